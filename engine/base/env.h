@@ -1,0 +1,90 @@
+// Env: the seam between pointbake and the file system.
+//
+// Everything that writes durable state (the cache, output folders, run
+// records) goes through an Env, so tests can inject a failure at a chosen write
+// (see FaultInjectingEnv) and check that nothing that looks complete is left
+// behind. Durable writes are always "write a temporary name, fsync, rename".
+#pragma once
+
+#include <sys/types.h>
+
+#include <cstdint>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/base/status.h"
+
+namespace pb {
+
+struct FileInfo {
+  uint64_t device = 0;
+  uint64_t inode = 0;
+  uint64_t size_bytes = 0;
+  int64_t mtime_ns = 0;
+  bool is_directory = false;
+};
+
+class Env {
+ public:
+  virtual ~Env() = default;
+
+  // Writes `contents` to `path` atomically: a sibling temporary file is
+  // written, fsynced and renamed over `path`. On failure `path` is untouched.
+  virtual Status WriteFileAtomic(const std::string& path, std::string_view contents);
+  // Copies `from` to `to` atomically (temporary name + rename); tries a
+  // reflink, then copy_file_range.
+  virtual Status CopyFileAtomic(const std::string& from, const std::string& to);
+  virtual Status Rename(const std::string& from, const std::string& to);
+  virtual Status SyncFile(const std::string& path);
+
+  Expected<std::string> ReadFile(const std::string& path) const;
+  Expected<FileInfo> Stat(const std::string& path) const;
+  bool Exists(const std::string& path) const;
+  // mkdir -p.
+  Status CreateDirs(const std::string& path);
+  // Removes a file, or a directory tree; missing paths are not an error.
+  Status RemoveAll(const std::string& path);
+  // Names (not paths) of the entries of a directory, sorted.
+  Expected<std::vector<std::string>> ListDir(const std::string& path) const;
+
+  // The process-wide real file system.
+  static Env* Default();
+};
+
+// An Env that fails the Nth durable write (WriteFileAtomic, CopyFileAtomic,
+// Rename, SyncFile, counted together from 1) with ENOSPC-like errors, leaving
+// a half-written temporary file behind as a real crash would.
+class FaultInjectingEnv : public Env {
+ public:
+  explicit FaultInjectingEnv(int fail_at_write) : fail_at_(fail_at_write) {}
+  Status WriteFileAtomic(const std::string& path, std::string_view contents) override;
+  Status CopyFileAtomic(const std::string& from, const std::string& to) override;
+  Status Rename(const std::string& from, const std::string& to) override;
+  Status SyncFile(const std::string& path) override;
+  int writes_seen() const { return writes_; }
+
+ private:
+  bool ShouldFail(const std::string& path);
+  int fail_at_;
+  int writes_ = 0;
+};
+
+// A temporary name beside `path`, unique per process and call:
+// "<path>.tmp.<pid>.<counter>". Cache garbage collection recognizes the
+// pattern and removes those whose process is gone.
+std::string TempNameFor(const std::string& path);
+
+// Joins path components with '/'.
+std::string JoinPath(std::string_view a, std::string_view b);
+// Directory part of a path ("a/b/c.yaml" -> "a/b", "c.yaml" -> ".").
+std::string DirName(std::string_view path);
+// Absolute, lexically normalized form of `path` relative to `base_dir`.
+std::string ResolvePath(std::string_view base_dir, std::string_view path);
+
+// Parses "512M", "2G", "1.5GiB", "300000" into bytes.
+Expected<uint64_t> ParseByteSize(std::string_view text);
+// Formats bytes as "1.5 GiB".
+std::string FormatBytes(uint64_t bytes);
+
+}  // namespace pb

@@ -1,0 +1,145 @@
+// The content-addressed cache.
+//
+// On-disk layout (format "pointbake-cache 1", in the FORMAT file):
+//   FORMAT                      signature and version; other versions refuse to open
+//   CACHEDIR.TAG                tells backup tools to skip the folder
+//   objects/ab/<digest>         immutable files, named by XXH3-128 of their bytes
+//   entries/ab/<key>.json       one completed stage result: key components, output
+//                               artifacts (file name -> object digest), run figures.
+//                               Written last, by rename: it is the completion marker.
+//   history/<workflow>/<stage>.json  last key components and peak RSS of a
+//                               (workflow name, stage id), for `explain` and --mem
+//   filehash/<id>               digest of an input file, keyed by (device, inode,
+//                               size, mtime) so a 1 GB scan is hashed once
+//   locks/                      flock() files; the kernel drops a lock when its
+//                               owner dies, so a killed run never blocks the next
+//   tmp/                        staging folders and temporary names; a name
+//                               carries its writer's pid, and gc removes those
+//                               whose process is gone
+//
+// Crash safety: objects are written to tmp/, fsynced and renamed into
+// objects/; the entry is renamed into entries/ only after all its objects are
+// in place. A lookup treats an entry as a hit only if it parses and every
+// object it names exists with the recorded size. Runs hold a shared cache
+// lock; `gc` holds it exclusively.
+//
+// Relocatable: nothing in the cache records an absolute path.
+#pragma once
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/artifact.h"
+#include "engine/base/env.h"
+#include "engine/base/hash.h"
+
+namespace pb {
+
+inline constexpr int kCacheFormatVersion = 1;
+
+// An flock() held on a file until destruction.
+class FileLock {
+ public:
+  FileLock() = default;
+  explicit FileLock(int fd) : fd_(fd) {}
+  FileLock(FileLock&& o) noexcept : fd_(o.fd_) { o.fd_ = -1; }
+  FileLock& operator=(FileLock&& o) noexcept;
+  ~FileLock();
+  bool held() const { return fd_ >= 0; }
+
+ private:
+  int fd_ = -1;
+};
+
+struct CacheEntry {
+  Digest key;
+  nlohmann::json components;  // what the key was computed from
+  std::map<std::string, Artifact> outputs;  // by output port
+  nlohmann::json record;      // figures of the run that produced it
+};
+
+struct VerifyReport {
+  int entries_checked = 0;
+  int objects_checked = 0;
+  std::vector<std::string> problems;  // one line each
+  int removed = 0;                    // with repair
+};
+
+struct GcReport {
+  uint64_t bytes_before = 0;
+  uint64_t bytes_after = 0;
+  int entries_removed = 0;
+  int objects_removed = 0;
+  int temp_removed = 0;
+};
+
+class Cache {
+ public:
+  // Opens (creating if needed) the cache at `dir`.
+  static Expected<std::unique_ptr<Cache>> Open(const std::string& dir, Env* env = Env::Default());
+
+  const std::string& dir() const { return dir_; }
+  std::string ObjectPath(const Digest& digest) const;
+
+  // Blocking locks. Shared: a run. Exclusive: gc. Key: computing one entry.
+  Expected<FileLock> LockShared();
+  Expected<FileLock> LockExclusive();
+  // Returns an unheld lock (and sets *would_block) if another process holds it
+  // and `wait` is false.
+  Expected<FileLock> LockKey(const Digest& key, bool wait, bool* would_block = nullptr);
+
+  // Digest of an input file, computed once per (device, inode, size, mtime).
+  Expected<Digest> FileDigest(const std::string& path);
+
+  // The entry for `key` if it is complete; nullopt on a miss. A damaged entry
+  // is a miss (and is reported by `verify`).
+  std::optional<CacheEntry> Lookup(const Digest& key);
+
+  // A fresh, empty staging folder for a stage computing `key`.
+  Expected<std::string> NewStagingDir(const Digest& key);
+
+  // Moves the files a stage wrote into objects and writes the entry last.
+  // `outputs`: port -> {type, files: name -> path inside the staging folder,
+  // meta}. Removes the staging folder.
+  struct StagedOutput {
+    std::string type;
+    std::map<std::string, std::string> files;
+    nlohmann::json meta = nlohmann::json::object();
+  };
+  Expected<CacheEntry> Commit(const Digest& key, const nlohmann::json& components,
+                              const std::map<std::string, StagedOutput>& outputs,
+                              const nlohmann::json& record, const std::string& staging_dir);
+
+  // Explain/--mem memory: the last key components and figures per stage.
+  Status SaveHistory(const std::string& workflow, const std::string& stage,
+                     const nlohmann::json& history);
+  std::optional<nlohmann::json> LoadHistory(const std::string& workflow, const std::string& stage);
+
+  // Every complete entry, with its size on disk and last use.
+  struct EntryInfo {
+    Digest key;
+    std::string stage_type;
+    uint64_t bytes = 0;
+    int64_t last_used_ns = 0;
+  };
+  Expected<std::vector<EntryInfo>> ListEntries();
+  Expected<VerifyReport> Verify(bool repair);
+  Expected<GcReport> Gc(uint64_t max_bytes);
+
+ private:
+  Cache(std::string dir, Env* env) : dir_(std::move(dir)), env_(env) {}
+  std::string EntryPath(const Digest& key) const;
+  Expected<CacheEntry> ReadEntry(const std::string& path);
+  Expected<FileLock> Lock(const std::string& path, bool exclusive, bool wait, bool* would_block);
+  Status StoreObject(const std::string& staged_path, const Digest& digest);
+
+  std::string dir_;
+  Env* env_;
+};
+
+}  // namespace pb

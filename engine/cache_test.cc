@@ -1,0 +1,154 @@
+#include "engine/cache.h"
+
+#include <gtest/gtest.h>
+#include <fcntl.h>
+#include <sys/stat.h>
+
+#include <filesystem>
+#include <fstream>
+
+#include "engine/test_util.h"
+
+namespace pb {
+namespace {
+
+using testing::TempDir;
+
+nlohmann::json Components(const std::string& x) { return {{"type", "t.text"}, {"x", x}}; }
+
+// Stages one output file with `text` and commits it.
+Expected<CacheEntry> CommitText(Cache& cache, const std::string& x, const std::string& text) {
+  const nlohmann::json comps = Components(x);
+  const Digest key = HashBytes(comps.dump());
+  PB_ASSIGN_OR_RETURN(std::string staging, cache.NewStagingDir(key));
+  std::filesystem::create_directories(staging + "/out");
+  std::ofstream(staging + "/out/table.json") << text;
+  Cache::StagedOutput out{"table", {{"table.json", staging + "/out/table.json"}}, {{"m", 1}}};
+  return cache.Commit(key, comps, {{"out", out}}, {{"wall_s", 0.5}}, staging);
+}
+
+TEST(CacheTest, CommitThenLookupHitsAndSharesObjects) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  ASSERT_TRUE(CommitText(*cache, "a", "same bytes").ok());
+  ASSERT_TRUE(CommitText(*cache, "b", "same bytes").ok());
+  auto hit = cache->Lookup(HashBytes(Components("a").dump()));
+  ASSERT_TRUE(hit.has_value());
+  const Artifact& art = hit->outputs.at("out");
+  EXPECT_EQ(art.meta["m"], 1);
+  EXPECT_EQ(art.files.at("table.json").size_bytes, 10u);
+  EXPECT_EQ(hit->record["wall_s"], 0.5);
+  // Both entries point at one object.
+  EXPECT_EQ(cache->Lookup(HashBytes(Components("b").dump()))->outputs.at("out").ComputeDigest(),
+            art.ComputeDigest());
+  EXPECT_FALSE(cache->Lookup(HashBytes(Components("c").dump())).has_value());
+  // Objects are read-only.
+  struct stat st;
+  ASSERT_EQ(::stat(cache->ObjectPath(art.files.at("table.json").digest).c_str(), &st), 0);
+  EXPECT_EQ(st.st_mode & 0222, 0u);
+}
+
+TEST(CacheTest, MissingObjectMakesAMissAndVerifyReportsIt) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  auto entry = CommitText(*cache, "a", "payload").value();
+  const std::string obj = cache->ObjectPath(entry.outputs.at("out").files.at("table.json").digest);
+  ::chmod(obj.c_str(), 0644);
+  std::ofstream(obj) << "PAYLOAD";  // same size, other bytes
+  auto report = cache->Verify(false).value();
+  EXPECT_EQ(report.problems.size(), 2u);  // the object and the entry naming it
+  auto repaired = cache->Verify(true).value();
+  EXPECT_EQ(repaired.removed, 2);
+  EXPECT_FALSE(cache->Lookup(entry.key).has_value());
+  EXPECT_TRUE(cache->Verify(false)->problems.empty());
+}
+
+TEST(CacheTest, RelocatedCacheStillHits) {
+  TempDir dir;
+  Digest key;
+  {
+    auto cache = Cache::Open(dir.path() + "/c1").value();
+    key = CommitText(*cache, "a", "x").value().key;
+  }
+  std::filesystem::rename(dir.path() + "/c1", dir.path() + "/c2");
+  auto cache = Cache::Open(dir.path() + "/c2").value();
+  EXPECT_TRUE(cache->Lookup(key).has_value());
+}
+
+// A failure at any durable write leaves either no entry or a complete one.
+TEST(CacheTest, InjectedFailureAtEveryWriteNeverLeavesAPartialEntry) {
+  for (int fail_at = 1; fail_at <= 6; ++fail_at) {
+    TempDir dir;
+    FaultInjectingEnv env(fail_at);
+    auto opened = Cache::Open(dir.path() + "/c", &env);
+    if (!opened.ok()) continue;  // failed while creating the layout: nothing to check
+    auto& cache = *opened.value();
+    auto committed = CommitText(cache, "a", "payload");
+    const Digest key = HashBytes(Components("a").dump());
+    auto reopened = Cache::Open(dir.path() + "/c").value();
+    if (committed.ok()) {
+      EXPECT_TRUE(reopened->Lookup(key).has_value()) << "fail_at " << fail_at;
+    } else {
+      EXPECT_FALSE(reopened->Lookup(key).has_value()) << "fail_at " << fail_at;
+    }
+    EXPECT_TRUE(reopened->Verify(false)->problems.empty()) << "fail_at " << fail_at;
+    // The next attempt succeeds and gc cleans the torn leftovers.
+    ASSERT_TRUE(CommitText(*reopened, "a", "payload").ok());
+    EXPECT_TRUE(reopened->Lookup(key).has_value());
+    reopened->Gc(1ull << 40).value();
+    EXPECT_TRUE(reopened->Verify(false)->problems.empty());
+  }
+}
+
+TEST(CacheTest, GcKeepsMostRecentlyUsedWithinBudget) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  auto old_entry = CommitText(*cache, "old", std::string(1000, 'o')).value();
+  auto new_entry = CommitText(*cache, "new", std::string(1000, 'n')).value();
+  // Make "old" older.
+  const std::string hex = old_entry.key.Hex();
+  const std::string path = dir.path() + "/c/entries/" + hex.substr(0, 2) + "/" + hex + ".json";
+  struct timespec times[2] = {{1, 0}, {1, 0}};
+  ::utimensat(AT_FDCWD, path.c_str(), times, 0);
+  auto report = cache->Gc(1500).value();
+  EXPECT_EQ(report.bytes_before, 2000u);
+  EXPECT_EQ(report.bytes_after, 1000u);
+  EXPECT_EQ(report.entries_removed, 1);
+  EXPECT_EQ(report.objects_removed, 1);
+  EXPECT_FALSE(cache->Lookup(old_entry.key).has_value());
+  EXPECT_TRUE(cache->Lookup(new_entry.key).has_value());
+}
+
+TEST(CacheTest, FileDigestIsMemoizedByStat) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  const std::string f = dir.Write("scan.txt", "points");
+  const Digest d1 = cache->FileDigest(f).value();
+  EXPECT_EQ(d1, HashBytes("points"));
+  auto memo = Env::Default()->ListDir(dir.path() + "/c/filehash").value();
+  EXPECT_EQ(memo.size(), 1u);
+  EXPECT_EQ(cache->FileDigest(f).value(), d1);
+  dir.Write("scan.txt", "other!");
+  EXPECT_EQ(cache->FileDigest(f).value(), HashBytes("other!"));
+}
+
+TEST(CacheTest, KeyLockIsExclusiveAndReleasedOnClose) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  const Digest key = HashBytes("k");
+  bool blocked = true;
+  auto first = cache->LockKey(key, false, &blocked);
+  ASSERT_TRUE(first.ok());
+  EXPECT_FALSE(blocked);
+  EXPECT_TRUE(first->held());
+  // flock locks belong to the open file description: a second open blocks.
+  auto second = cache->LockKey(key, false, &blocked);
+  ASSERT_TRUE(second.ok());
+  EXPECT_TRUE(blocked);
+  { FileLock drop = std::move(first).value(); }
+  auto third = cache->LockKey(key, false, &blocked);
+  EXPECT_FALSE(blocked);
+}
+
+}  // namespace
+}  // namespace pb

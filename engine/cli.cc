@@ -1,0 +1,310 @@
+#include "engine/cli.h"
+
+#include <unistd.h>
+
+#include <CLI/CLI.hpp>
+#include <chrono>
+#include <cstdio>
+#include <ctime>
+#include <iostream>
+#include <thread>
+
+#include "engine/base/env.h"
+#include "engine/cache.h"
+#include "engine/executor.h"
+#include "engine/key.h"
+#include "engine/progress.h"
+#include "engine/run_record.h"
+#include "engine/scheduler.h"
+#include "engine/workflow.h"
+
+namespace pb {
+namespace {
+
+struct RunFlags {
+  std::string workflow;
+  std::string scene;
+  std::vector<std::string> sets;
+  int jobs = 1;
+  std::string mem;
+  std::string cache_dir;
+  std::string out_dir;
+  bool dry_run = false;
+  bool keep_going = false;
+  bool quiet = false;
+  bool in_process = false;
+  int threads = 0;
+};
+
+void AddWorkflowOptions(CLI::App* cmd, RunFlags& f) {
+  cmd->add_option("WORKFLOW", f.workflow, "Workflow YAML file")->required();
+  cmd->add_option("--scene", f.scene, "Scene file (overrides the workflow's scene:)");
+  cmd->add_option("--set", f.sets, "Override a parameter: STAGE.PARAM=VALUE (repeatable)");
+}
+
+void AddRunOptions(CLI::App* cmd, RunFlags& f) {
+  AddWorkflowOptions(cmd, f);
+  cmd->add_option("-j,--jobs", f.jobs, "Stages run in parallel")->check(CLI::Range(1, 256));
+  cmd->add_option("--mem", f.mem, "Memory budget for parallel stages, e.g. 16G");
+  cmd->add_option("--cache", f.cache_dir, "Cache folder (default $POINTBAKE_CACHE or ~/.cache/pointbake)");
+  cmd->add_option("--out", f.out_dir, "Output folder (default out/<workflow name>)");
+  cmd->add_option("--threads", f.threads, "Threads per stage (default: all cores)");
+}
+
+std::string DefaultCacheDir() {
+  if (const char* env = std::getenv("POINTBAKE_CACHE"); env && *env) return env;
+  if (const char* xdg = std::getenv("XDG_CACHE_HOME"); xdg && *xdg) return std::string(xdg) + "/pointbake";
+  if (const char* home = std::getenv("HOME"); home && *home) return std::string(home) + "/.cache/pointbake";
+  return ".pointbake-cache";
+}
+
+std::string SelfExe() {
+  char buf[4096];
+  const ssize_t n = ::readlink("/proc/self/exe", buf, sizeof buf - 1);
+  if (n <= 0) return "pointbake";
+  return std::string(buf, static_cast<size_t>(n));
+}
+
+int Fail(const Status& st) {
+  std::fprintf(stderr, "%s\n", st.message().c_str());
+  return 2;
+}
+
+Expected<Workflow> Load(const RunFlags& f, Registry& registry) {
+  LoadOptions opts;
+  opts.scene_file = f.scene;
+  opts.sets = f.sets;
+  return LoadWorkflow(f.workflow, opts, registry);
+}
+
+std::string IsoNow() {
+  std::time_t t = std::time(nullptr);
+  char buf[32];
+  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
+  return buf;
+}
+
+int PrintPlan(const Workflow& wf, Cache& cache, bool explain) {
+  Expected<std::vector<PlanLine>> plan = PlanWorkflow(wf, cache);
+  if (!plan.ok()) return Fail(plan.status());
+  int hits = 0, runs = 0, maybe = 0;
+  for (const PlanLine& line : *plan) {
+    const char* what = line.state == PlanLine::State::kHit    ? "hit"
+                       : line.state == PlanLine::State::kMiss ? "run"
+                                                              : "run?";
+    (line.state == PlanLine::State::kHit ? hits : line.state == PlanLine::State::kMiss ? runs : maybe)++;
+    std::printf("%-5s %-20s %-22s %s\n", what, line.stage.c_str(), line.type.c_str(),
+                line.key.empty() ? "(key known once inputs are)" : line.key.substr(0, 16).c_str());
+    if (explain || line.state != PlanLine::State::kHit)
+      for (const std::string& r : line.reasons) std::printf("        - %s\n", r.c_str());
+  }
+  std::printf("%d cached, %d to run, %d to run unless upstream outputs come out unchanged\n", hits,
+              runs, maybe);
+  return 0;
+}
+
+int CmdRun(const RunFlags& f, Registry& registry, bool explain_only) {
+  Expected<Workflow> wf = Load(f, registry);
+  if (!wf.ok()) return Fail(wf.status());
+  uint64_t mem = 0;
+  if (!f.mem.empty()) {
+    Expected<uint64_t> parsed = ParseByteSize(f.mem);
+    if (!parsed.ok()) return Fail(parsed.status().WithContext("--mem"));
+    mem = *parsed;
+  }
+  Expected<std::unique_ptr<Cache>> cache = Cache::Open(f.cache_dir.empty() ? DefaultCacheDir() : f.cache_dir);
+  if (!cache.ok()) return Fail(cache.status());
+  Expected<FileLock> shared = (*cache)->LockShared();
+  if (!shared.ok()) return Fail(shared.status());
+  if (explain_only || f.dry_run) return PrintPlan(*wf, **cache, explain_only);
+
+  const std::string out_dir = f.out_dir.empty() ? "out/" + wf->name : f.out_dir;
+  Status st = Env::Default()->CreateDirs(out_dir + "/logs");
+  if (!st.ok()) return Fail(st);
+  RunOptions opts;
+  opts.jobs = f.jobs;
+  opts.mem_budget_bytes = mem;
+  opts.keep_going = f.keep_going;
+  opts.threads_per_stage = f.threads;
+  opts.log_dir = ResolvePath(".", out_dir + "/logs");
+  LocalProcessExecutor local(SelfExe());
+  InProcessExecutor in_process;
+  Executor& executor = f.in_process ? static_cast<Executor&>(in_process) : local;
+  ProgressPrinter printer(::isatty(2) != 0, f.quiet);
+  Scheduler scheduler(*wf, **cache, executor, &printer);
+  const std::string started = IsoNow();
+  const auto t0 = std::chrono::steady_clock::now();
+  std::vector<StageOutcome> outcomes = scheduler.Run(opts);
+  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  nlohmann::json info = {{"started", started},
+                         {"total_wall_s", total_s},
+                         {"cache", (*cache)->dir()},
+                         {"options",
+                          {{"jobs", f.jobs}, {"mem_budget_bytes", mem}, {"keep_going", f.keep_going},
+                           {"sets", f.sets}, {"scene", wf->scene_file}}},
+                         {"host", {{"cores", std::thread::hardware_concurrency()}}}};
+  std::vector<std::string> written;
+  st = WriteRunOutputs(*wf, outcomes, info, **cache, out_dir, &written);
+  int ran = 0, hit = 0, failed = 0, skipped = 0;
+  for (const auto& o : outcomes) {
+    if (o.state == StageOutcome::State::kRan) ++ran;
+    if (o.state == StageOutcome::State::kHit) ++hit;
+    if (o.state == StageOutcome::State::kFailed) ++failed;
+    if (o.state == StageOutcome::State::kSkipped) ++skipped;
+  }
+  if (!st.ok()) {
+    std::fprintf(stderr, "writing outputs: %s\n", st.message().c_str());
+    return 2;
+  }
+  if (!f.quiet)
+    for (const auto& w : written) std::printf("output %s\n", w.c_str());
+  std::printf("%s: %zu stages, %d ran, %d cached, %d failed, %d not run in %s; record in %s/run.json\n",
+              wf->name.c_str(), outcomes.size(), ran, hit, failed, skipped,
+              FormatSeconds(total_s).c_str(), out_dir.c_str());
+  return failed > 0 || skipped > 0 ? 1 : 0;
+}
+
+int CmdValidate(const std::vector<std::string>& files, Registry& registry) {
+  int bad = 0;
+  for (const std::string& file : files) {
+    Expected<YamlDocument> doc = ParseYamlFile(file);
+    Status st;
+    if (!doc.ok()) {
+      st = doc.status();
+    } else if (doc->value.is_object() && doc->value.contains("stages")) {
+      Expected<Workflow> wf = LoadWorkflow(file, {}, registry);
+      if (!wf.ok()) st = wf.status();
+    } else {
+      Expected<nlohmann::json> scene = LoadScene(file);
+      if (!scene.ok()) st = scene.status();
+    }
+    if (st.ok()) {
+      std::printf("%s: ok\n", file.c_str());
+    } else {
+      ++bad;
+      std::fprintf(stderr, "%s\n", st.message().c_str());
+    }
+  }
+  return bad ? 2 : 0;
+}
+
+int CmdStages(const std::string& id, Registry& registry) {
+  if (id.empty()) {
+    for (const StageType* t : registry.All()) std::printf("%-22s %s\n", t->id.c_str(), t->summary.c_str());
+    return 0;
+  }
+  const StageType* t = registry.Find(id);
+  if (!t) {
+    std::fprintf(stderr, "unknown stage type '%s' (see `pointbake stages`)\n", id.c_str());
+    return 2;
+  }
+  std::printf("%s", DescribeStage(*t).c_str());
+  return 0;
+}
+
+}  // namespace
+
+int CliMain(int argc, char** argv, Registry& registry) {
+  for (const std::string& e : registry.TakeErrors())
+    std::fprintf(stderr, "internal error registering built-in stages: %s\n", e.c_str());
+  // The hidden child-process entry point, kept out of CLI11 for speed.
+  if (argc == 3 && std::string(argv[1]) == "__stage") return RunStageSubcommand(argv[2], registry);
+
+  CLI::App app{"pointbake: point clouds to VR-ready textured meshes, as cached workflows"};
+  app.require_subcommand(1);
+  app.set_version_flag("--version", "pointbake 0.1.0");
+  RunFlags run_flags, explain_flags, graph_flags;
+  CLI::App* run = app.add_subcommand("run", "Run a workflow");
+  AddRunOptions(run, run_flags);
+  run->add_flag("--dry-run", run_flags.dry_run, "Show what would run, run nothing");
+  run->add_flag("--keep-going", run_flags.keep_going, "After a failure, still run independent stages");
+  run->add_flag("-q,--quiet", run_flags.quiet, "Print failures and the summary only");
+  run->add_flag("--in-process", run_flags.in_process,
+                "Run stages inside this process (debugging; no per-stage memory figures)");
+  CLI::App* validate = app.add_subcommand("validate", "Check workflow and scene files, run nothing");
+  std::vector<std::string> validate_files;
+  validate->add_option("FILE", validate_files, "Workflow or scene files")->required();
+  CLI::App* explain = app.add_subcommand("explain", "Per stage: cached or not, and what changed");
+  AddRunOptions(explain, explain_flags);
+  CLI::App* graph = app.add_subcommand("graph", "Print the workflow's DAG as Graphviz DOT");
+  AddWorkflowOptions(graph, graph_flags);
+  CLI::App* stages = app.add_subcommand("stages", "List stage types, or document one");
+  std::string stage_id;
+  stages->add_option("TYPE", stage_id, "Stage type id, e.g. points.downsample");
+  CLI::App* cache = app.add_subcommand("cache", "Inspect and maintain the cache");
+  cache->require_subcommand(1);
+  std::string cache_dir;
+  cache->add_option("--cache", cache_dir, "Cache folder (default $POINTBAKE_CACHE or ~/.cache/pointbake)");
+  CLI::App* cache_ls = cache->add_subcommand("ls", "List entries, most recently used first");
+  CLI::App* cache_gc = cache->add_subcommand("gc", "Evict least recently used entries down to a size");
+  std::string max_size;
+  cache_gc->add_option("--max-size", max_size, "Size to keep, e.g. 20G")->required();
+  CLI::App* cache_verify = cache->add_subcommand("verify", "Re-hash every object, check every entry");
+  bool repair = false;
+  cache_verify->add_flag("--repair", repair, "Remove what is corrupt");
+
+  try {
+    app.parse(argc, argv);
+  } catch (const CLI::ParseError& e) {
+    return app.exit(e) == 0 ? 0 : 2;
+  }
+
+  if (*run) return CmdRun(run_flags, registry, false);
+  if (*explain) return CmdRun(explain_flags, registry, true);
+  if (*validate) return CmdValidate(validate_files, registry);
+  if (*stages) return CmdStages(stage_id, registry);
+  if (*graph) {
+    Expected<Workflow> wf = Load(graph_flags, registry);
+    if (!wf.ok()) return Fail(wf.status());
+    std::printf("%s", WorkflowToDot(*wf).c_str());
+    return 0;
+  }
+  if (*cache) {
+    Expected<std::unique_ptr<Cache>> c = Cache::Open(cache_dir.empty() ? DefaultCacheDir() : cache_dir);
+    if (!c.ok()) return Fail(c.status());
+    if (*cache_ls) {
+      Expected<FileLock> lock = (*c)->LockShared();
+      Expected<std::vector<Cache::EntryInfo>> entries = (*c)->ListEntries();
+      if (!entries.ok()) return Fail(entries.status());
+      uint64_t total = 0;
+      for (const auto& e : *entries) {
+        const std::time_t t = static_cast<std::time_t>(e.last_used_ns / 1000000000);
+        char when[32];
+        std::strftime(when, sizeof when, "%Y-%m-%d %H:%M", std::localtime(&t));
+        std::printf("%s  %-22s %10s  %s\n", e.key.Hex().c_str(), e.stage_type.c_str(),
+                    FormatBytes(e.bytes).c_str(), when);
+        total += e.bytes;
+      }
+      std::printf("%zu entries, %s (shared objects counted per entry) in %s\n", entries->size(),
+                  FormatBytes(total).c_str(), (*c)->dir().c_str());
+      return 0;
+    }
+    if (*cache_gc) {
+      Expected<uint64_t> bytes = ParseByteSize(max_size);
+      if (!bytes.ok()) return Fail(bytes.status().WithContext("--max-size"));
+      Expected<FileLock> lock = (*c)->LockExclusive();
+      if (!lock.ok()) return Fail(lock.status());
+      Expected<GcReport> r = (*c)->Gc(*bytes);
+      if (!r.ok()) return Fail(r.status());
+      std::printf("gc: %s -> %s; removed %d entries, %d objects, %d temporary leftovers\n",
+                  FormatBytes(r->bytes_before).c_str(), FormatBytes(r->bytes_after).c_str(),
+                  r->entries_removed, r->objects_removed, r->temp_removed);
+      return 0;
+    }
+    if (*cache_verify) {
+      Expected<FileLock> lock = repair ? (*c)->LockExclusive() : (*c)->LockShared();
+      if (!lock.ok()) return Fail(lock.status());
+      Expected<VerifyReport> r = (*c)->Verify(repair);
+      if (!r.ok()) return Fail(r.status());
+      for (const auto& p : r->problems) std::printf("%s\n", p.c_str());
+      std::printf("verify: %d entries, %d objects checked, %zu problems%s\n", r->entries_checked,
+                  r->objects_checked, r->problems.size(),
+                  repair ? (", " + std::to_string(r->removed) + " removed").c_str() : "");
+      return r->problems.empty() || repair ? 0 : 1;
+    }
+  }
+  return 2;
+}
+
+}  // namespace pb

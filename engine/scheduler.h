@@ -1,0 +1,68 @@
+// The scheduler: runs a workflow's stages in dependency order, at most
+// `jobs` at a time and within a memory budget, through an Executor, with
+// every result going through the cache.
+#pragma once
+
+#include <map>
+#include <nlohmann/json.hpp>
+#include <string>
+#include <vector>
+
+#include "engine/cache.h"
+#include "engine/executor.h"
+#include "engine/workflow.h"
+
+namespace pb {
+
+struct RunOptions {
+  int jobs = 1;
+  uint64_t mem_budget_bytes = 0;  // 0: no budget
+  bool keep_going = false;        // run independent stages after a failure
+  int threads_per_stage = 0;      // 0: all cores
+  std::string log_dir;            // <log_dir>/<stage>.log; empty: inside the staging folder
+};
+
+struct StageOutcome {
+  enum class State { kPending, kRunning, kHit, kRan, kFailed, kSkipped };
+  std::string id;
+  std::string type;
+  State state = State::kPending;
+  std::string key;
+  nlohmann::json components;
+  std::map<std::string, Artifact> outputs;  // by port (hit or ran)
+  JobResult result;                         // kRan / kFailed: this run's figures
+  nlohmann::json cached_record;             // kHit: figures of the run that made the entry
+  double start_s = 0, end_s = 0;            // seconds since the run started
+  int slot = 0;                             // lane in the trace
+  std::string error;
+};
+
+const char* StateName(StageOutcome::State state);
+
+class RunObserver {
+ public:
+  virtual ~RunObserver() = default;
+  virtual void OnStageStart(const std::string& id, const std::string& type) = 0;
+  virtual void OnStageWaiting(const std::string& id, const std::string& why) = 0;
+  virtual void OnStageProgress(const std::string& id, double fraction) = 0;
+  virtual void OnStageEnd(const StageOutcome& outcome, int done, int total) = 0;
+};
+
+class Scheduler {
+ public:
+  Scheduler(const Workflow& workflow, Cache& cache, Executor& executor, RunObserver* observer)
+      : wf_(workflow), cache_(cache), executor_(executor), observer_(observer) {}
+  // Outcomes in the workflow's topological order.
+  std::vector<StageOutcome> Run(const RunOptions& options);
+
+ private:
+  void RunOne(StageOutcome& outcome, const std::map<std::string, StageOutcome>& done,
+              const RunOptions& options, double t0_offset);
+
+  const Workflow& wf_;
+  Cache& cache_;
+  Executor& executor_;
+  RunObserver* observer_;
+};
+
+}  // namespace pb

@@ -1,0 +1,165 @@
+#include "engine/scheduler.h"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <thread>
+
+#include "engine/key.h"
+#include "engine/test_util.h"
+
+namespace pb {
+namespace {
+
+using testing::TempDir;
+
+// Runs stages in-process and counts executions; can hold each job a while
+// and record how many run at once.
+class CountingExecutor : public Executor {
+ public:
+  JobResult Run(const JobSpec& job, const ProgressFn& progress) override {
+    const int now = ++concurrent_;
+    int seen = max_concurrent_.load();
+    while (now > seen && !max_concurrent_.compare_exchange_weak(seen, now)) {
+    }
+    if (hold_ms_) std::this_thread::sleep_for(std::chrono::milliseconds(hold_ms_));
+    JobResult r = inner_.Run(job, progress);
+    r.peak_rss_bytes = 100 << 20;  // pretend each stage needs 100 MiB
+    --concurrent_;
+    {
+      std::lock_guard<std::mutex> g(mu_);
+      ran_.push_back(job.stage_id);
+    }
+    return r;
+  }
+  std::vector<std::string> ran() {
+    std::lock_guard<std::mutex> g(mu_);
+    std::sort(ran_.begin(), ran_.end());
+    auto out = ran_;
+    ran_.clear();
+    return out;
+  }
+  int hold_ms_ = 0;
+  std::atomic<int> max_concurrent_{0};
+
+ private:
+  InProcessExecutor inner_;
+  std::atomic<int> concurrent_{0};
+  std::mutex mu_;
+  std::vector<std::string> ran_;
+};
+
+class SchedulerTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    testing::RegisterTestStages(registry_);
+    cache_ = Cache::Open(dir_.path() + "/cache").value();
+  }
+  std::vector<StageOutcome> Run(const std::string& yaml, std::vector<std::string> sets = {},
+                                RunOptions opts = {}) {
+    auto wf = LoadWorkflow(dir_.Write("wf.yaml", yaml), LoadOptions{"", sets}, registry_);
+    EXPECT_TRUE(wf.ok()) << wf.status().message();
+    workflow_ = std::move(wf).value();
+    return Scheduler(workflow_, *cache_, executor_, nullptr).Run(opts);
+  }
+  static std::map<std::string, std::string> States(const std::vector<StageOutcome>& outs) {
+    std::map<std::string, std::string> m;
+    for (const auto& o : outs) m[o.id] = StateName(o.state);
+    return m;
+  }
+  Registry registry_;
+  TempDir dir_;
+  std::unique_ptr<Cache> cache_;
+  CountingExecutor executor_;
+  Workflow workflow_;
+};
+
+constexpr const char* kChain = R"(name: chain
+stages:
+  src: { uses: t.text, with: { text: abc } }
+  len: { uses: t.len, in: { in: src.out } }
+  up: { uses: t.upper, in: { in: len.out } }
+  side: { uses: t.upper, in: { in: src.out } }
+)";
+
+TEST_F(SchedulerTest, SecondRunHitsEverything) {
+  auto first = Run(kChain);
+  EXPECT_EQ(executor_.ran(), (std::vector<std::string>{"len", "side", "src", "up"}));
+  auto second = Run(kChain);
+  EXPECT_TRUE(executor_.ran().empty());
+  for (const auto& o : second) EXPECT_EQ(o.state, StageOutcome::State::kHit) << o.id;
+}
+
+TEST_F(SchedulerTest, ParameterChangeRerunsStageAndDependentsWithEarlyCutoff) {
+  Run(kChain);
+  executor_.ran();
+  // Same length: len re-runs (its input changed) but writes the same bytes,
+  // so `up` hits; `side` sees new text and re-runs.
+  auto outs = Run(kChain, {"src.text=xyz"});
+  EXPECT_EQ(executor_.ran(), (std::vector<std::string>{"len", "side", "src"}));
+  EXPECT_EQ(States(outs)["up"], "hit");
+  // A parameter outside the key changes nothing.
+  Run(kChain, {"src.text=xyz", "src.threads=8"});
+  EXPECT_TRUE(executor_.ran().empty());
+}
+
+TEST_F(SchedulerTest, ExplainNamesTheChangedParameter) {
+  Run(kChain);
+  auto wf = LoadWorkflow(dir_.path() + "/wf.yaml", LoadOptions{"", {"src.text=abcd"}}, registry_);
+  ASSERT_TRUE(wf.ok());
+  auto plan = PlanWorkflow(*wf, *cache_).value();
+  ASSERT_EQ(plan[0].stage, "src");
+  EXPECT_EQ(plan[0].state, PlanLine::State::kMiss);
+  ASSERT_FALSE(plan[0].reasons.empty());
+  EXPECT_EQ(plan[0].reasons[0], "parameter 'text' changed: \"abc\" -> \"abcd\"");
+  for (size_t i = 1; i < plan.size(); ++i) EXPECT_EQ(plan[i].state, PlanLine::State::kDependsOnUpstream);
+}
+
+TEST_F(SchedulerTest, FailureStopsDependentsAndKeepGoingRunsSiblings) {
+  registry_.Register(StageType{.id = "t.boom",
+                               .summary = "fails",
+                               .outputs = {{"out", "table"}},
+                               .run = [](StageContext&) { return Status::Invalid("boom"); }});
+  const std::string yaml = R"(name: fail
+stages:
+  a: { uses: t.boom }
+  b: { uses: t.upper, in: { in: a.out } }
+  c: { uses: t.text }
+)";
+  RunOptions keep;
+  keep.keep_going = true;
+  auto outs = Run(yaml, {}, keep);
+  auto states = States(outs);
+  EXPECT_EQ(states["a"], "failed");
+  EXPECT_EQ(states["b"], "skipped");
+  EXPECT_EQ(states["c"], "ran");
+  EXPECT_EQ(outs[0].error, "boom");
+  // The failure is not cached.
+  outs = Run(yaml, {}, keep);
+  EXPECT_EQ(States(outs)["a"], "failed");
+}
+
+TEST_F(SchedulerTest, MemoryBudgetHoldsBackParallelStages) {
+  const std::string yaml = R"(name: wide
+stages:
+  a: { uses: t.text, with: { text: a } }
+  b: { uses: t.text, with: { text: b } }
+  c: { uses: t.text, with: { text: c } }
+  d: { uses: t.text, with: { text: d } }
+)";
+  executor_.hold_ms_ = 50;
+  RunOptions opts;
+  opts.jobs = 4;
+  Run(yaml, {}, opts);
+  EXPECT_GE(executor_.max_concurrent_.load(), 2);
+  // Learned peaks (100 MiB each) against a 250 MiB budget: at most 2 at once.
+  executor_.max_concurrent_ = 0;
+  opts.mem_budget_bytes = 250ull << 20;
+  Run(yaml, {"a.text=A", "b.text=B", "c.text=C", "d.text=D"}, opts);
+  EXPECT_EQ(executor_.ran().size(), 8u);
+  EXPECT_LE(executor_.max_concurrent_.load(), 2);
+  EXPECT_GE(executor_.max_concurrent_.load(), 1);
+}
+
+}  // namespace
+}  // namespace pb

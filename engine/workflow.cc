@@ -1,0 +1,536 @@
+#include "engine/workflow.h"
+
+#include <algorithm>
+#include <functional>
+#include <queue>
+#include <set>
+#include <sstream>
+
+#include "engine/base/env.h"
+#include "engine/schema.h"
+
+namespace pb {
+
+extern const char* const kWorkflowSchemaText;
+extern const char* const kSceneSchemaText;
+
+namespace {
+
+using nlohmann::json;
+
+// Collects `file:line:column: message` lines.
+class Errors {
+ public:
+  void Add(const SourcePos& pos, const std::string& message) {
+    lines_.push_back(pos.ToString() + ": " + message);
+  }
+  void AddRaw(const std::string& line) { lines_.push_back(line); }
+  bool empty() const { return lines_.empty(); }
+  Status ToStatus() const {
+    std::string msg;
+    for (size_t i = 0; i < lines_.size(); ++i) msg += (i ? "\n" : "") + lines_[i];
+    return Status::Invalid(msg);
+  }
+
+ private:
+  std::vector<std::string> lines_;
+};
+
+size_t EditDistance(const std::string& a, const std::string& b) {
+  std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+  for (size_t j = 0; j <= b.size(); ++j) prev[j] = j;
+  for (size_t i = 1; i <= a.size(); ++i) {
+    cur[0] = i;
+    for (size_t j = 1; j <= b.size(); ++j)
+      cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, prev[j - 1] + (a[i - 1] != b[j - 1])});
+    std::swap(prev, cur);
+  }
+  return prev[b.size()];
+}
+
+std::string Suggest(const std::string& word, const std::vector<std::string>& candidates) {
+  std::string best;
+  size_t best_d = std::max<size_t>(3, word.size() / 3) + 1;
+  for (const auto& c : candidates) {
+    size_t d = EditDistance(word, c);
+    if (d < best_d) best_d = d, best = c;
+  }
+  return best.empty() ? "" : " (did you mean '" + best + "'?)";
+}
+
+std::string JoinNames(const std::vector<std::string>& names) {
+  std::string out;
+  for (size_t i = 0; i < names.size(); ++i) out += (i ? ", " : "") + names[i];
+  return out.empty() ? "none" : out;
+}
+
+template <typename Map>
+std::vector<std::string> KeysOf(const Map& m) {
+  std::vector<std::string> out;
+  for (const auto& kv : m) out.push_back(kv.first);
+  return out;
+}
+
+void ReportSchemaErrors(const YamlDocument& doc, const std::vector<SchemaError>& errors,
+                        const std::string& pointer_prefix, Errors& out) {
+  for (const SchemaError& e : errors) {
+    const std::string pointer = pointer_prefix + e.pointer;
+    const bool about_key = e.message.rfind("unknown key", 0) == 0;
+    out.Add(about_key ? doc.KeyPositionOf(pointer) : doc.PositionOf(pointer), e.message);
+  }
+}
+
+// Looks up "a.b.c" in the scene.
+const json* SceneLookup(const json& scene, const std::string& dotted) {
+  const json* cur = &scene;
+  std::stringstream ss(dotted);
+  std::string part;
+  while (std::getline(ss, part, '.')) {
+    if (cur->is_object() && cur->contains(part)) cur = &(*cur)[part];
+    else if (cur->is_array() && !part.empty() &&
+             std::all_of(part.begin(), part.end(), ::isdigit) && std::stoul(part) < cur->size())
+      cur = &(*cur)[std::stoul(part)];
+    else return nullptr;
+  }
+  return cur;
+}
+
+struct SceneContext {
+  const json* scene = nullptr;  // null: no scene
+  std::string file;
+  std::string dir;
+};
+
+// Replaces ${scene.KEY} in every string of `value`. A string that is exactly
+// one reference takes the referenced value with its type; otherwise the value
+// is formatted into the string. `from_scene` collects pointers (relative to
+// `value`) whose whole value came from the scene, for path resolution.
+void SubstituteScene(json& value, const std::string& pointer, const YamlDocument& doc,
+                     const std::string& doc_pointer, const SceneContext& scene,
+                     std::set<std::string>& from_scene, Errors& errors) {
+  if (value.is_object()) {
+    for (auto& [k, v] : value.items())
+      SubstituteScene(v, pointer + "/" + PointerToken(k), doc, doc_pointer + "/" + PointerToken(k),
+                      scene, from_scene, errors);
+    return;
+  }
+  if (value.is_array()) {
+    for (size_t i = 0; i < value.size(); ++i)
+      SubstituteScene(value[i], pointer + "/" + std::to_string(i), doc,
+                      doc_pointer + "/" + std::to_string(i), scene, from_scene, errors);
+    return;
+  }
+  if (!value.is_string()) return;
+  const std::string text = value.get<std::string>();
+  if (text.find("${") == std::string::npos) return;
+  std::string out;
+  size_t pos = 0;
+  bool whole = false;
+  json whole_value;
+  while (pos < text.size()) {
+    size_t start = text.find("${", pos);
+    if (start == std::string::npos) {
+      out += text.substr(pos);
+      break;
+    }
+    out += text.substr(pos, start - pos);
+    size_t end = text.find('}', start);
+    if (end == std::string::npos) {
+      errors.Add(doc.PositionOf(doc_pointer), "unterminated '${' in \"" + text + "\"");
+      return;
+    }
+    const std::string ref = text.substr(start + 2, end - start - 2);
+    if (ref.rfind("scene.", 0) != 0) {
+      errors.Add(doc.PositionOf(doc_pointer),
+                 "unknown reference '${" + ref + "}' (only ${scene.KEY} is supported)");
+      return;
+    }
+    if (!scene.scene) {
+      errors.Add(doc.PositionOf(doc_pointer),
+                 "'${" + ref + "}' refers to the scene, but the workflow names no scene "
+                 "(add 'scene: FILE' or pass --scene FILE)");
+      return;
+    }
+    const json* found = SceneLookup(*scene.scene, ref.substr(6));
+    if (!found) {
+      std::vector<std::string> keys;
+      if (scene.scene->is_object())
+        for (auto& [k, v] : scene.scene->items()) keys.push_back(k);
+      errors.Add(doc.PositionOf(doc_pointer), "scene " + scene.file + " has no key '" +
+                                                  ref.substr(6) + "'" + Suggest(ref.substr(6), keys));
+      return;
+    }
+    if (start == 0 && end == text.size() - 1) {
+      whole = true;
+      whole_value = *found;
+    }
+    out += found->is_string() ? found->get<std::string>() : found->dump();
+    pos = end + 1;
+  }
+  if (whole) {
+    value = whole_value;
+    from_scene.insert(pointer);
+  } else {
+    value = out;
+  }
+}
+
+// Applies one --set STAGE.PARAM[.SUB]=VALUE to the stages' `with:` objects.
+Status ApplySet(const std::string& set, json& stages) {
+  const size_t eq = set.find('=');
+  if (eq == std::string::npos)
+    return Status::Invalid("--set " + set + ": expected STAGE.PARAM=VALUE");
+  const std::string lhs = set.substr(0, eq);
+  std::vector<std::string> parts;
+  std::stringstream ss(lhs);
+  for (std::string p; std::getline(ss, p, '.');) parts.push_back(p);
+  if (parts.size() < 2 || std::any_of(parts.begin(), parts.end(), [](auto& p) { return p.empty(); }))
+    return Status::Invalid("--set " + set + ": expected STAGE.PARAM=VALUE");
+  if (!stages.is_object() || !stages.contains(parts[0])) {
+    std::vector<std::string> ids;
+    if (stages.is_object())
+      for (auto& [k, v] : stages.items()) ids.push_back(k);
+    return Status::Invalid("--set " + set + ": no stage '" + parts[0] + "' in the workflow" +
+                           Suggest(parts[0], ids) + " (stages: " + JoinNames(ids) + ")");
+  }
+  Expected<json> value = ParseYamlValue(set.substr(eq + 1));
+  if (!value.ok()) return value.status().WithContext("--set " + set);
+  json& stage = stages[parts[0]];
+  if (!stage.is_object()) return Status::Invalid("--set " + set + ": stage is not a mapping");
+  json* cur = &stage["with"];
+  if (cur->is_null()) *cur = json::object();
+  for (size_t i = 1; i + 1 < parts.size(); ++i) {
+    json& next = (*cur)[parts[i]];
+    if (next.is_null()) next = json::object();
+    if (!next.is_object())
+      return Status::Invalid("--set " + set + ": '" + parts[i] + "' is not a mapping");
+    cur = &next;
+  }
+  (*cur)[parts.back()] = *value;
+  return Status::Ok();
+}
+
+}  // namespace
+
+const nlohmann::json& WorkflowSchemaJson() {
+  static const json schema = json::parse(kWorkflowSchemaText);
+  return schema;
+}
+
+const nlohmann::json& SceneSchemaJson() {
+  static const json schema = json::parse(kSceneSchemaText);
+  return schema;
+}
+
+std::vector<std::string> Workflow::Dependents(const std::string& id) const {
+  std::vector<std::string> out;
+  for (const auto& [sid, node] : stages)
+    if (std::find(node.deps.begin(), node.deps.end(), id) != node.deps.end()) out.push_back(sid);
+  return out;
+}
+
+Expected<nlohmann::json> LoadScene(const std::string& path) {
+  PB_ASSIGN_OR_RETURN(YamlDocument doc, ParseYamlFile(path));
+  static const JsonSchema schema = JsonSchema::Parse(SceneSchemaJson(), "scene schema").value();
+  Errors errors;
+  if (!doc.value.is_object()) {
+    errors.Add(doc.PositionOf(""), "a scene file must be a mapping with at least 'name'");
+    return errors.ToStatus();
+  }
+  ReportSchemaErrors(doc, schema.Validate(doc.value), "", errors);
+  if (!errors.empty()) return errors.ToStatus();
+  return ApplyDefaults(SceneSchemaJson(), doc.value);
+}
+
+Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& options,
+                                Registry& registry) {
+  PB_ASSIGN_OR_RETURN(YamlDocument doc, ParseYamlFile(path));
+  static const JsonSchema schema =
+      JsonSchema::Parse(WorkflowSchemaJson(), "workflow schema").value();
+  Errors errors;
+  if (!doc.value.is_object()) {
+    errors.Add(doc.PositionOf(""), "a workflow must be a mapping with 'name' and 'stages'");
+    return errors.ToStatus();
+  }
+  ReportSchemaErrors(doc, schema.Validate(doc.value), "", errors);
+  if (!errors.empty()) return errors.ToStatus();
+
+  Workflow wf;
+  wf.file = ResolvePath(".", path);
+  const std::string dir = DirName(wf.file);
+  wf.name = doc.value["name"].get<std::string>();
+  wf.salt = doc.value.value("salt", "");
+
+  // Plugins first: they add stage types.
+  if (doc.value.contains("plugins")) {
+    const json& plugins = doc.value["plugins"];
+    for (size_t i = 0; i < plugins.size(); ++i) {
+      const std::string abs = ResolvePath(dir, plugins[i].get<std::string>());
+      Status st = registry.LoadPlugin(abs);
+      if (!st.ok()) errors.Add(doc.PositionOf("/plugins/" + std::to_string(i)), st.message());
+      wf.plugins.push_back(abs);
+    }
+  }
+
+  // Scene.
+  SceneContext scene_ctx;
+  json scene;
+  std::string scene_path;
+  SourcePos scene_pos{"--scene", 0, 0};
+  if (!options.scene_file.empty()) {
+    scene_path = ResolvePath(".", options.scene_file);
+  } else if (doc.value.contains("scene")) {
+    scene_path = ResolvePath(dir, doc.value["scene"].get<std::string>());
+    scene_pos = doc.PositionOf("/scene");
+  }
+  if (!scene_path.empty()) {
+    if (!Env::Default()->Exists(scene_path)) {
+      errors.Add(scene_pos, "scene file not found: " + scene_path);
+    } else {
+      Expected<json> loaded = LoadScene(scene_path);
+      if (!loaded.ok()) errors.AddRaw(loaded.status().message());
+      else scene = std::move(loaded).value();
+    }
+    wf.scene_file = scene_path;
+    wf.scene = scene;
+    if (!scene.is_null()) {
+      scene_ctx.scene = &wf.scene;
+      scene_ctx.file = scene_path;
+      scene_ctx.dir = DirName(scene_path);
+    }
+  }
+
+  // --set overrides, applied to a copy of the stages; remember which
+  // pointers they touched so errors point at the command line.
+  json stages = doc.value["stages"];
+  std::map<std::string, std::string> set_by_pointer;
+  for (const std::string& set : options.sets) {
+    Status st = ApplySet(set, stages);
+    if (!st.ok()) {
+      errors.AddRaw("<command line>: " + st.message());
+      continue;
+    }
+    const std::string lhs = set.substr(0, set.find('='));
+    std::string pointer = "/stages";
+    std::stringstream ss(lhs);
+    int part_index = 0;
+    for (std::string p; std::getline(ss, p, '.'); ++part_index) {
+      pointer += "/" + PointerToken(p);
+      if (part_index == 0) pointer += "/with";
+    }
+    set_by_pointer[pointer] = set;
+  }
+  auto pos_of = [&](const std::string& pointer) -> SourcePos {
+    for (const auto& [p, set] : set_by_pointer)
+      if (pointer == p || pointer.rfind(p + "/", 0) == 0)
+        return SourcePos{"<command line> --set " + set, 0, 0};
+    return doc.PositionOf(pointer);
+  };
+
+  std::vector<std::string> type_ids;
+  for (const StageType* t : registry.All()) type_ids.push_back(t->id);
+
+  for (auto& [id, spec] : stages.items()) {
+    const std::string sp = "/stages/" + PointerToken(id);
+    StageNode node;
+    node.id = id;
+    node.pos = doc.KeyPositionOf(sp);
+    const std::string uses = spec["uses"].get<std::string>();
+    node.type = registry.Find(uses);
+    if (!node.type) {
+      errors.Add(doc.PositionOf(sp + "/uses"),
+                 "unknown stage type '" + uses + "'" + Suggest(uses, type_ids) +
+                     " (see `pointbake stages`)");
+      continue;
+    }
+    json with = spec.contains("with") ? spec["with"] : json::object();
+    std::set<std::string> from_scene;
+    SubstituteScene(with, "", doc, sp + "/with", scene_ctx, from_scene, errors);
+    const json& param_schema = registry.ParamsSchema(uses).json();
+    with = ApplyDefaults(param_schema, with);
+    for (const SchemaError& e : registry.ParamsSchema(uses).Validate(with)) {
+      const std::string pointer = sp + "/with" + e.pointer;
+      const bool about_key = e.message.rfind("unknown key", 0) == 0;
+      SourcePos pos = pos_of(pointer);
+      if (about_key && pos.file.rfind("<command line>", 0) != 0) pos = doc.KeyPositionOf(pointer);
+      errors.Add(pos, "stage '" + id + "' (" + uses + "): " + e.message);
+    }
+    // Paths: absolute, relative to the file that named them.
+    const json properties = param_schema.value("properties", json::object());
+    for (auto& [name, prop] : properties.items()) {
+      if (!prop.value("x-path", false) || !with.contains(name) || !with[name].is_string()) continue;
+      const std::string base = from_scene.count("/" + PointerToken(name)) ? scene_ctx.dir : dir;
+      with[name] = ResolvePath(base, with[name].get<std::string>());
+    }
+    node.params = std::move(with);
+
+    // Inputs.
+    const json in = spec.contains("in") ? spec["in"] : json::object();
+    for (auto& [port, ref] : in.items()) {
+      const std::string ip = sp + "/in/" + PointerToken(port);
+      const auto& inputs = node.type->inputs;
+      auto port_it = std::find_if(inputs.begin(), inputs.end(),
+                                  [&](const PortSpec& p) { return p.name == port; });
+      if (port_it == inputs.end()) {
+        std::vector<std::string> names;
+        for (const auto& p : inputs) names.push_back(p.name);
+        errors.Add(doc.KeyPositionOf(ip), "stage '" + id + "' (" + uses +
+                                              ") has no input port '" + port + "'" +
+                                              Suggest(port, names) + " (inputs: " +
+                                              JoinNames(names) + ")");
+        continue;
+      }
+      const std::string text = ref.get<std::string>();
+      const size_t dot = text.find('.');
+      InputRef input{text.substr(0, dot), text.substr(dot + 1), doc.PositionOf(ip)};
+      node.inputs[port] = input;
+    }
+    for (const PortSpec& p : node.type->inputs)
+      if (!p.optional && !node.inputs.count(p.name))
+        errors.Add(node.pos, "stage '" + id + "' (" + uses + ") is missing required input '" +
+                                 p.name + "' (" + p.type + "); add `in: { " + p.name +
+                                 ": STAGE.PORT }`");
+    wf.stages.emplace(id, std::move(node));
+  }
+
+  // Edges: sources exist, ports exist, types agree.
+  const std::vector<std::string> stage_ids = KeysOf(wf.stages);
+  for (auto& [id, node] : wf.stages) {
+    std::set<std::string> deps;
+    for (auto& [port, input] : node.inputs) {
+      auto src = wf.stages.find(input.from_stage);
+      if (src == wf.stages.end()) {
+        // A stage that failed to resolve its type was reported already.
+        if (!stages.contains(input.from_stage))
+          errors.Add(input.pos, "input '" + port + "' of stage '" + id + "' names unknown stage '" +
+                                    input.from_stage + "'" + Suggest(input.from_stage, stage_ids));
+        continue;
+      }
+      const auto& outs = src->second.type->outputs;
+      auto out_it = std::find_if(outs.begin(), outs.end(),
+                                 [&](const PortSpec& p) { return p.name == input.from_port; });
+      if (out_it == outs.end()) {
+        std::vector<std::string> names;
+        for (const auto& p : outs) names.push_back(p.name);
+        errors.Add(input.pos, "stage '" + input.from_stage + "' (" + src->second.type->id +
+                                  ") has no output port '" + input.from_port + "'" +
+                                  Suggest(input.from_port, names) + " (outputs: " +
+                                  JoinNames(names) + ")");
+        continue;
+      }
+      const PortSpec& in_spec = *std::find_if(node.type->inputs.begin(), node.type->inputs.end(),
+                                              [&](const PortSpec& p) { return p.name == port; });
+      if (in_spec.type != "any" && in_spec.type != out_it->type)
+        errors.Add(input.pos, "type mismatch: input '" + port + "' of stage '" + id +
+                                  "' takes " + in_spec.type + ", but " + input.from_stage + "." +
+                                  input.from_port + " is " + out_it->type);
+      deps.insert(input.from_stage);
+    }
+    node.deps.assign(deps.begin(), deps.end());
+  }
+
+  // Outputs.
+  if (doc.value.contains("outputs")) {
+    for (auto& [name, ref] : doc.value["outputs"].items()) {
+      const std::string text = ref.get<std::string>();
+      const std::string st = text.substr(0, text.find('.'));
+      const std::string port = text.substr(text.find('.') + 1);
+      auto it = wf.stages.find(st);
+      const SourcePos pos = doc.PositionOf("/outputs/" + PointerToken(name));
+      if (it == wf.stages.end()) {
+        if (!stages.contains(st))
+          errors.Add(pos, "output '" + name + "' names unknown stage '" + st + "'" +
+                              Suggest(st, stage_ids));
+        continue;
+      }
+      const auto& outs = it->second.type->outputs;
+      if (std::none_of(outs.begin(), outs.end(), [&](const PortSpec& p) { return p.name == port; })) {
+        errors.Add(pos, "output '" + name + "': stage '" + st + "' has no output port '" + port + "'");
+        continue;
+      }
+      wf.outputs[name] = {st, port};
+    }
+  }
+
+  if (!errors.empty()) return errors.ToStatus();
+
+  // Topological order (Kahn, ties by name) and cycle detection.
+  std::map<std::string, int> indegree;
+  for (const auto& [id, node] : wf.stages) indegree[id] = static_cast<int>(node.deps.size());
+  std::priority_queue<std::string, std::vector<std::string>, std::greater<>> ready;
+  for (const auto& [id, d] : indegree)
+    if (d == 0) ready.push(id);
+  while (!ready.empty()) {
+    std::string id = ready.top();
+    ready.pop();
+    wf.order.push_back(id);
+    for (const std::string& dep : wf.Dependents(id))
+      if (--indegree[dep] == 0) ready.push(dep);
+  }
+  if (wf.order.size() != wf.stages.size()) {
+    // Walk upstream from a stage left over until a stage repeats.
+    std::string start;
+    for (const auto& [id, d] : indegree)
+      if (d > 0) {
+        start = id;
+        break;
+      }
+    std::vector<std::string> path;
+    std::string cur = start;
+    while (std::find(path.begin(), path.end(), cur) == path.end()) {
+      path.push_back(cur);
+      for (const std::string& dep : wf.stages[cur].deps)
+        if (indegree[dep] > 0) {
+          cur = dep;
+          break;
+        }
+    }
+    auto first = std::find(path.begin(), path.end(), cur);
+    std::vector<std::string> cycle(first, path.end());
+    std::reverse(cycle.begin(), cycle.end());
+    std::string text;
+    for (const auto& s : cycle) text += s + " -> ";
+    text += cycle.front();
+    // Report at the input that closes the cycle: cycle.front() feeds cycle[1].
+    const StageNode& consumer = wf.stages[cycle.size() > 1 ? cycle[1] : cycle[0]];
+    SourcePos pos = consumer.pos;
+    for (const auto& [port, input] : consumer.inputs)
+      if (input.from_stage == cycle.front()) pos = input.pos;
+    errors.Add(pos, "cycle: " + text);
+    return errors.ToStatus();
+  }
+
+  // Default outputs: every output of every stage nothing consumes.
+  if (!doc.value.contains("outputs")) {
+    for (const auto& [id, node] : wf.stages)
+      if (wf.Dependents(id).empty())
+        for (const PortSpec& p : node.type->outputs)
+          wf.outputs[id + "." + p.name] = {id, p.name};
+  }
+  return wf;
+}
+
+std::string WorkflowToDot(const Workflow& wf) {
+  std::ostringstream out;
+  auto quote = [](const std::string& s) {
+    std::string q = "\"";
+    for (char c : s) {
+      if (c == '"' || c == '\\') q += '\\';
+      q += c;
+    }
+    return q + "\"";
+  };
+  out << "digraph " << quote(wf.name) << " {\n  rankdir=LR;\n  node [shape=box, fontname=\"Helvetica\"];\n";
+  for (const std::string& id : wf.order) {
+    const StageNode& n = wf.stages.at(id);
+    out << "  " << quote(id) << " [label=" << quote(id + "\\n" + n.type->id) << "];\n";
+  }
+  for (const std::string& id : wf.order)
+    for (const auto& [port, in] : wf.stages.at(id).inputs)
+      out << "  " << quote(in.from_stage) << " -> " << quote(id)
+          << " [label=" << quote(in.from_port + " → " + port) << "];\n";
+  out << "}\n";
+  return out.str();
+}
+
+}  // namespace pb

@@ -1,0 +1,13 @@
+#include "stages/builtin.h"
+
+#include "stages/io/io_stages.h"
+#include "stages/points/points_stages.h"
+
+namespace pb {
+
+void RegisterBuiltinStages(StageRegistry& registry) {
+  RegisterIoStages(registry);
+  RegisterPointsStages(registry);
+}
+
+}  // namespace pb

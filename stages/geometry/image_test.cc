@@ -1,0 +1,109 @@
+#include "stages/geometry/image.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <filesystem>
+#include <fstream>
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+class ImageTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("pb_image_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+
+  std::filesystem::path dir_;
+};
+
+TEST_F(ImageTest, Png8BitAllChannelCounts) {
+  for (int channels = 1; channels <= 4; ++channels) {
+    Image image = Image::Make(5, 3, channels, Image::PixelType::kU8);
+    for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<uint8_t>(i * 37 + channels);
+    const std::string path = Path("img" + std::to_string(channels) + ".png");
+    ASSERT_TRUE(WritePng(path, image).ok());
+    auto read = ReadPng(path);
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    EXPECT_EQ(read->width, 5);
+    EXPECT_EQ(read->height, 3);
+    EXPECT_EQ(read->channels, channels);
+    EXPECT_EQ(read->type, Image::PixelType::kU8);
+    EXPECT_EQ(read->data, image.data);
+  }
+}
+
+TEST_F(ImageTest, Png16BitKeepsFullValues) {
+  Image image = Image::Make(4, 2, 3, Image::PixelType::kU16);
+  image.at_u16(0, 0, 0) = 0x1234;
+  image.at_u16(3, 1, 2) = 65535;
+  image.at_u16(2, 1, 1) = 258;  // 0x0102: catches byte-order mistakes
+  ASSERT_TRUE(WriteImage(Path("deep.PNG"), image).ok());
+  auto read = ReadImage(Path("deep.PNG"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->type, Image::PixelType::kU16);
+  EXPECT_EQ(read->at_u16(0, 0, 0), 0x1234);
+  EXPECT_EQ(read->at_u16(3, 1, 2), 65535);
+  EXPECT_EQ(read->at_u16(2, 1, 1), 258);
+  EXPECT_EQ(read->data, image.data);
+}
+
+TEST_F(ImageTest, ExrFloatRoundTrip) {
+  for (int channels : {1, 3, 4}) {
+    Image image = Image::Make(7, 5, channels, Image::PixelType::kF32);
+    for (size_t i = 0; i < image.sample_count(); ++i) image.f32()[i] = -1.0f + 0.013f * i;
+    image.at_f32(6, 4, channels - 1) = 1e20f;
+    const std::string path = Path("n" + std::to_string(channels) + ".exr");
+    ASSERT_TRUE(WriteImage(path, image).ok());
+    auto read = ReadImage(path);
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    EXPECT_EQ(read->width, 7);
+    EXPECT_EQ(read->height, 5);
+    EXPECT_EQ(read->channels, channels);
+    EXPECT_EQ(read->type, Image::PixelType::kF32);
+    EXPECT_EQ(read->data, image.data);
+  }
+}
+
+TEST_F(ImageTest, CorruptAndWrongFilesAreClearErrors) {
+  std::ofstream(Path("text.png")) << "this is not a png";
+  auto not_png = ReadPng(Path("text.png"));
+  ASSERT_FALSE(not_png.ok());
+  EXPECT_THAT(not_png.status().message(), HasSubstr("text.png: not a PNG file"));
+
+  // A real PNG cut in half: libpng's error comes back as a Status.
+  Image image = Image::Make(64, 64, 3, Image::PixelType::kU8);
+  for (size_t i = 0; i < image.data.size(); ++i) image.data[i] = static_cast<uint8_t>(i * 7919 % 251);
+  ASSERT_TRUE(WritePng(Path("full.png"), image).ok());
+  const auto size = std::filesystem::file_size(Path("full.png"));
+  std::filesystem::copy_file(Path("full.png"), Path("cut.png"));
+  std::filesystem::resize_file(Path("cut.png"), size / 2);
+  auto cut = ReadPng(Path("cut.png"));
+  ASSERT_FALSE(cut.ok());
+  EXPECT_EQ(cut.status().code(), Status::Code::kCorrupt);
+  EXPECT_THAT(cut.status().message(), HasSubstr("cut.png: corrupt PNG"));
+
+  std::ofstream(Path("text.exr")) << "this is not an exr";
+  auto not_exr = ReadExr(Path("text.exr"));
+  ASSERT_FALSE(not_exr.ok());
+  EXPECT_THAT(not_exr.status().message(), HasSubstr("text.exr: corrupt or unreadable EXR"));
+
+  EXPECT_EQ(ReadImage(Path("x.tiff")).status().code(), Status::Code::kUnsupported);
+  EXPECT_EQ(ReadPng(Path("missing.png")).status().code(), Status::Code::kNotFound);
+  EXPECT_EQ(WritePng(Path("f.png"), Image::Make(2, 2, 1, Image::PixelType::kF32)).code(),
+            Status::Code::kInvalid);
+  EXPECT_EQ(WriteExr(Path("f.exr"), Image::Make(2, 2, 1, Image::PixelType::kU8)).code(),
+            Status::Code::kInvalid);
+}
+
+}  // namespace
+}  // namespace pb

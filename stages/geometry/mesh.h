@@ -1,0 +1,50 @@
+// Mesh: the `mesh` artifact in memory, a triangle mesh with optional
+// per-vertex attributes (structure of arrays, like PointCloud):
+//   positions: 3 floats per vertex, meters, relative to `origin`
+//   normals:   empty or 3 floats per vertex (unit length)
+//   colors:    empty or 3 bytes per vertex (r, g, b; sRGB 0..255)
+//   uvs:       empty or 2 floats per vertex (u right, v up; [0,1] on the atlas)
+//   tangents:  empty or 4 floats per vertex (xyz unit tangent along +u, w = ±1
+//              handedness: bitangent = w * cross(normal, tangent), glTF style)
+//   indices:   3 vertex indices per triangle, counter-clockwise = front
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "engine/base/status.h"
+#include "stages/geometry/point_cloud.h"
+
+namespace pb {
+
+struct Mesh {
+  std::array<double, 3> origin{};  // meters
+  std::vector<float> positions;    // xyz per vertex, meters, relative to origin
+  std::vector<float> normals;      // empty or 3 per vertex
+  std::vector<uint8_t> colors;     // empty or 3 per vertex
+  std::vector<float> uvs;          // empty or 2 per vertex
+  std::vector<float> tangents;     // empty or 4 per vertex
+  std::vector<uint32_t> indices;   // 3 per triangle
+
+  size_t vertex_count() const { return positions.size() / 3; }
+  size_t face_count() const { return indices.size() / 3; }
+  bool has_normals() const { return !normals.empty(); }
+  bool has_colors() const { return !colors.empty(); }
+  bool has_uvs() const { return !uvs.empty(); }
+  bool has_tangents() const { return !tangents.empty(); }
+};
+
+Bounds LocalBounds(const Mesh& mesh);
+Bounds AbsoluteBounds(const Mesh& mesh);
+
+// Checks attribute sizes against the vertex count and that every index names
+// a vertex; Status::Invalid naming the first problem otherwise.
+Status Validate(const Mesh& mesh);
+
+// The vertices of a mesh as a point cloud (positions, normals, colors),
+// e.g. to bake from a mesh's own vertex colors.
+PointCloud VerticesAsPoints(const Mesh& mesh);
+
+}  // namespace pb

@@ -1,0 +1,416 @@
+#include "stages/geometry/ply.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <limits>
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+class PlyTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("pb_ply_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::create_directories(dir_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  std::string Write(const std::string& name, const std::string& contents) const {
+    std::ofstream(Path(name), std::ios::binary) << contents;
+    return Path(name);
+  }
+
+  std::filesystem::path dir_;
+};
+
+std::string SharedData() {
+  const char* source = std::getenv("PB_SOURCE_DIR");
+  if (source) {
+    const std::filesystem::path candidate = std::filesystem::path(source) / ".." / "shared" / "data";
+    if (std::filesystem::exists(candidate)) return candidate.string();
+  }
+  if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
+  return "";
+}
+
+template <typename T>
+void AppendRaw(std::string* out, T value, bool big_endian) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  if (big_endian != (std::endian::native == std::endian::big)) std::reverse(bytes, bytes + sizeof(T));
+  out->append(bytes, sizeof(T));
+}
+
+TEST_F(PlyTest, PointsRoundTripWithAllAttributes) {
+  PointCloud cloud;
+  cloud.origin = {652341.0, 5412345.25, 312.5};
+  cloud.positions = {0.f, 0.f, 0.f, 1.5f, -2.25f, 3.125f, 1e-4f, 1e4f, -7.f};
+  cloud.normals = {0, 0, 1, 0, 1, 0, 0.6f, 0.8f, 0};
+  cloud.colors = {0, 0, 0, 255, 128, 1, 10, 20, 30};
+  ASSERT_TRUE(WritePlyPoints(Path("p.ply"), cloud).ok());
+
+  auto read = ReadPlyPoints(Path("p.ply"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.origin, cloud.origin);
+  EXPECT_EQ(read->points.positions, cloud.positions);
+  EXPECT_EQ(read->points.normals, cloud.normals);
+  EXPECT_EQ(read->points.colors, cloud.colors);
+  EXPECT_EQ(read->report.format, "binary_little_endian");
+  EXPECT_EQ(read->report.pointbake_kind, "points");
+  EXPECT_EQ(read->report.pointbake_version, 1);
+
+  // The header is what the format documentation promises.
+  std::ifstream in(Path("p.ply"));
+  std::string line1, line2, line3, line4;
+  std::getline(in, line1);
+  std::getline(in, line2);
+  std::getline(in, line3);
+  std::getline(in, line4);
+  EXPECT_EQ(line1, "ply");
+  EXPECT_EQ(line2, "format binary_little_endian 1.0");
+  EXPECT_EQ(line3, "comment pointbake points 1");
+  EXPECT_EQ(line4, "comment origin 652341 5412345.25 312.5");
+}
+
+TEST_F(PlyTest, PointsWithoutOptionalAttributes) {
+  PointCloud cloud;
+  cloud.positions = {1, 2, 3};
+  ASSERT_TRUE(WritePlyPoints(Path("p.ply"), cloud).ok());
+  auto read = ReadPlyPoints(Path("p.ply"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.positions, cloud.positions);
+  EXPECT_FALSE(read->points.has_normals());
+  EXPECT_FALSE(read->points.has_colors());
+}
+
+TEST_F(PlyTest, MeshRoundTripWithAllAttributes) {
+  Mesh mesh;
+  mesh.origin = {1.0, -2.0, 1e6};
+  mesh.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  mesh.normals = {0, 0, 1, 0, 0, 1, 0, 0, 1, 0, 0, 1};
+  mesh.colors = {255, 0, 0, 0, 255, 0, 0, 0, 255, 9, 9, 9};
+  mesh.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
+  mesh.tangents = {1, 0, 0, 1, 1, 0, 0, 1, 1, 0, 0, -1, 1, 0, 0, 1};
+  mesh.indices = {0, 1, 2, 0, 2, 3};
+  ASSERT_TRUE(WritePlyMesh(Path("m.ply"), mesh).ok());
+
+  auto read = ReadPlyMesh(Path("m.ply"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->mesh.origin, mesh.origin);
+  EXPECT_EQ(read->mesh.positions, mesh.positions);
+  EXPECT_EQ(read->mesh.normals, mesh.normals);
+  EXPECT_EQ(read->mesh.colors, mesh.colors);
+  EXPECT_EQ(read->mesh.uvs, mesh.uvs);
+  EXPECT_EQ(read->mesh.tangents, mesh.tangents);
+  EXPECT_EQ(read->mesh.indices, mesh.indices);
+  EXPECT_EQ(read->report.pointbake_kind, "mesh");
+  EXPECT_EQ(read->report.faces_in_file, 2u);
+
+  // Reading a mesh as points keeps the vertices only.
+  auto points = ReadPlyPoints(Path("m.ply"));
+  ASSERT_TRUE(points.ok()) << points.status().message();
+  EXPECT_EQ(points->points.size(), 4u);
+  EXPECT_EQ(points->points.colors, mesh.colors);
+}
+
+TEST_F(PlyTest, WriterRejectsMismatchedAttributes) {
+  PointCloud cloud;
+  cloud.positions = {1, 2, 3, 4, 5, 6};
+  cloud.colors = {1, 2, 3};
+  const Status status = WritePlyPoints(Path("bad.ply"), cloud);
+  EXPECT_EQ(status.code(), Status::Code::kInvalid);
+  EXPECT_THAT(status.message(), HasSubstr("3 color bytes for 2 points"));
+
+  Mesh mesh;
+  mesh.positions = {0, 0, 0};
+  mesh.indices = {0, 0, 1};
+  EXPECT_THAT(WritePlyMesh(Path("bad2.ply"), mesh).message(), HasSubstr("refers to vertex 1"));
+}
+
+TEST_F(PlyTest, AsciiWithQuadAndUnknownElementsAndProperties) {
+  const std::string path = Write("a.ply",
+                                 "ply\n"
+                                 "format ascii 1.0\n"
+                                 "comment made by hand\n"
+                                 "obj_info scanner 7\n"
+                                 "element range_grid 2\n"
+                                 "property list uchar int vertex_indices\n"
+                                 "element vertex 4\n"
+                                 "property double x\n"
+                                 "property double y\n"
+                                 "property double z\n"
+                                 "property float confidence\n"
+                                 "property float nx\n"
+                                 "property float ny\n"
+                                 "property float nz\n"
+                                 "property ushort red\n"
+                                 "property ushort green\n"
+                                 "property ushort blue\n"
+                                 "property uchar alpha\n"
+                                 "property float texture_u\n"
+                                 "property float texture_v\n"
+                                 "element face 1\n"
+                                 "property uchar flags\n"
+                                 "property list uchar int vertex_index\n"
+                                 "end_header\n"
+                                 "1 0\n"
+                                 "0\n"
+                                 "1000.5 2000.25 10 0.9 0 0 1 65535 0 32768 255 0 0\n"
+                                 "1001.5 2000.25 10 0.9 0 0 1 0 65535 0 255 1 0\n"
+                                 "1001.5 2001.25 10 0.9 0 0 1 0 0 0 255 1 1\n"
+                                 "1000.5 2001.25 10 0.9 0 0 1 257 514 771 255 0 1\n"
+                                 "7 4 0 1 2 3\n");
+  auto read = ReadPlyMesh(path);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const Mesh& mesh = read->mesh;
+  EXPECT_EQ(read->report.format, "ascii");
+  ASSERT_EQ(mesh.vertex_count(), 4u);
+  // Doubles are re-centered on their bounding-box center rounded to 1 m.
+  EXPECT_EQ(mesh.origin, (std::array<double, 3>{1001, 2001, 10}));
+  EXPECT_FLOAT_EQ(mesh.positions[0], -0.5f);
+  EXPECT_FLOAT_EQ(mesh.positions[1], -0.75f);
+  EXPECT_FLOAT_EQ(mesh.positions[2], 0.f);
+  EXPECT_FLOAT_EQ(mesh.positions[6], 0.5f);
+  EXPECT_FLOAT_EQ(mesh.positions[7], 0.25f);
+  EXPECT_EQ(mesh.normals.size(), 12u);
+  EXPECT_EQ(mesh.colors, (std::vector<uint8_t>{255, 0, 128, 0, 255, 0, 0, 0, 0, 1, 2, 3}));
+  EXPECT_EQ(mesh.uvs, (std::vector<float>{0, 0, 1, 0, 1, 1, 0, 1}));
+  EXPECT_TRUE(mesh.tangents.empty());
+  // The quad is fan-triangulated.
+  EXPECT_EQ(mesh.indices, (std::vector<uint32_t>{0, 1, 2, 0, 2, 3}));
+  EXPECT_EQ(read->report.comments, (std::vector<std::string>{"made by hand", "scanner 7"}));
+}
+
+TEST_F(PlyTest, FloatColorsAndCrLf) {
+  const std::string path = Write("c.ply",
+                                 "ply\r\nformat ascii 1.0\r\nelement vertex 2\r\n"
+                                 "property float x\r\nproperty float y\r\nproperty float z\r\n"
+                                 "property float red\r\nproperty float green\r\nproperty float blue\r\n"
+                                 "end_header\r\n"
+                                 "1 2 3 1.0 0.5 0\r\n"
+                                 "4 5 6 2.0 -1 0.2\r\n");
+  auto read = ReadPlyPoints(path);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.origin, (std::array<double, 3>{0, 0, 0}));
+  EXPECT_EQ(read->points.positions, (std::vector<float>{1, 2, 3, 4, 5, 6}));
+  EXPECT_EQ(read->points.colors, (std::vector<uint8_t>{255, 128, 0, 255, 0, 51}));
+}
+
+std::string BigEndianFile(bool truncate) {
+  std::string data =
+      "ply\n"
+      "format binary_big_endian 1.0\n"
+      "element vertex 3\n"
+      "property float x\n"
+      "property float y\n"
+      "property float z\n"
+      "property int16 extra\n"
+      "property uchar red\n"
+      "property uchar green\n"
+      "property uchar blue\n"
+      "element face 1\n"
+      "property list uchar uint vertex_indices\n"
+      "end_header\n";
+  for (int i = 0; i < 3; ++i) {
+    AppendRaw<float>(&data, 1.5f * i, true);
+    AppendRaw<float>(&data, -2.0f, true);
+    AppendRaw<float>(&data, 1000.25f, true);
+    AppendRaw<int16_t>(&data, -7, true);
+    data += static_cast<char>(10 * i);
+    data += static_cast<char>(20);
+    data += static_cast<char>(200);
+  }
+  data += static_cast<char>(3);
+  AppendRaw<uint32_t>(&data, 2, true);
+  AppendRaw<uint32_t>(&data, 1, true);
+  AppendRaw<uint32_t>(&data, 0, true);
+  if (truncate) data.resize(data.size() - 30);
+  return data;
+}
+
+TEST_F(PlyTest, BinaryBigEndian) {
+  auto read = ReadPlyMesh(Write("be.ply", BigEndianFile(false)));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->report.format, "binary_big_endian");
+  EXPECT_EQ(read->mesh.positions,
+            (std::vector<float>{0, -2, 1000.25f, 1.5f, -2, 1000.25f, 3, -2, 1000.25f}));
+  EXPECT_EQ(read->mesh.colors, (std::vector<uint8_t>{0, 20, 200, 10, 20, 200, 20, 20, 200}));
+  EXPECT_EQ(read->mesh.indices, (std::vector<uint32_t>{2, 1, 0}));
+}
+
+TEST_F(PlyTest, TruncatedBinaryNamesElementAndByte) {
+  // Vertices are 17 bytes, the face 13: cutting 30 of 64 bytes leaves 34,
+  // so vertex 2 (at 34) is the first incomplete record.
+  const std::string data = BigEndianFile(true);
+  const size_t header_bytes = data.find("end_header\n") + 11;
+  auto read = ReadPlyPoints(Write("t.ply", data));
+  ASSERT_FALSE(read.ok());
+  EXPECT_EQ(read.status().code(), Status::Code::kCorrupt);
+  EXPECT_THAT(read.status().message(),
+              HasSubstr("t.ply: truncated: vertex 2 of 3 at byte " + std::to_string(header_bytes + 34)));
+}
+
+TEST_F(PlyTest, TruncatedAsciiNamesLine) {
+  const std::string path = Write("t.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                 "property float x\nproperty float y\nproperty float z\nend_header\n"
+                                 "1 2 3\n4 5 6\n7 8\n");
+  auto read = ReadPlyPoints(path);
+  ASSERT_FALSE(read.ok());
+  EXPECT_THAT(read.status().message(), HasSubstr("t.ply:10: truncated: vertex 2 of 3"));
+}
+
+TEST_F(PlyTest, CountMismatchExtraData) {
+  std::string data = BigEndianFile(false);
+  data += "garbage bytes";
+  auto read = ReadPlyPoints(Write("x.ply", data));
+  ASSERT_FALSE(read.ok());
+  EXPECT_THAT(read.status().message(), HasSubstr("13 bytes of unexpected data after the last element"));
+  EXPECT_THAT(read.status().message(), HasSubstr("vertex 3, face 1"));
+
+  const std::string ascii = Write("y.ply",
+                                  "ply\nformat ascii 1.0\nelement vertex 1\n"
+                                  "property float x\nproperty float y\nproperty float z\nend_header\n"
+                                  "1 2 3\n4 5 6\n");
+  auto read_ascii = ReadPlyPoints(ascii);
+  ASSERT_FALSE(read_ascii.ok());
+  EXPECT_THAT(read_ascii.status().message(), HasSubstr("y.ply:9: unexpected data '4' after the last element"));
+}
+
+TEST_F(PlyTest, HeaderErrorsNameTheLine) {
+  struct Case {
+    std::string contents;
+    std::string expected;
+  };
+  const Case cases[] = {
+      {"", ": empty file"},
+      {"PK\x03\x04zip", ":1: expected 'ply'"},
+      {"ply\nformat binary 1.0\n", ":2: expected 'format ascii 1.0'"},
+      {"ply\nformat ascii 1.0\nelement vertex many\n", ":3: expected 'element <name> <count>'"},
+      {"ply\nformat ascii 1.0\nproperty float x\n", ":3: 'property' before any 'element'"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty half x\n", ":4: unknown property type 'half'"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n", ":4: missing 'end_header'"},
+      {"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nend_header\n",
+       ":3: element 'vertex' has no property 'z'"},
+      {"ply\nformat ascii 1.0\nelement face 0\nend_header\n", ": no 'vertex' element"},
+      {"ply\nformat ascii 1.0\ncomment pointbake points 2\nend_header\n",
+       ":3: pointbake points format version 2; this build reads version 1"},
+      {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+       "property float z\nend_header\n1 2 abc\n",
+       ":8: vertex 0: expected a number for 'z', got 'abc'"},
+  };
+  int index = 0;
+  for (const Case& c : cases) {
+    // Appended piecewise: "h" + to_string(...) trips GCC 12's -Wrestrict.
+    std::string name = "h";
+    name += std::to_string(index++);
+    name += ".ply";
+    auto read = ReadPlyPoints(Write(name, c.contents));
+    ASSERT_FALSE(read.ok()) << name;
+    EXPECT_THAT(read.status().message(), HasSubstr(name + c.expected)) << name;
+  }
+  auto missing = ReadPlyPoints(Path("missing.ply"));
+  EXPECT_EQ(missing.status().code(), Status::Code::kNotFound);
+}
+
+TEST_F(PlyTest, NonFiniteCoordinatesFailOrAreDropped) {
+  const std::string path = Write("n.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 4\n"
+                                 "property float x\nproperty float y\nproperty float z\n"
+                                 "element face 2\nproperty list uchar int vertex_indices\n"
+                                 "end_header\n"
+                                 "0 0 0\n1 0 0\nnan 1 0\n0 1 inf\n"
+                                 "3 0 1 3\n3 0 1 2\n");
+  auto failed = ReadPlyMesh(path);
+  ASSERT_FALSE(failed.ok());
+  EXPECT_THAT(failed.status().message(), HasSubstr("n.ply:12: vertex 2 has a non-finite coordinate"));
+
+  PlyReadOptions options;
+  options.drop_invalid_points = true;
+  auto dropped = ReadPlyMesh(path, options);
+  ASSERT_TRUE(dropped.ok()) << dropped.status().message();
+  EXPECT_EQ(dropped->report.dropped_points, 2u);
+  EXPECT_EQ(dropped->report.dropped_triangles, 2u);
+  EXPECT_EQ(dropped->mesh.positions, (std::vector<float>{0, 0, 0, 1, 0, 0}));
+  EXPECT_TRUE(dropped->mesh.indices.empty());
+
+  // Binary: the error names the byte.
+  std::string binary =
+      "ply\nformat binary_little_endian 1.0\nelement vertex 2\n"
+      "property float x\nproperty float y\nproperty float z\nend_header\n";
+  const size_t header_bytes = binary.size();
+  for (float v : {1.f, 2.f, 3.f, 4.f, std::numeric_limits<float>::quiet_NaN(), 6.f}) {
+    AppendRaw<float>(&binary, v, false);
+  }
+  auto failed_binary = ReadPlyPoints(Write("nb.ply", binary));
+  ASSERT_FALSE(failed_binary.ok());
+  EXPECT_THAT(failed_binary.status().message(),
+              HasSubstr("vertex 1 has a non-finite coordinate (4 nan 6)"));
+  EXPECT_THAT(failed_binary.status().message(), HasSubstr("at byte " + std::to_string(header_bytes + 12)));
+  auto dropped_binary = ReadPlyPoints(Path("nb.ply"), options);
+  ASSERT_TRUE(dropped_binary.ok());
+  EXPECT_EQ(dropped_binary->points.size(), 1u);
+  EXPECT_EQ(dropped_binary->report.dropped_points, 1u);
+}
+
+TEST_F(PlyTest, FaceIndexOutOfRange) {
+  const std::string path = Write("f.ply",
+                                 "ply\nformat ascii 1.0\nelement vertex 3\n"
+                                 "property float x\nproperty float y\nproperty float z\n"
+                                 "element face 1\nproperty list uchar int vertex_indices\n"
+                                 "end_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 3\n");
+  auto read = ReadPlyMesh(path);
+  ASSERT_FALSE(read.ok());
+  EXPECT_THAT(read.status().message(),
+              HasSubstr("f.ply:13: face 0 refers to vertex 3 but the file has 3 vertices"));
+}
+
+TEST_F(PlyTest, ProgressReachesOne) {
+  PointCloud cloud;
+  cloud.positions.assign(3 * 200000, 1.0f);
+  ASSERT_TRUE(WritePlyPoints(Path("big.ply"), cloud).ok());
+  std::vector<double> fractions;
+  PlyReadOptions options;
+  options.progress = [&](double fraction) { fractions.push_back(fraction); };
+  auto read = ReadPlyPoints(Path("big.ply"), options);
+  ASSERT_TRUE(read.ok());
+  EXPECT_EQ(read->points.size(), 200000u);
+  ASSERT_GE(fractions.size(), 2u);
+  EXPECT_TRUE(std::is_sorted(fractions.begin(), fractions.end()));
+  EXPECT_DOUBLE_EQ(fractions.back(), 1.0);
+}
+
+TEST_F(PlyTest, StanfordBunny) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  const std::string path = data + "/bunny/bun_zipper.ply";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
+  auto read = ReadPlyPoints(path);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.size(), 35947u);
+  EXPECT_FALSE(read->points.has_colors());
+  EXPECT_EQ(read->report.faces_in_file, 69451u);
+  const Bounds bounds = AbsoluteBounds(read->points);
+  EXPECT_NEAR(bounds.min_m[0], -0.0947, 1e-3);
+  EXPECT_NEAR(bounds.max_m[1], 0.1877, 1e-3);
+
+  auto mesh = ReadPlyMesh(path);
+  ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+  EXPECT_EQ(mesh->mesh.face_count(), 69451u);
+}
+
+}  // namespace
+}  // namespace pb

@@ -1,0 +1,62 @@
+#include "stages/geometry/point_cloud.h"
+
+#include <algorithm>
+#include <limits>
+#include <string>
+
+namespace pb {
+
+std::array<double, 3> Bounds::center_m() const {
+  if (empty()) return {0, 0, 0};
+  return {0.5 * (min_m[0] + max_m[0]), 0.5 * (min_m[1] + max_m[1]), 0.5 * (min_m[2] + max_m[2])};
+}
+
+std::array<double, 3> Bounds::extent_m() const {
+  if (empty()) return {0, 0, 0};
+  return {max_m[0] - min_m[0], max_m[1] - min_m[1], max_m[2] - min_m[2]};
+}
+
+Bounds BoundsOf(std::span<const float> positions_xyz) {
+  assert(positions_xyz.size() % 3 == 0);
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  Bounds bounds{{kInf, kInf, kInf}, {-kInf, -kInf, -kInf}};
+  for (size_t i = 0; i + 2 < positions_xyz.size(); i += 3) {
+    for (int axis = 0; axis < 3; ++axis) {
+      const double value = positions_xyz[i + axis];
+      bounds.min_m[axis] = std::min(bounds.min_m[axis], value);
+      bounds.max_m[axis] = std::max(bounds.max_m[axis], value);
+    }
+  }
+  return bounds;
+}
+
+Bounds LocalBounds(const PointCloud& cloud) { return BoundsOf(cloud.positions); }
+
+Bounds AbsoluteBounds(const PointCloud& cloud) {
+  Bounds bounds = LocalBounds(cloud);
+  if (bounds.empty()) return bounds;
+  for (int axis = 0; axis < 3; ++axis) {
+    bounds.min_m[axis] += cloud.origin[axis];
+    bounds.max_m[axis] += cloud.origin[axis];
+  }
+  return bounds;
+}
+
+Status Validate(const PointCloud& cloud) {
+  if (cloud.positions.size() % 3 != 0) {
+    return Status::Invalid("point cloud: positions hold " + std::to_string(cloud.positions.size()) +
+                           " floats, not a multiple of 3");
+  }
+  const size_t n = cloud.size();
+  if (cloud.has_normals() && cloud.normals.size() != 3 * n) {
+    return Status::Invalid("point cloud: " + std::to_string(cloud.normals.size()) +
+                           " normal floats for " + std::to_string(n) + " points (expected 3 per point)");
+  }
+  if (cloud.has_colors() && cloud.colors.size() != 3 * n) {
+    return Status::Invalid("point cloud: " + std::to_string(cloud.colors.size()) +
+                           " color bytes for " + std::to_string(n) + " points (expected 3 per point)");
+  }
+  return Status::Ok();
+}
+
+}  // namespace pb

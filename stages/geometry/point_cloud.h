@@ -1,0 +1,55 @@
+// PointCloud: the `points` artifact in memory.
+//
+// Positions are float32 meters relative to a double-precision `origin`, so a
+// georeferenced scan (coordinates in the 10^5..10^7 m range) keeps sub-
+// millimeter precision: absolute = origin + position. Attributes are stored
+// as flat arrays (structure of arrays), one entry per point, interleaved per
+// attribute:
+//   positions: 3 floats per point (x, y, z), meters, relative to origin
+//   normals:   empty, or 3 floats per point (unit length)
+//   colors:    empty, or 3 bytes per point (r, g, b; sRGB 0..255)
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "engine/base/status.h"
+
+namespace pb {
+
+struct PointCloud {
+  std::array<double, 3> origin{};  // meters
+  std::vector<float> positions;    // xyz interleaved, meters, relative to origin
+  std::vector<float> normals;      // empty or 3 per point
+  std::vector<uint8_t> colors;     // empty or rgb per point
+
+  size_t size() const { return positions.size() / 3; }
+  bool empty() const { return positions.empty(); }
+  bool has_normals() const { return !normals.empty(); }
+  bool has_colors() const { return !colors.empty(); }
+};
+
+// Axis-aligned bounds in meters. Empty bounds have min = +inf, max = -inf.
+struct Bounds {
+  std::array<double, 3> min_m{};
+  std::array<double, 3> max_m{};
+  bool empty() const { return min_m[0] > max_m[0]; }
+  std::array<double, 3> center_m() const;
+  std::array<double, 3> extent_m() const;  // max - min, zeros when empty
+};
+
+// Bounds of xyz-interleaved positions (3 floats per point), in the positions'
+// own frame.
+Bounds BoundsOf(std::span<const float> positions_xyz);
+// Bounds relative to the cloud's origin / in absolute coordinates.
+Bounds LocalBounds(const PointCloud& cloud);
+Bounds AbsoluteBounds(const PointCloud& cloud);
+
+// Checks that attribute arrays agree with the point count; Status::Invalid
+// naming the attribute otherwise.
+Status Validate(const PointCloud& cloud);
+
+}  // namespace pb

@@ -1,0 +1,30 @@
+// Typed access to a stage's effective parameters.
+//
+// The engine validates `with:` against the stage's schema and fills defaults
+// before a stage runs, so these lookups normally just read; a missing or
+// mistyped value still becomes a Status naming the stage and the parameter,
+// never an exception.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <string_view>
+
+#include "engine/base/status.h"
+#include "engine/stage.h"
+
+namespace pb {
+
+// `fallback` is used when the parameter is absent; without one, absence is
+// Status::Invalid.
+Expected<std::string> StringParam(const StageContext& ctx, std::string_view stage_id, const char* name,
+                                  std::optional<std::string> fallback = std::nullopt);
+Expected<double> NumberParam(const StageContext& ctx, std::string_view stage_id, const char* name,
+                             std::optional<double> fallback = std::nullopt);
+Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, const char* name,
+                         std::optional<bool> fallback = std::nullopt);
+
+// The single file of input `port`, or Status::Invalid if it is missing.
+Expected<std::string> InputFile(const StageContext& ctx, std::string_view stage_id, std::string_view port);
+
+}  // namespace pb

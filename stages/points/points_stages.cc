@@ -1,0 +1,14 @@
+#include "stages/points/points_stages.h"
+
+#include <cassert>
+
+namespace pb {
+
+void RegisterPointsStages(StageRegistry& registry) {
+  for (StageType type : {DownsampleStage(), StatsStage()}) {
+    [[maybe_unused]] const Status status = registry.Register(std::move(type));
+    assert(status.ok());
+  }
+}
+
+}  // namespace pb

@@ -1,0 +1,15 @@
+// The `points` stage family: point cloud -> point cloud (or a table about it).
+#pragma once
+
+#include "engine/stage.h"
+
+namespace pb {
+
+// points.downsample: voxel-grid averaging.
+StageType DownsampleStage();
+// points.stats: counts, bounds, centroid and mean color as a table.
+StageType StatsStage();
+
+void RegisterPointsStages(StageRegistry& registry);
+
+}  // namespace pb

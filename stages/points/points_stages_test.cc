@@ -1,0 +1,251 @@
+// Runs the io and points stages through a fake StageContext (no engine, no
+// child processes): files go to a temporary directory.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+
+#include "stages/builtin.h"
+#include "stages/geometry/ply.h"
+#include "stages/geometry/table.h"
+#include "stages/io/io_stages.h"
+#include "stages/points/points_stages.h"
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+class FakeRegistry : public StageRegistry {
+ public:
+  Status Register(StageType type) override {
+    if (types_.count(type.id)) return Status::Invalid("duplicate " + type.id);
+    const std::string id = type.id;
+    types_.emplace(id, std::move(type));
+    return Status::Ok();
+  }
+  const StageType* Find(std::string_view id) const override {
+    auto it = types_.find(std::string(id));
+    return it == types_.end() ? nullptr : &it->second;
+  }
+  std::vector<const StageType*> All() const override {
+    std::vector<const StageType*> all;
+    for (const auto& [id, type] : types_) all.push_back(&type);
+    return all;
+  }
+
+ private:
+  std::map<std::string, StageType> types_;
+};
+
+class FakeContext : public StageContext {
+ public:
+  FakeContext(std::filesystem::path dir, nlohmann::json params)
+      : dir_(std::move(dir)), params_(std::move(params)) {}
+
+  void AddInput(const std::string& port, const std::string& type, const std::string& file) {
+    ArtifactView view;
+    view.type = type;
+    view.files[std::filesystem::path(file).filename().string()] = file;
+    inputs_[port] = view;
+  }
+
+  const nlohmann::json& params() const override { return params_; }
+  bool has_input(std::string_view port) const override { return inputs_.count(std::string(port)) > 0; }
+  const ArtifactView& input(std::string_view port) const override { return inputs_.at(std::string(port)); }
+  std::string output_path(std::string_view port, std::string_view file_name) override {
+    const std::filesystem::path dir = dir_ / "out" / std::string(port);
+    std::filesystem::create_directories(dir);
+    outputs_[std::string(port)] = (dir / std::string(file_name)).string();
+    return outputs_[std::string(port)];
+  }
+  void set_output_meta(std::string_view port, nlohmann::json meta) override {
+    meta_[std::string(port)] = std::move(meta);
+  }
+  void progress(double fraction) override {
+    EXPECT_GE(fraction, last_progress_);
+    EXPECT_LE(fraction, 1.0);
+    last_progress_ = fraction;
+  }
+  void counter(std::string_view name, double value) override { counters_[std::string(name)] = value; }
+  void begin_phase(std::string_view name) override {
+    open_phases_.push_back(std::string(name));
+    phases_.insert(std::string(name));
+  }
+  void end_phase(std::string_view name) override {
+    ASSERT_FALSE(open_phases_.empty());
+    EXPECT_EQ(open_phases_.back(), name);
+    open_phases_.pop_back();
+  }
+  int threads() const override { return 1; }
+
+  std::map<std::string, std::string> outputs_;
+  std::map<std::string, nlohmann::json> meta_;
+  std::map<std::string, double> counters_;
+  std::set<std::string> phases_;
+  std::vector<std::string> open_phases_;
+  double last_progress_ = 0;
+
+ private:
+  std::filesystem::path dir_;
+  nlohmann::json params_;
+  std::map<std::string, ArtifactView> inputs_;
+};
+
+std::string SharedData() {
+  const char* source = std::getenv("PB_SOURCE_DIR");
+  if (source) {
+    const std::filesystem::path candidate = std::filesystem::path(source) / ".." / "shared" / "data";
+    if (std::filesystem::exists(candidate)) return candidate.string();
+  }
+  if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
+  return "";
+}
+
+class PointsStagesTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    dir_ = std::filesystem::temp_directory_path() /
+           ("pb_stages_test_" + std::to_string(::getpid()) + "_" +
+            ::testing::UnitTest::GetInstance()->current_test_info()->name());
+    std::filesystem::create_directories(dir_);
+    RegisterBuiltinStages(registry_);
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  Status Run(const std::string& id, FakeContext& ctx) {
+    const StageType* type = registry_.Find(id);
+    if (!type) return Status::NotFound(id);
+    const Status status = type->run(ctx);
+    EXPECT_TRUE(ctx.open_phases_.empty());
+    return status;
+  }
+
+  std::filesystem::path dir_;
+  FakeRegistry registry_;
+};
+
+TEST_F(PointsStagesTest, RegistersWellFormedTypes) {
+  const std::vector<const StageType*> all = registry_.All();
+  ASSERT_EQ(all.size(), 3u);
+  for (const StageType* type : all) {
+    SCOPED_TRACE(type->id);
+    EXPECT_GE(type->version, 1);
+    EXPECT_FALSE(type->summary.empty());
+    EXPECT_FALSE(type->doc.empty());
+    EXPECT_TRUE(type->run);
+    const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
+    EXPECT_EQ(schema["type"], "object");
+    EXPECT_EQ(schema["additionalProperties"], false);
+    for (const auto& [name, property] : schema["properties"].items()) {
+      EXPECT_TRUE(property.contains("description")) << name;
+    }
+  }
+  const nlohmann::json read_schema = nlohmann::json::parse(registry_.Find("io.read_points")->params_schema);
+  EXPECT_EQ(read_schema["required"], nlohmann::json({"path"}));
+  EXPECT_EQ(read_schema["properties"]["path"]["x-path"], true);
+  EXPECT_EQ(read_schema["properties"]["format"]["enum"], nlohmann::json({"auto", "ply"}));
+  const nlohmann::json downsample_schema =
+      nlohmann::json::parse(registry_.Find("points.downsample")->params_schema);
+  EXPECT_EQ(downsample_schema["properties"]["voxel"]["exclusiveMinimum"], 0);
+}
+
+TEST_F(PointsStagesTest, DownsampleThenStats) {
+  PointCloud cloud;
+  cloud.origin = {500000.0, 4000000.0, 100.0};
+  // Two 1 m voxels: 3 points in one, 1 in the other.
+  cloud.positions = {0.1f, 0.1f, 0.1f, 0.3f, 0.3f, 0.3f, 0.5f, 0.2f, 0.8f, 1.5f, 0.5f, 0.5f};
+  cloud.colors = {0, 0, 0, 30, 60, 90, 60, 120, 180, 255, 255, 255};
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+
+  FakeContext downsample(dir_ / "d", {{"voxel", 1.0}});
+  downsample.AddInput("points", "points", input);
+  ASSERT_TRUE(Run("points.downsample", downsample).ok());
+  EXPECT_EQ(downsample.counters_["points_in"], 4);
+  EXPECT_EQ(downsample.counters_["points_out"], 2);
+  EXPECT_EQ(downsample.phases_, (std::set<std::string>{"io", "compute"}));
+  EXPECT_DOUBLE_EQ(downsample.last_progress_, 1.0);
+  auto out = ReadPlyPoints(downsample.outputs_["points"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  EXPECT_EQ(out->points.origin, cloud.origin);
+  ASSERT_EQ(out->points.size(), 2u);
+  EXPECT_FLOAT_EQ(out->points.positions[0], 0.3f);
+  EXPECT_FLOAT_EQ(out->points.positions[2], 0.4f);
+  EXPECT_EQ(out->points.colors, (std::vector<uint8_t>{30, 60, 90, 255, 255, 255}));
+  EXPECT_EQ(downsample.meta_["points"]["points"], 2);
+
+  FakeContext stats(dir_ / "s", nlohmann::json::object());
+  stats.AddInput("points", "points", downsample.outputs_["points"]);
+  ASSERT_TRUE(Run("points.stats", stats).ok());
+  auto table = ReadTable(stats.outputs_["table"]);
+  ASSERT_TRUE(table.ok()) << table.status().message();
+  ASSERT_EQ(table->rows.size(), 1u);
+  EXPECT_EQ(std::get<int64_t>(table->get(0, "points")), 2);
+  EXPECT_NEAR(TableNumber(table->get(0, "min_x_m")), 500000.3, 1e-6);
+  EXPECT_NEAR(TableNumber(table->get(0, "max_x_m")), 500001.5, 1e-6);
+  EXPECT_NEAR(TableNumber(table->get(0, "centroid_y_m")), 4000000.35, 1e-6);
+  EXPECT_EQ(std::get<bool>(table->get(0, "has_colors")), true);
+  EXPECT_EQ(std::get<bool>(table->get(0, "has_normals")), false);
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(0, "mean_red")), 142.5);
+}
+
+TEST_F(PointsStagesTest, DownsampleRejectsBadVoxel) {
+  PointCloud cloud;
+  cloud.positions = {0, 0, 0};
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+  FakeContext ctx(dir_ / "d", {{"voxel", -1.0}});
+  ctx.AddInput("points", "points", input);
+  EXPECT_EQ(Run("points.downsample", ctx).code(), Status::Code::kInvalid);
+}
+
+TEST_F(PointsStagesTest, ReadPointsBunny) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  const std::string path = data + "/bunny/bun_zipper.ply";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
+  FakeContext ctx(dir_, {{"path", path}, {"format", "auto"}, {"drop_invalid", false}});
+  const Status status = Run("io.read_points", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["points"], 35947);
+  EXPECT_EQ(ctx.counters_["dropped_points"], 0);
+  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io"}));
+  EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
+  auto read = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.size(), 35947u);
+  EXPECT_EQ(read->report.pointbake_kind, "points");
+}
+
+TEST_F(PointsStagesTest, ReadPointsDropsInvalid) {
+  const std::string path = (dir_ / "scan.PLY").string();
+  std::ofstream(path) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
+                         "property float y\nproperty float z\nend_header\n1 2 3\nnan 0 0\n4 5 6\n";
+  FakeContext strict(dir_ / "a", {{"path", path}});
+  const Status failed = Run("io.read_points", strict);
+  EXPECT_THAT(failed.message(), HasSubstr("scan.PLY:9: vertex 1 has a non-finite coordinate"));
+
+  FakeContext lenient(dir_ / "b", {{"path", path}, {"drop_invalid", true}});
+  ASSERT_TRUE(Run("io.read_points", lenient).ok());
+  EXPECT_EQ(lenient.counters_["points"], 2);
+  EXPECT_EQ(lenient.counters_["dropped_points"], 1);
+}
+
+TEST_F(PointsStagesTest, ReadPointsUnsupportedExtension) {
+  FakeContext ctx(dir_, {{"path", (dir_ / "foo.xyz").string()}, {"format", "auto"}});
+  const Status status = Run("io.read_points", ctx);
+  EXPECT_EQ(status.code(), Status::Code::kUnsupported);
+  EXPECT_THAT(status.message(), HasSubstr("unsupported extension '.xyz'"));
+  EXPECT_THAT(status.message(), HasSubstr("formats supported now: ply (.ply)"));
+  EXPECT_TRUE(ctx.outputs_.empty());
+}
+
+}  // namespace
+}  // namespace pb

@@ -1,0 +1,496 @@
+// End-to-end tests of the `pointbake` binary: real child processes, real
+// cache folders under /tmp.
+#include <sys/stat.h>
+
+#include <chrono>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <gtest/gtest.h>
+
+#include "tests/cli_test_util.h"
+
+namespace pbtest {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kChain = R"(name: chain
+plugins: [$PLUGIN]
+stages:
+  src:
+    uses: test.source
+    with: { text: hello }
+  up:
+    uses: test.concat
+    in: { a: src.out }
+    with: { suffix: " world" }
+  len:
+    uses: test.length
+    in: { in: up.out }
+  other:
+    uses: test.source
+    with: { text: other }
+outputs:
+  greeting: up.out
+  length: len.out
+  other: other.out
+)";
+
+std::string TextOf(const std::string& table_file) {
+  const Json j = ReadJson(table_file);
+  return j.is_object() ? j.value("text", "<no text>") : "<not json: " + ReadFile(table_file) + ">";
+}
+
+class Cli : public CliTest {
+ protected:
+  // `pointbake run WF --cache <tmp>/cache --out <tmp>/OUT EXTRA...`
+  RunResult RunWf(const std::string& wf, const std::string& out = "out",
+                  std::vector<std::string> extra = {}, const std::string& cache = "cache") {
+    std::vector<std::string> args = {"run", wf, "--cache", P(cache), "--out", P(out)};
+    args.insert(args.end(), extra.begin(), extra.end());
+    return pbtest::Run(args);
+  }
+  Json RunJson(const std::string& out = "out") { return ReadJson(P(out) + "/run.json"); }
+};
+
+// 1. A chain runs; outputs copied; run.json, trace.json, run.jsonl written.
+TEST_F(Cli, ChainRunsAndWritesRecords) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  const RunResult r = RunWf(wf);
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_EQ(TextOf(P("out/greeting.json")), "hello world");
+  EXPECT_EQ(TextOf(P("out/length.json")), "11");
+  EXPECT_EQ(TextOf(P("out/other.json")), "other");
+
+  const Json run = RunJson();
+  ASSERT_TRUE(run.is_object()) << ReadFile(P("out/run.json"));
+  EXPECT_EQ(run.value("format", ""), "pointbake-run 1");
+  EXPECT_EQ(run.value("workflow", ""), "chain");
+  ASSERT_EQ(run["stages"].size(), 4u);
+  for (const Json& s : run["stages"]) {
+    SCOPED_TRACE(s.dump());
+    EXPECT_EQ(s.value("status", ""), "ran");
+    ASSERT_TRUE(s.contains("peak_rss_bytes"));
+    EXPECT_GT(s["peak_rss_bytes"].get<double>(), 0);
+    ASSERT_TRUE(s.contains("user_s"));
+    EXPECT_GE(s["user_s"].get<double>(), 0);
+    EXPECT_TRUE(s.contains("phases"));
+    EXPECT_TRUE(s.contains("counters"));
+    EXPECT_FALSE(s.value("key", "").empty());
+  }
+  // test.source reports a counter and a phase.
+  const Json src = StageRecord(run, "src");
+  EXPECT_EQ(src["counters"].value("chars", -1.0), 5.0) << src.dump();
+  bool has_compute = false;
+  for (const Json& ph : src["phases"]) has_compute |= ph.value("name", "") == "compute";
+  EXPECT_TRUE(has_compute) << src["phases"].dump();
+
+  const Json trace = ReadJson(P("out/trace.json"));
+  ASSERT_TRUE(trace.is_object() && trace.contains("traceEvents")) << ReadFile(P("out/trace.json"));
+  int x_events = 0;
+  for (const Json& e : trace["traceEvents"]) x_events += e.value("ph", "") == "X";
+  EXPECT_GE(x_events, 4);
+
+  const std::vector<Json> lines = ReadJsonLines(P("out/run.jsonl"));
+  ASSERT_EQ(lines.size(), 4u);
+  for (const Json& l : lines) EXPECT_TRUE(l.is_object() && l.contains("stage")) << l.dump();
+  EXPECT_NE(r.out.find("4 ran"), std::string::npos) << r.out;
+}
+
+// 2. A second run hits everything and writes identical outputs.
+TEST_F(Cli, RerunHitsEverything) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  ASSERT_EQ(RunWf(wf, "out1").exit_code, 0);
+  const RunResult r = RunWf(wf, "out2");
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const Json run = RunJson("out2");
+  for (const Json& s : run["stages"]) {
+    EXPECT_EQ(s.value("status", ""), "hit") << s.dump();
+    EXPECT_TRUE(s.contains("cached_run")) << s.dump();
+  }
+  for (const char* f : {"greeting.json", "length.json", "other.json"})
+    EXPECT_EQ(ReadFile(P("out1/") + f), ReadFile(P("out2/") + f)) << f;
+  EXPECT_NE(r.out.find("0 ran, 4 cached"), std::string::npos) << r.out;
+}
+
+// 3. --set re-runs exactly the changed stage and its dependents; explain says why.
+TEST_F(Cli, SetParameterRerunsStageAndDependents) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  ASSERT_EQ(RunWf(wf).exit_code, 0);
+
+  const RunResult ex = pbtest::Run({"explain", wf, "--cache", P("cache"), "--set", "src.text=bye"});
+  ASSERT_EQ(ex.exit_code, 0) << ex.Describe();
+  EXPECT_NE(ex.out.find("parameter 'text' changed: "), std::string::npos) << ex.out;
+  const size_t at = ex.out.find("parameter 'text' changed");
+  const std::string line = at == std::string::npos ? "" : ex.out.substr(at, ex.out.find('\n', at) - at);
+  EXPECT_NE(line.find("hello"), std::string::npos) << line;
+  EXPECT_NE(line.find("bye"), std::string::npos) << line;
+  EXPECT_LT(line.find("hello"), line.find("bye")) << "old value first: " << line;
+
+  const RunResult r = RunWf(wf, "out", {"--set", "src.text=bye"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const Json run = RunJson();
+  EXPECT_EQ(StageStatus(run, "src"), "ran") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "up"), "ran") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "len"), "ran") << Statuses(run);  // 9 != 11
+  EXPECT_EQ(StageStatus(run, "other"), "hit") << Statuses(run);
+  EXPECT_EQ(TextOf(P("out/greeting.json")), "bye world");
+  EXPECT_EQ(TextOf(P("out/length.json")), "9");
+}
+
+// 4. Early cutoff: an upstream change that leaves an output's bytes equal
+// stops the re-runs there.
+TEST_F(Cli, EarlyCutoff) {
+  const std::string body = R"(name: cutoff
+plugins: [$PLUGIN]
+stages:
+  src: { uses: test.source, with: { text: TEXT } }
+  len: { uses: test.length, in: { in: src.out } }
+  tail: { uses: test.concat, in: { a: len.out }, with: { suffix: "!" } }
+outputs: { tail: tail.out }
+)";
+  auto with_text = [&](const std::string& t) {
+    std::string s = body;
+    s.replace(s.find("TEXT"), 4, t);
+    return s;
+  };
+  const std::string wf = WriteWorkflow(P("proj/cutoff.yaml"), with_text("abc"));
+  ASSERT_EQ(RunWf(wf).exit_code, 0);
+  EXPECT_EQ(TextOf(P("out/tail.json")), "3!");
+  WriteWorkflow(wf, with_text("xyz"));
+  const RunResult r = RunWf(wf);
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const Json run = RunJson();
+  EXPECT_EQ(StageStatus(run, "src"), "ran") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "len"), "ran") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "tail"), "hit") << Statuses(run);
+  EXPECT_EQ(TextOf(P("out/tail.json")), "3!");
+}
+
+// 5. Moving the cache and the project keeps every hit.
+TEST_F(Cli, RelocatableCache) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  ASSERT_EQ(RunWf(wf, "out1", {}, "cache").exit_code, 0);
+  fs::rename(P("proj"), P("moved_proj"));
+  fs::rename(P("cache"), P("moved_cache"));
+  const RunResult r = RunWf(P("moved_proj/chain.yaml"), "out2", {}, "moved_cache");
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const Json run = RunJson("out2");
+  for (const Json& s : run["stages"]) EXPECT_EQ(s.value("status", ""), "hit") << Statuses(run);
+  EXPECT_EQ(ReadFile(P("out1/greeting.json")), ReadFile(P("out2/greeting.json")));
+  EXPECT_FALSE(Exists(P("cache")));
+}
+
+// 6. Memory figures are the stage child's peak RSS.
+TEST_F(Cli, PeakRssOfAllocStage) {
+  const std::string wf = WriteWorkflow(P("proj/alloc.yaml"), R"(name: alloc
+plugins: [$PLUGIN]
+stages:
+  big: { uses: test.alloc, with: { mib: 512 } }
+)");
+  const RunResult r = RunWf(wf);
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const Json big = StageRecord(RunJson(), "big");
+  ASSERT_TRUE(big.contains("peak_rss_bytes")) << big.dump();
+  const double rss = big["peak_rss_bytes"].get<double>();
+  const double mib512 = 512.0 * 1024 * 1024;
+  EXPECT_GE(rss, 0.9 * mib512) << "peak_rss_bytes=" << rss;
+  EXPECT_LE(rss, 1.1 * mib512) << "peak_rss_bytes=" << rss;
+  EXPECT_EQ(big["counters"].value("bytes", 0.0), mib512);
+}
+
+constexpr const char* kFailing = R"(name: failing
+plugins: [$PLUGIN]
+stages:
+  bad: { uses: test.fail, with: { message: "planned boom 42" } }
+  after: { uses: test.concat, in: { a: bad.out } }
+  sib: { uses: test.source, with: { text: sibling, sleep_ms: 100 } }
+)";
+
+// 7. Failures: exit 1; --keep-going runs independent stages, skips
+// dependents; errors reach stderr and run.json; nothing is cached for them.
+TEST_F(Cli, FailureHandling) {
+  const std::string wf = WriteWorkflow(P("proj/failing.yaml"), kFailing);
+  const RunResult stop = RunWf(wf, "out_stop", {}, "cache_stop");
+  EXPECT_EQ(stop.exit_code, 1) << stop.Describe();
+  EXPECT_EQ(StageStatus(RunJson("out_stop"), "bad"), "failed") << Statuses(RunJson("out_stop"));
+  EXPECT_EQ(StageStatus(RunJson("out_stop"), "after"), "skipped");
+
+  const RunResult r = RunWf(wf, "out", {"--keep-going"});
+  EXPECT_EQ(r.exit_code, 1) << r.Describe();
+  const Json run = RunJson();
+  EXPECT_EQ(StageStatus(run, "bad"), "failed") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "sib"), "ran") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "after"), "skipped") << Statuses(run);
+  EXPECT_NE(r.err.find("planned boom 42"), std::string::npos) << r.Describe();
+  EXPECT_NE(StageRecord(run, "bad").value("error", "").find("planned boom 42"), std::string::npos)
+      << StageRecord(run, "bad").dump();
+  EXPECT_EQ(TextOf(P("out/sib.out.json")), "sibling");  // default outputs: sinks
+  EXPECT_EQ(CountEntries(P("cache")), 1) << "only sib is cached";
+
+  const RunResult again = RunWf(wf, "out", {"--keep-going"});
+  EXPECT_EQ(again.exit_code, 1) << again.Describe();
+  const Json run2 = RunJson();
+  EXPECT_EQ(StageStatus(run2, "bad"), "failed") << Statuses(run2);
+  EXPECT_EQ(StageStatus(run2, "sib"), "hit") << Statuses(run2);
+  EXPECT_EQ(CountEntries(P("cache")), 1);
+}
+
+TEST_F(Cli, CrashingStageReportsSignal) {
+  const std::string wf = WriteWorkflow(P("proj/crash.yaml"), R"(name: crash
+plugins: [$PLUGIN]
+stages:
+  boom: { uses: test.fail, with: { crash: true } }
+)");
+  const RunResult r = RunWf(wf);
+  EXPECT_EQ(r.exit_code, 1) << r.Describe();
+  const Json boom = StageRecord(RunJson(), "boom");
+  EXPECT_EQ(boom.value("status", ""), "failed") << boom.dump();
+  EXPECT_NE(boom.value("error", "").find("signal"), std::string::npos) << boom.dump();
+  EXPECT_EQ(CountEntries(P("cache")), 0);
+}
+
+// 8. --jobs 2 runs independent stages at the same time.
+TEST_F(Cli, JobsRunInParallel) {
+  const std::string wf = WriteWorkflow(P("proj/par.yaml"), R"(name: par
+plugins: [$PLUGIN]
+stages:
+  a: { uses: test.source, with: { text: a, sleep_ms: 600 } }
+  b: { uses: test.source, with: { text: b, sleep_ms: 600 } }
+)");
+  const RunResult r = RunWf(wf, "out", {"--jobs", "2"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const Json run = RunJson();
+  EXPECT_EQ(StageStatus(run, "a"), "ran");
+  EXPECT_EQ(StageStatus(run, "b"), "ran");
+  const Json trace = ReadJson(P("out/trace.json"));
+  Json ea, eb;
+  for (const Json& e : trace["traceEvents"]) {
+    if (e.value("ph", "") != "X" || e.value("cat", "").rfind("stage", 0) != 0) continue;
+    if (e.value("name", "") == "a") ea = e;
+    if (e.value("name", "") == "b") eb = e;
+  }
+  ASSERT_TRUE(ea.is_object() && eb.is_object()) << trace.dump(1);
+  const double a0 = ea["ts"].get<double>(), a1 = a0 + ea["dur"].get<double>();
+  const double b0 = eb["ts"].get<double>(), b1 = b0 + eb["dur"].get<double>();
+  EXPECT_LT(a0, b1) << trace.dump(1);
+  EXPECT_LT(b0, a1) << trace.dump(1);
+  EXPECT_NE(ea["tid"], eb["tid"]) << "parallel stages share a trace lane";
+}
+
+// 9. --dry-run runs nothing.
+TEST_F(Cli, DryRunExecutesNothing) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  const RunResult r = RunWf(wf, "out", {"--dry-run"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_NE(r.out.find("run   src"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("run   other"), std::string::npos) << r.out;
+  EXPECT_EQ(CountEntries(P("cache")), 0);
+  const RunResult ls = pbtest::Run({"cache", "--cache", P("cache"), "ls"});
+  ASSERT_EQ(ls.exit_code, 0) << ls.Describe();
+  EXPECT_NE(ls.out.find("0 entries"), std::string::npos) << ls.out;
+  EXPECT_FALSE(Exists(P("out/run.json")));
+}
+
+// 10. graph and stages.
+TEST_F(Cli, GraphAndStages) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  const RunResult g = pbtest::Run({"graph", wf});
+  ASSERT_EQ(g.exit_code, 0) << g.Describe();
+  EXPECT_NE(g.out.find("digraph"), std::string::npos) << g.out;
+  EXPECT_NE(g.out.find("\"src\" -> \"up\""), std::string::npos) << g.out;
+  EXPECT_NE(g.out.find("\"up\" -> \"len\""), std::string::npos) << g.out;
+
+  const RunResult all = pbtest::Run({"stages"});
+  ASSERT_EQ(all.exit_code, 0) << all.Describe();
+  EXPECT_NE(all.out.find("io.read_points"), std::string::npos) << all.out;
+  EXPECT_EQ(all.out.find("test.source"), std::string::npos) << "plugin stage listed without plugin";
+
+  const RunResult plugin_stage = pbtest::Run({"stages", "test.source"});
+  EXPECT_EQ(plugin_stage.exit_code, 2) << plugin_stage.Describe();
+  EXPECT_NE(plugin_stage.err.find("unknown stage type 'test.source'"), std::string::npos)
+      << plugin_stage.Describe();
+
+  const RunResult ds = pbtest::Run({"stages", "points.downsample"});
+  ASSERT_EQ(ds.exit_code, 0) << ds.Describe();
+  EXPECT_NE(ds.out.find("voxel"), std::string::npos) << ds.out;
+}
+
+// 11. cache verify / --repair / gc.
+TEST_F(Cli, CacheVerifyRepairAndGc) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  ASSERT_EQ(RunWf(wf).exit_code, 0);
+  const RunResult ok = pbtest::Run({"cache", "--cache", P("cache"), "verify"});
+  EXPECT_EQ(ok.exit_code, 0) << ok.Describe();
+  EXPECT_NE(ok.out.find(" 0 problems"), std::string::npos) << ok.out;
+
+  // The object holding up's output has the bytes of out/greeting.json.
+  const std::string greeting = ReadFile(P("out/greeting.json"));
+  std::string victim;
+  for (const std::string& f : ListFiles(P("cache/objects")))
+    if (ReadFile(P("cache/objects/") + f) == greeting) victim = P("cache/objects/") + f;
+  ASSERT_FALSE(victim.empty()) << "no object with the greeting's bytes";
+  fs::permissions(victim, fs::perms::owner_write, fs::perm_options::add);
+  std::string corrupt(greeting.size(), 'X');
+  WriteFile(victim, corrupt);  // same size, other bytes
+
+  const RunResult bad = pbtest::Run({"cache", "--cache", P("cache"), "verify"});
+  EXPECT_EQ(bad.exit_code, 1) << bad.Describe();
+  const std::string victim_name = fs::path(victim).filename().string();
+  EXPECT_NE(bad.out.find(victim_name), std::string::npos) << bad.out;
+  EXPECT_NE(bad.out.find(" 1 problems"), std::string::npos) << bad.out;
+
+  const RunResult repair = pbtest::Run({"cache", "--cache", P("cache"), "verify", "--repair"});
+  EXPECT_EQ(repair.exit_code, 0) << repair.Describe();
+  EXPECT_FALSE(Exists(victim));
+  const RunResult after = pbtest::Run({"cache", "--cache", P("cache"), "verify"});
+  EXPECT_EQ(after.exit_code, 0) << after.Describe();
+  EXPECT_NE(after.out.find(" 0 problems"), std::string::npos) << after.out;
+
+  const RunResult rerun = RunWf(wf);
+  ASSERT_EQ(rerun.exit_code, 0) << rerun.Describe();
+  Json run = RunJson();
+  EXPECT_EQ(StageStatus(run, "up"), "ran") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "src"), "hit") << Statuses(run);
+  EXPECT_EQ(StageStatus(run, "other"), "hit") << Statuses(run);
+  EXPECT_EQ(TextOf(P("out/greeting.json")), "hello world");
+
+  const RunResult gc = pbtest::Run({"cache", "--cache", P("cache"), "gc", "--max-size", "0"});
+  ASSERT_EQ(gc.exit_code, 0) << gc.Describe();
+  EXPECT_EQ(CountEntries(P("cache")), 0) << gc.out;
+  EXPECT_TRUE(ListFiles(P("cache/objects")).empty()) << gc.out;
+  const RunResult fresh = RunWf(wf);
+  ASSERT_EQ(fresh.exit_code, 0) << fresh.Describe();
+  run = RunJson();
+  for (const Json& s : run["stages"]) EXPECT_EQ(s.value("status", ""), "ran") << Statuses(run);
+}
+
+// 12. Two runs at once on one cache.
+TEST_F(Cli, ConcurrentRunsShareCache) {
+  const std::string wf = WriteWorkflow(P("proj/conc.yaml"), R"(name: conc
+plugins: [$PLUGIN]
+stages:
+  s1: { uses: test.source, with: { text: "abc", repeat: 2000, sleep_ms: 200 } }
+  s2: { uses: test.source, with: { text: "de", repeat: 1000, sleep_ms: 100 } }
+  cat: { uses: test.concat, in: { a: s1.out, b: s2.out }, with: { sleep_ms: 200 } }
+  len: { uses: test.length, in: { in: cat.out }, with: { sleep_ms: 100 } }
+outputs: { cat: cat.out, len: len.out }
+)");
+  const auto args = [&](const std::string& out) {
+    return std::vector<std::string>{"run", wf, "--cache", P("cache"), "--out", P(out), "--jobs", "2"};
+  };
+  const pid_t a = Spawn(args("outA"), P("a.stdout"), P("a.stderr"));
+  const pid_t b = Spawn(args("outB"), P("b.stdout"), P("b.stderr"));
+  const int ca = WaitWithTimeout(a, 60), cb = WaitWithTimeout(b, 60);
+  EXPECT_EQ(ca, 0) << ReadFile(P("a.stderr"));
+  EXPECT_EQ(cb, 0) << ReadFile(P("b.stderr"));
+  for (const char* f : {"cat.json", "len.json"}) {
+    EXPECT_TRUE(Exists(P("outA/") + f)) << f;
+    EXPECT_EQ(ReadFile(P("outA/") + f), ReadFile(P("outB/") + f)) << f;
+  }
+  EXPECT_EQ(TextOf(P("outA/len.json")), "8000");
+  const RunResult v = pbtest::Run({"cache", "--cache", P("cache"), "verify"});
+  EXPECT_EQ(v.exit_code, 0) << v.Describe();
+  EXPECT_NE(v.out.find(" 0 problems"), std::string::npos) << v.out;
+  EXPECT_EQ(CountEntries(P("cache")), 4);
+}
+
+// 13. The example plugin, and a missing plugin.
+TEST_F(Cli, HelloPluginAndMissingPlugin) {
+  const std::string wf = WriteWorkflow(P("proj/hello.yaml"), R"(name: hello
+plugins: [$HELLO]
+stages:
+  greet: { uses: hello.greet, with: { name: "tests", times: 2 } }
+outputs: { greeting: greet.greeting }
+)");
+  const RunResult r = RunWf(wf);
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const Json g = ReadJson(P("out/greeting.json"));
+  EXPECT_EQ(g.value("greeting", ""), "Hello, tests!") << g.dump();
+  EXPECT_EQ(g.value("times", 0), 2) << g.dump();
+  EXPECT_EQ(StageRecord(RunJson(), "greet")["counters"].value("greetings", 0.0), 2.0);
+
+  const std::string missing = WriteWorkflow(P("proj/missing.yaml"), R"(name: missing
+plugins:
+  - plugins/libnot_there.so
+stages:
+  greet: { uses: hello.greet, with: { name: "x" } }
+)");
+  for (const char* cmd : {"validate", "run"}) {
+    std::vector<std::string> args = {cmd, missing};
+    if (std::string(cmd) == "run") args.insert(args.end(), {"--cache", P("cache2")});
+    const RunResult m = pbtest::Run(args);
+    EXPECT_EQ(m.exit_code, 2) << m.Describe();
+    EXPECT_NE(m.err.find(missing + ":3:5:"), std::string::npos) << m.Describe();
+    EXPECT_NE(m.err.find("libnot_there.so"), std::string::npos) << m.Describe();
+  }
+  EXPECT_EQ(CountEntries(P("cache2")), 0);
+}
+
+// 14. A memory budget smaller than any stage still completes, one at a time.
+TEST_F(Cli, TinyMemoryBudgetDoesNotDeadlock) {
+  const std::string wf = WriteWorkflow(P("proj/mem.yaml"), R"(name: mem
+plugins: [$PLUGIN]
+stages:
+  a: { uses: test.alloc, with: { mib: 16 } }
+  b: { uses: test.alloc, with: { mib: 24 } }
+  c: { uses: test.source, with: { text: c, sleep_ms: 100 } }
+  d: { uses: test.concat, in: { a: a.out, b: c.out } }
+)");
+  const pid_t pid = Spawn({"run", wf, "--cache", P("cache"), "--out", P("out"), "--mem", "1M", "--jobs", "2"},
+                          P("stdout"), P("stderr"));
+  const int code = WaitWithTimeout(pid, 60);
+  ASSERT_EQ(code, 0) << (code == -2 ? "timed out (deadlock?)\n" : "") << ReadFile(P("stderr"));
+  const Json run = RunJson();
+  for (const Json& s : run["stages"]) EXPECT_EQ(s.value("status", ""), "ran") << Statuses(run);
+  // Held back stages run one at a time: no two stage boxes overlap.
+  std::vector<std::pair<double, double>> boxes;
+  for (const Json& e : ReadJson(P("out/trace.json"))["traceEvents"])
+    if (e.value("ph", "") == "X" && e.value("cat", "").rfind("stage", 0) == 0)
+      boxes.push_back({e["ts"].get<double>(), e["ts"].get<double>() + e["dur"].get<double>()});
+  EXPECT_EQ(boxes.size(), 4u);
+  for (size_t i = 0; i < boxes.size(); ++i)
+    for (size_t j = i + 1; j < boxes.size(); ++j)
+      EXPECT_TRUE(boxes[i].second <= boxes[j].first || boxes[j].second <= boxes[i].first)
+          << "stages " << i << " and " << j << " overlap under a 1M budget";
+}
+
+// 15. Input files are keyed by content: touch keeps hits, edits re-run.
+TEST_F(Cli, InputFileDigests) {
+  const std::string ply_header =
+      "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+      "end_header\n";
+  WriteFile(P("proj/data/scan.ply"), ply_header + "0 0 0\n1 0 0\n0 1 0\n");
+  const std::string wf = WriteWorkflow(P("proj/read.yaml"), R"(name: read
+stages:
+  scan: { uses: io.read_points, with: { path: data/scan.ply } }
+)");
+  const RunResult r1 = RunWf(wf);
+  ASSERT_EQ(r1.exit_code, 0) << r1.Describe();
+  EXPECT_EQ(StageStatus(RunJson(), "scan"), "ran");
+
+  const RunResult r2 = RunWf(wf);
+  ASSERT_EQ(r2.exit_code, 0) << r2.Describe();
+  EXPECT_EQ(StageStatus(RunJson(), "scan"), "hit");
+
+  // Same bytes, new mtime.
+  const auto t = fs::last_write_time(P("proj/data/scan.ply"));
+  fs::last_write_time(P("proj/data/scan.ply"), t + std::chrono::seconds(10));
+  const RunResult r3 = RunWf(wf);
+  ASSERT_EQ(r3.exit_code, 0) << r3.Describe();
+  EXPECT_EQ(StageStatus(RunJson(), "scan"), "hit") << "touch must not re-run";
+
+  // New bytes (same size), mtime moved too.
+  WriteFile(P("proj/data/scan.ply"), ply_header + "0 0 0\n2 0 0\n0 2 0\n");
+  fs::last_write_time(P("proj/data/scan.ply"), t + std::chrono::seconds(20));
+  const RunResult ex = pbtest::Run({"explain", wf, "--cache", P("cache")});
+  EXPECT_NE(ex.out.find("file of parameter 'path' changed"), std::string::npos) << ex.Describe();
+  const RunResult r4 = RunWf(wf);
+  ASSERT_EQ(r4.exit_code, 0) << r4.Describe();
+  EXPECT_EQ(StageStatus(RunJson(), "scan"), "ran") << "content change must re-run";
+}
+
+}  // namespace
+}  // namespace pbtest
