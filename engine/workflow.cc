@@ -359,8 +359,16 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     const json properties = param_schema.value("properties", json::object());
     for (auto& [name, prop] : properties.items()) {
       if (!prop.value("x-path", false) || !with.contains(name) || !with[name].is_string()) continue;
-      const std::string base = from_scene.count("/" + PointerToken(name)) ? scene_ctx.dir : dir;
-      with[name] = ResolvePath(base, with[name].get<std::string>());
+      const bool scene_value = from_scene.count("/" + PointerToken(name)) > 0;
+      const std::string abs = ResolvePath(scene_value ? scene_ctx.dir : dir, with[name].get<std::string>());
+      with[name] = abs;
+      if (!Env::Default()->Exists(abs)) {
+        const std::string pointer = sp + "/with/" + PointerToken(name);
+        errors.Add(pos_of(pointer), "stage '" + id + "': file not found: " + abs +
+                                        (scene_value ? " (from scene " + scene_ctx.file +
+                                                           "; edit its path there)"
+                                                     : ""));
+      }
     }
     node.params = std::move(with);
 
@@ -515,7 +523,7 @@ std::string WorkflowToDot(const Workflow& wf) {
   auto quote = [](const std::string& s) {
     std::string q = "\"";
     for (char c : s) {
-      if (c == '"' || c == '\\') q += '\\';
+      if (c == '"') q += '\\';  // labels keep their \n line breaks
       q += c;
     }
     return q + "\"";

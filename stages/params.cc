@@ -55,7 +55,7 @@ Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, con
   return value->get<bool>();
 }
 
-Expected<std::string> InputFile(const StageContext& ctx, std::string_view stage_id, std::string_view port) {
+Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id, std::string_view port) {
   if (!ctx.has_input(port)) {
     return Status::Invalid(std::string(stage_id) + ": input '" + std::string(port) + "' is not connected");
   }

@@ -25,6 +25,6 @@ Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, con
                          std::optional<bool> fallback = std::nullopt);
 
 // The single file of input `port`, or Status::Invalid if it is missing.
-Expected<std::string> InputFile(const StageContext& ctx, std::string_view stage_id, std::string_view port);
+Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id, std::string_view port);
 
 }  // namespace pb

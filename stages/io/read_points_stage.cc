@@ -143,7 +143,8 @@ StageType ReadPointsStage() {
       "and 8-bit sRGB colors when the file has them. Supported now: PLY (ascii, binary little "
       "and big endian; any scalar types; unknown elements and properties are ignored).\n\n"
       "Double-precision (e.g. georeferenced) coordinates are stored as float32 offsets from an "
-      "origin at the scan's bounding-box center rounded to 1 m, so no precision is lost; the "
+      "origin at the scan's bounding-box center rounded to 1 m, which keeps float32 precision "
+      "(about 1e-7 of the scan's extent) for any location on Earth; the "
       "origin travels in the artifact.\n\n"
       "Counters: `points` (points kept), `dropped_points` (non-finite coordinates, with "
       "drop_invalid).";

@@ -24,7 +24,7 @@ constexpr const char* kSchema = R"({
 
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const double voxel_m, NumberParam(ctx, kId, "voxel", 0.01));
-  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFile(ctx, kId, "points"));
+  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
   PointCloud input;
   {
     PB_PHASE(ctx, "io");

@@ -47,7 +47,7 @@ Table Describe(const PointCloud& points) {
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFile(ctx, kId, "points"));
+  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
   PointCloud points;
   {
     PB_PHASE(ctx, "io");
