@@ -165,14 +165,24 @@ int CmdRun(const RunFlags& f, Registry& registry, bool explain_only) {
   return failed > 0 || skipped > 0 ? 1 : 0;
 }
 
-int CmdValidate(const std::vector<std::string>& files, Registry& registry) {
+// A scene names data, units, spacing, viewpoints or parameters; anything else
+// is checked as a workflow (so a workflow that lost its `stages:` is reported
+// as such, not accepted as a scene).
+bool LooksLikeWorkflow(const nlohmann::json& value) {
+  if (!value.is_object() || value.contains("stages")) return true;
+  for (const char* key : {"points", "units", "spacing_m", "viewpoints", "params", "preset"})
+    if (value.contains(key)) return false;
+  return true;
+}
+
+int CmdValidate(const std::vector<std::string>& files, const std::string& as, Registry& registry) {
   int bad = 0;
   for (const std::string& file : files) {
     Expected<YamlDocument> doc = ParseYamlFile(file);
     Status st;
     if (!doc.ok()) {
       st = doc.status();
-    } else if (doc->value.is_object() && doc->value.contains("stages")) {
+    } else if (as == "workflow" || (as.empty() && LooksLikeWorkflow(doc->value))) {
       Expected<Workflow> wf = LoadWorkflow(file, {}, registry);
       if (!wf.ok()) st = wf.status();
     } else {
@@ -225,6 +235,9 @@ int CliMain(int argc, char** argv, Registry& registry) {
   CLI::App* validate = app.add_subcommand("validate", "Check workflow and scene files, run nothing");
   std::vector<std::string> validate_files;
   validate->add_option("FILE", validate_files, "Workflow or scene files")->required();
+  std::string validate_as;
+  validate->add_option("--as", validate_as, "Check as this kind (default: decided by content)")
+      ->check(CLI::IsMember({"workflow", "scene"}));
   CLI::App* explain = app.add_subcommand("explain", "Per stage: cached or not, and what changed");
   AddRunOptions(explain, explain_flags);
   CLI::App* graph = app.add_subcommand("graph", "Print the workflow's DAG as Graphviz DOT");
@@ -252,7 +265,7 @@ int CliMain(int argc, char** argv, Registry& registry) {
 
   if (*run) return CmdRun(run_flags, registry, false);
   if (*explain) return CmdRun(explain_flags, registry, true);
-  if (*validate) return CmdValidate(validate_files, registry);
+  if (*validate) return CmdValidate(validate_files, validate_as, registry);
   if (*stages) return CmdStages(stage_id, registry);
   if (*graph) {
     Expected<Workflow> wf = Load(graph_flags, registry);

@@ -27,10 +27,16 @@ std::string LastLines(const std::string& path, int count) {
   Expected<std::string> text = Env::Default()->ReadFile(path);
   if (!text.ok()) return "";
   const std::string& s = *text;
-  size_t pos = s.size();
-  if (pos > 0 && s[pos - 1] == '\n') --pos;
-  for (int i = 0; i < count && pos != std::string::npos && pos > 0; ++i) pos = s.rfind('\n', pos - 1);
-  return pos == std::string::npos ? s : s.substr(pos + 1);
+  size_t end = s.size();
+  if (end > 0 && s[end - 1] == '\n') --end;
+  size_t start = end;
+  for (int i = 0; i < count && start > 0; ++i) {
+    const size_t nl = s.rfind('\n', start - 1);
+    start = nl == std::string::npos ? 0 : nl;
+    if (nl == std::string::npos) break;
+  }
+  if (start < end && s[start] == '\n') ++start;
+  return s.substr(start, end - start);
 }
 
 nlohmann::json ResultToJson(const JobResult& r) {

@@ -26,6 +26,7 @@ class Errors {
   }
   void AddRaw(const std::string& line) { lines_.push_back(line); }
   bool empty() const { return lines_.empty(); }
+  size_t size() const { return lines_.size(); }
   Status ToStatus() const {
     std::string msg;
     for (size_t i = 0; i < lines_.size(); ++i) msg += (i ? "\n" : "") + lines_[i];
@@ -50,7 +51,7 @@ size_t EditDistance(const std::string& a, const std::string& b) {
 
 std::string Suggest(const std::string& word, const std::vector<std::string>& candidates) {
   std::string best;
-  size_t best_d = std::max<size_t>(3, word.size() / 3) + 1;
+  size_t best_d = std::max<size_t>(2, word.size() / 3) + 1;
   for (const auto& c : candidates) {
     size_t d = EditDistance(word, c);
     if (d < best_d) best_d = d, best = c;
@@ -345,7 +346,10 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     }
     json with = spec.contains("with") ? spec["with"] : json::object();
     std::set<std::string> from_scene;
+    const size_t errors_before = errors.size();
     SubstituteScene(with, "", doc, sp + "/with", scene_ctx, from_scene, errors);
+    // An unresolved ${...} would only add a confusing type error below.
+    if (errors.size() != errors_before) continue;
     const json& param_schema = registry.ParamsSchema(uses).json();
     with = ApplyDefaults(param_schema, with);
     for (const SchemaError& e : registry.ParamsSchema(uses).Validate(with)) {

@@ -250,12 +250,12 @@ Json StageRecord(const Json& run_json, const std::string& stage) {
   if (run_json.is_object() && run_json.contains("stages"))
     for (const Json& s : run_json["stages"])
       if (s.value("stage", "") == stage) return s;
-  return Json();
+  return Json::object();
 }
 
 std::string StageStatus(const Json& run_json, const std::string& stage) {
   const Json s = StageRecord(run_json, stage);
-  return s.is_object() ? s.value("status", "?") : "<no record>";
+  return s.contains("status") ? s.value("status", "?") : "<no record>";
 }
 
 std::string Statuses(const Json& run_json) {

@@ -27,9 +27,9 @@ std::ostream& operator<<(std::ostream& os, const BadCase& c) { return os << c.fi
 
 const std::vector<BadCase>& Cases() {
   static const std::vector<BadCase> cases = {
-      {"syntax_error.yaml", 6, 28, "end of map flow not found"},
+      {"syntax_error.yaml", 6, 28, "illegal flow end"},
       {"duplicate_key.yaml", 6, 5, "duplicate key 'uses' (first defined at line 5"},
-      {"missing_stages.yaml", 2, 1, "stages"},
+      {"missing_stages.yaml", 2, 1, "missing required key 'stages'"},
       {"unknown_top_level_key.yaml", 7, 1, "unknown key 'output'"},
       {"unknown_stage_type.yaml", 8, 11,
        "unknown stage type 'points.downsampel' (did you mean 'points.downsample'?)"},
@@ -39,12 +39,13 @@ const std::vector<BadCase>& Cases() {
       {"type_mismatch.yaml", 13, 15, "type mismatch: input 'points' of stage 'down' takes points"},
       {"cycle.yaml", 6, 19, "cycle: b -> a -> b"},
       {"missing_required_input.yaml", 4, 3, "missing required input 'points'"},
-      {"wrong_param_type.yaml", 10, 20, "stage 'down' (points.downsample)"},
+      {"wrong_param_type.yaml", 10, 20,
+       "stage 'down' (points.downsample): expected a number, got the string \"coarse\""},
       {"unknown_parameter.yaml", 6, 29, "unknown key 'colour'"},
-      {"param_out_of_range.yaml", 11, 14, "stage 'down' (points.downsample)"},
+      {"param_out_of_range.yaml", 11, 14, "stage 'down' (points.downsample): must be > 0, got -0.5"},
       {"scene_missing_key.yaml", 12, 14, "has no key 'nokey'"},
       {"scene_without_scene.yaml", 11, 14, "the workflow names no scene"},
-      {"with_is_list.yaml", 6, 11, "object"},
+      {"with_is_list.yaml", 6, 11, "expected an object, got an array"},
       {"bad_set.yaml", 0, 0, "--set nosuch.voxel=0.1: no stage 'nosuch' in the workflow",
        {"--set", "nosuch.voxel=0.1"}},
   };
