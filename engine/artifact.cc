@@ -6,7 +6,7 @@ Digest Artifact::ComputeDigest() const {
   Hasher h;
   h.Add("artifact-v1").Add(type);
   for (const auto& [name, file] : files) h.Add(name).Add(file.digest.Hex());
-  h.Add(meta.dump());
+  h.Add(meta.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   return h.Finish();
 }
 

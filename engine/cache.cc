@@ -7,7 +7,10 @@
 #include <unistd.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cerrno>
+#include <charconv>
+#include <climits>
 #include <chrono>
 #include <set>
 
@@ -32,9 +35,12 @@ std::optional<pid_t> PidOfTempName(const std::string& name) {
   if (last == std::string::npos || last == 0) return std::nullopt;
   const size_t prev = name.rfind('.', last - 1);
   if (prev == std::string::npos) return std::nullopt;
-  const std::string pid = name.substr(prev + 1, last - prev - 1);
-  if (pid.empty() || !std::all_of(pid.begin(), pid.end(), ::isdigit)) return std::nullopt;
-  return static_cast<pid_t>(std::stol(pid));
+  const std::string_view digits = std::string_view(name).substr(prev + 1, last - prev - 1);
+  long pid = 0;
+  const auto [end, ec] = std::from_chars(digits.data(), digits.data() + digits.size(), pid);
+  if (ec != std::errc() || end != digits.data() + digits.size() || pid <= 0 || pid > INT_MAX)
+    return std::nullopt;
+  return static_cast<pid_t>(pid);
 }
 
 bool ProcessAlive(pid_t pid) { return ::kill(pid, 0) == 0 || errno == EPERM; }
@@ -47,6 +53,12 @@ std::string SafeName(const std::string& name) {
 }
 
 }  // namespace
+
+// Strings in components are UTF-8 (checked at load), so `replace` never
+// changes them; it only keeps a stray byte from throwing.
+Digest KeyOf(const nlohmann::json& components) {
+  return HashBytes(components.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
+}
 
 FileLock& FileLock::operator=(FileLock&& o) noexcept {
   if (this != &o) {
@@ -130,6 +142,7 @@ Expected<Digest> Cache::FileDigest(const std::string& path) {
                              .Add(std::to_string(info.inode))
                              .Add(std::to_string(info.size_bytes))
                              .Add(std::to_string(info.mtime_ns))
+                             .Add(std::to_string(info.ctime_ns))
                              .Finish()
                              .Hex();
   const std::string memo = dir_ + "/filehash/" + id;
@@ -142,9 +155,12 @@ Expected<Digest> Cache::FileDigest(const std::string& path) {
   }
   uint64_t size = 0;
   PB_ASSIGN_OR_RETURN(Digest digest, HashFile(path, &size));
-  // A file modified while we hashed it must not be remembered.
+  // A file modified while we hashed it, or so recently that a same-second
+  // rewrite would keep its times, must not be remembered.
   Expected<FileInfo> after = env_->Stat(path);
-  if (after.ok() && after->mtime_ns == info.mtime_ns && after->size_bytes == size)
+  const bool settled = NowNs() - std::max(info.mtime_ns, info.ctime_ns) > 2'000'000'000LL;
+  if (after.ok() && settled && after->mtime_ns == info.mtime_ns &&
+      after->ctime_ns == info.ctime_ns && after->size_bytes == size)
     (void)env_->WriteFileAtomic(memo, digest.Hex() + "\n");
   return digest;
 }
@@ -152,7 +168,7 @@ Expected<Digest> Cache::FileDigest(const std::string& path) {
 Expected<CacheEntry> Cache::ReadEntry(const std::string& path) {
   PB_ASSIGN_OR_RETURN(std::string text, env_->ReadFile(path));
   nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
-  if (j.is_discarded() || !j.is_object() || j.value("format", "") != kEntryFormat)
+  if (j.is_discarded() || !j.is_object() || !j.contains("format") || j["format"] != kEntryFormat)
     return Status::Corrupt(path + ": not a pointbake cache entry");
   CacheEntry entry;
   try {
@@ -166,7 +182,7 @@ Expected<CacheEntry> Cache::ReadEntry(const std::string& path) {
   } catch (const nlohmann::json::exception& e) {
     return Status::Corrupt(path + ": " + e.what());
   }
-  if (HashBytes(entry.components.dump()) != entry.key)
+  if (KeyOf(entry.components) != entry.key)
     return Status::Corrupt(path + ": key does not match its components");
   return entry;
 }
@@ -187,7 +203,7 @@ std::optional<CacheEntry> Cache::Lookup(const Digest& key) {
 }
 
 Expected<std::string> Cache::NewStagingDir(const Digest& key) {
-  static int counter = 0;
+  static std::atomic<int> counter{0};
   const std::string path = dir_ + "/tmp/" + key.Hex() + "." + std::to_string(::getpid()) + "." +
                            std::to_string(counter++);
   PB_RETURN_IF_ERROR(env_->RemoveAll(path));
@@ -211,7 +227,7 @@ Status Cache::StoreObject(const std::string& staged_path, const Digest& digest) 
 Expected<CacheEntry> Cache::Commit(const Digest& key, const nlohmann::json& components,
                                    const std::map<std::string, StagedOutput>& outputs,
                                    const nlohmann::json& record, const std::string& staging_dir) {
-  assert(HashBytes(components.dump()) == key);
+  assert(KeyOf(components) == key);
   CacheEntry entry;
   entry.key = key;
   entry.components = components;
@@ -239,7 +255,8 @@ Expected<CacheEntry> Cache::Commit(const Digest& key, const nlohmann::json& comp
   j["outputs"] = outs;
   const std::string path = EntryPath(key);
   PB_RETURN_IF_ERROR(env_->CreateDirs(DirName(path)));
-  PB_RETURN_IF_ERROR(env_->WriteFileAtomic(path, j.dump(1)));
+  PB_RETURN_IF_ERROR(env_->WriteFileAtomic(
+      path, j.dump(1, ' ', false, nlohmann::json::error_handler_t::replace)));
   (void)env_->RemoveAll(staging_dir);
   return entry;
 }
@@ -248,7 +265,8 @@ Status Cache::SaveHistory(const std::string& workflow, const std::string& stage,
                           const nlohmann::json& history) {
   const std::string dir = dir_ + "/history/" + SafeName(workflow);
   PB_RETURN_IF_ERROR(env_->CreateDirs(dir));
-  return env_->WriteFileAtomic(dir + "/" + SafeName(stage) + ".json", history.dump(1));
+  return env_->WriteFileAtomic(dir + "/" + SafeName(stage) + ".json",
+                               history.dump(1, ' ', false, nlohmann::json::error_handler_t::replace));
 }
 
 std::optional<nlohmann::json> Cache::LoadHistory(const std::string& workflow,
@@ -257,7 +275,11 @@ std::optional<nlohmann::json> Cache::LoadHistory(const std::string& workflow,
   Expected<std::string> text = env_->ReadFile(path);
   if (!text.ok()) return std::nullopt;
   nlohmann::json j = nlohmann::json::parse(*text, nullptr, false);
-  if (j.is_discarded()) return std::nullopt;
+  // Damaged history only costs explain's reasons and --mem's estimate.
+  if (j.is_discarded() || !j.is_object() || !j.contains("components") ||
+      !j["components"].is_object() || !j.contains("peak_rss_bytes") ||
+      !j["peak_rss_bytes"].is_number_unsigned())
+    return std::nullopt;
   return j;
 }
 

@@ -10,7 +10,8 @@
 //   history/<workflow>/<stage>.json  last key components and peak RSS of a
 //                               (workflow name, stage id), for `explain` and --mem
 //   filehash/<id>               digest of an input file, keyed by (device, inode,
-//                               size, mtime) so a 1 GB scan is hashed once
+//                               size, mtime, ctime) so a 1 GB scan is hashed once;
+//                               files changed in the last 2 s are not memoized
 //   locks/                      flock() files; the kernel drops a lock when its
 //                               owner dies, so a killed run never blocks the next
 //   tmp/                        staging folders and temporary names; a name
@@ -41,6 +42,9 @@
 namespace pb {
 
 inline constexpr int kCacheFormatVersion = 1;
+
+// A cache key: XXH3-128 of the compact JSON of its components (see key.h).
+Digest KeyOf(const nlohmann::json& components);
 
 // An flock() held on a file until destruction.
 class FileLock {
@@ -118,6 +122,8 @@ class Cache {
   // Explain/--mem memory: the last key components and figures per stage.
   Status SaveHistory(const std::string& workflow, const std::string& stage,
                      const nlohmann::json& history);
+  // nullopt unless it is an object with "components" (object) and
+  // "peak_rss_bytes" (unsigned).
   std::optional<nlohmann::json> LoadHistory(const std::string& workflow, const std::string& stage);
 
   // Every complete entry, with its size on disk and last use.

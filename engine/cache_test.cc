@@ -4,7 +4,9 @@
 #include <fcntl.h>
 #include <sys/stat.h>
 
+#include <chrono>
 #include <filesystem>
+#include <thread>
 #include <fstream>
 
 #include "engine/test_util.h"
@@ -100,6 +102,41 @@ TEST(CacheTest, InjectedFailureAtEveryWriteNeverLeavesAPartialEntry) {
   }
 }
 
+TEST(CacheTest, DamagedFilesAreMissesNotCrashes) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  auto entry = CommitText(*cache, "a", "x").value();
+  const std::string hex = entry.key.Hex();
+  const std::string path = dir.path() + "/c/entries/" + hex.substr(0, 2) + "/" + hex + ".json";
+  ::chmod(path.c_str(), 0644);
+  for (const char* damaged : {R"({"format": 1})", "[1]", R"({"format": "pointbake-entry 1"})", "{"}) {
+    std::ofstream(path) << damaged;
+    EXPECT_FALSE(cache->Lookup(entry.key).has_value()) << damaged;
+    EXPECT_EQ(cache->Verify(false)->problems.size(), 1u) << damaged;
+  }
+  ASSERT_TRUE(cache->SaveHistory("wf", "s", {{"components", nlohmann::json::object()}, {"peak_rss_bytes", 5}}).ok());
+  EXPECT_TRUE(cache->LoadHistory("wf", "s").has_value());
+  for (const nlohmann::json& bad : {nlohmann::json::array({1}),
+                                    nlohmann::json{{"components", 5}, {"peak_rss_bytes", 5}},
+                                    nlohmann::json{{"components", nlohmann::json::object()}, {"peak_rss_bytes", "x"}}}) {
+    ASSERT_TRUE(cache->SaveHistory("wf", "s", bad).ok());
+    EXPECT_FALSE(cache->LoadHistory("wf", "s").has_value()) << bad.dump();
+  }
+}
+
+TEST(CacheTest, GcRemovesLeftoversOfDeadProcessesWhateverTheirName) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  for (const char* name : {"abc.99999999999999999999.1", "abc.0.1", "abc.-5.1", "noname",
+                           "k.2147483647.3"})
+    dir.Write(std::string("c/tmp/") + name + "/f", "x");
+  const std::string mine = "k." + std::to_string(::getpid()) + ".0";
+  dir.Write("c/tmp/" + mine + "/f", "x");
+  auto report = cache->Gc(1 << 20).value();
+  EXPECT_EQ(report.temp_removed, 5);
+  EXPECT_EQ(Env::Default()->ListDir(dir.path() + "/c/tmp").value(), std::vector<std::string>{mine});
+}
+
 TEST(CacheTest, GcKeepsMostRecentlyUsedWithinBudget) {
   TempDir dir;
   auto cache = Cache::Open(dir.path() + "/c").value();
@@ -125,9 +162,21 @@ TEST(CacheTest, FileDigestIsMemoizedByStat) {
   const std::string f = dir.Write("scan.txt", "points");
   const Digest d1 = cache->FileDigest(f).value();
   EXPECT_EQ(d1, HashBytes("points"));
+  // Just written: a same-second rewrite could keep its times, so no memo yet.
+  EXPECT_TRUE(Env::Default()->ListDir(dir.path() + "/c/filehash")->empty());
+  std::this_thread::sleep_for(std::chrono::milliseconds(2100));
+  EXPECT_EQ(cache->FileDigest(f).value(), d1);
   auto memo = Env::Default()->ListDir(dir.path() + "/c/filehash").value();
   EXPECT_EQ(memo.size(), 1u);
-  EXPECT_EQ(cache->FileDigest(f).value(), d1);
+  // Rewritten in place with the same size and its mtime put back (cp -p,
+  // rsync -t): the inode change time still tells.
+  const FileInfo before = Env::Default()->Stat(f).value();
+  dir.Write("scan.txt", "POINTS");
+  const struct timespec times[2] = {{0, UTIME_OMIT},
+                                    {before.mtime_ns / 1000000000, before.mtime_ns % 1000000000}};
+  ASSERT_EQ(::utimensat(AT_FDCWD, f.c_str(), times, 0), 0);
+  EXPECT_EQ(Env::Default()->Stat(f)->mtime_ns, before.mtime_ns);
+  EXPECT_EQ(cache->FileDigest(f).value(), HashBytes("POINTS"));
   dir.Write("scan.txt", "other!");
   EXPECT_EQ(cache->FileDigest(f).value(), HashBytes("other!"));
 }

@@ -58,12 +58,9 @@ std::string DefaultCacheDir() {
   return ".pointbake-cache";
 }
 
-std::string SelfExe() {
-  char buf[4096];
-  const ssize_t n = ::readlink("/proc/self/exe", buf, sizeof buf - 1);
-  if (n <= 0) return "pointbake";
-  return std::string(buf, static_cast<size_t>(n));
-}
+// Stages run the very binary that planned them, even if a rebuild replaced
+// the file meanwhile (new code under old keys would poison the cache).
+std::string SelfExe() { return "/proc/self/exe"; }
 
 int Fail(const Status& st) {
   std::fprintf(stderr, "%s\n", st.message().c_str());
@@ -104,6 +101,12 @@ int PrintPlan(const Workflow& wf, Cache& cache, bool explain) {
 }
 
 int CmdRun(const RunFlags& f, Registry& registry, bool explain_only) {
+  // Paths travel to stages inside JSON job files, which hold UTF-8 only.
+  for (const auto& [what, path] : {std::pair{"workflow", ResolvePath(".", f.workflow)},
+                                   std::pair{"--cache", ResolvePath(".", f.cache_dir)},
+                                   std::pair{"--out", ResolvePath(".", f.out_dir)}})
+    if (!IsValidUtf8(path))
+      return Fail(Status::Invalid(std::string(what) + " path is not valid UTF-8; rename the folder"));
   Expected<Workflow> wf = Load(f, registry);
   if (!wf.ok()) return Fail(wf.status());
   uint64_t mem = 0;
@@ -251,9 +254,12 @@ int CliMain(int argc, char** argv, Registry& registry) {
   cache->add_option("--cache", cache_dir, "Cache folder (default $POINTBAKE_CACHE or ~/.cache/pointbake)");
   CLI::App* cache_ls = cache->add_subcommand("ls", "List entries, most recently used first");
   CLI::App* cache_gc = cache->add_subcommand("gc", "Evict least recently used entries down to a size");
+  CLI::App* cache_verify = cache->add_subcommand("verify", "Re-hash every object, check every entry");
+  // `--cache DIR` is accepted before or after the sub-command.
+  for (CLI::App* sub : {cache_ls, cache_gc, cache_verify})
+    sub->add_option("--cache", cache_dir, "Cache folder (default $POINTBAKE_CACHE or ~/.cache/pointbake)");
   std::string max_size;
   cache_gc->add_option("--max-size", max_size, "Size to keep, e.g. 20G")->required();
-  CLI::App* cache_verify = cache->add_subcommand("verify", "Re-hash every object, check every entry");
   bool repair = false;
   cache_verify->add_flag("--repair", repair, "Remove what is corrupt");
 

@@ -90,7 +90,8 @@ JobResult LocalProcessExecutor::Run(const JobSpec& job, const ProgressFn& progre
   Env* env = Env::Default();
   const std::string job_path = JoinPath(job.staging_dir, "_job.json");
   const std::string result_path = JoinPath(job.staging_dir, "_result.json");
-  Status st = env->WriteFileAtomic(job_path, job.ToJson().dump());
+  Status st = env->WriteFileAtomic(job_path, job.ToJson().dump(-1, ' ', false,
+                                                               nlohmann::json::error_handler_t::replace));
   if (!st.ok()) {
     result.status = st;
     return result;
@@ -133,7 +134,8 @@ JobResult LocalProcessExecutor::Run(const JobSpec& job, const ProgressFn& progre
   if (pid == 0) {
     ::prctl(PR_SET_PDEATHSIG, SIGKILL);
     if (::getppid() != parent) ::_exit(127);
-    ::dup2(pipe_fds[1], 3);
+    if (pipe_fds[1] == 3) ::fcntl(3, F_SETFD, 0);  // dup2 onto itself keeps CLOEXEC
+    else ::dup2(pipe_fds[1], 3);
     ::dup2(log_fd, 1);
     ::dup2(log_fd, 2);
     ::execve(self_exe_.c_str(), argv, envp.data());
@@ -165,8 +167,13 @@ JobResult LocalProcessExecutor::Run(const JobSpec& job, const ProgressFn& progre
   }
   ReadProcIo(pid, result);
   int wstatus = 0;
-  struct rusage ru;
-  while (::wait4(pid, &wstatus, 0, &ru) < 0 && errno == EINTR) {
+  struct rusage ru {};
+  for (;;) {
+    if (::wait4(pid, &wstatus, 0, &ru) >= 0) break;
+    if (errno != EINTR) {
+      result.status = Status::Errno("wait4", "stage " + job.stage_id);
+      return result;
+    }
   }
   result.wall_s = std::chrono::duration<double>(Clock::now() - start).count();
   result.user_s = static_cast<double>(ru.ru_utime.tv_sec) + 1e-6 * static_cast<double>(ru.ru_utime.tv_usec);
@@ -258,8 +265,9 @@ int RunStageSubcommand(const std::string& job_path, Registry& registry) {
     result = RunStageHere(job, progress);
   }
   if (!result.status.ok()) std::fprintf(stderr, "error: %s\n", result.status.message().c_str());
-  Status st = Env::Default()->WriteFileAtomic(JoinPath(job.staging_dir, "_result.json"),
-                                              ResultToJson(result).dump());
+  Status st = Env::Default()->WriteFileAtomic(
+      JoinPath(job.staging_dir, "_result.json"),
+      ResultToJson(result).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace));
   if (!st.ok()) {
     std::fprintf(stderr, "pointbake __stage: %s\n", st.message().c_str());
     return 2;

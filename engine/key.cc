@@ -62,7 +62,6 @@ Expected<json> KeyComponents(const StageNode& node, const std::string& salt,
               {"salt", salt}};
 }
 
-Digest KeyOf(const json& components) { return HashBytes(components.dump()); }
 
 std::vector<std::string> DiffComponents(const json& before, const json& after) {
   std::vector<std::string> out;

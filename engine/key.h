@@ -33,8 +33,6 @@ Expected<nlohmann::json> KeyComponents(const StageNode& node, const std::string&
                                        const std::map<std::string, std::string>& input_digests,
                                        Cache& cache);
 
-Digest KeyOf(const nlohmann::json& components);
-
 // Human-readable differences between two component sets, e.g.
 // "parameter 'voxel' changed: 0.01 -> 0.02", "input 'points' changed",
 // "implementation version 1 -> 2", "file 'path' changed (content)".

@@ -107,12 +107,12 @@ Status WriteRunOutputs(const Workflow& wf, const std::vector<StageOutcome>& outc
     }
   }
   const nlohmann::json record = RunRecordJson(wf, outcomes, run_info);
-  PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(out_dir, "run.json"), record.dump(2) + "\n"));
+  PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(out_dir, "run.json"), record.dump(2, ' ', false, nlohmann::json::error_handler_t::replace) + "\n"));
   std::string lines;
-  for (const auto& s : record["stages"]) lines += s.dump() + "\n";
+  for (const auto& s : record["stages"]) lines += s.dump(-1, ' ', false, nlohmann::json::error_handler_t::replace) + "\n";
   PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(out_dir, "run.jsonl"), lines));
   PB_RETURN_IF_ERROR(
-      env->WriteFileAtomic(JoinPath(out_dir, "trace.json"), ChromeTraceJson(wf, outcomes).dump()));
+      env->WriteFileAtomic(JoinPath(out_dir, "trace.json"), ChromeTraceJson(wf, outcomes).dump(-1, ' ', false, nlohmann::json::error_handler_t::replace)));
   return Status::Ok();
 }
 

@@ -49,7 +49,15 @@ void Scheduler::RunOne(StageOutcome& out, const std::map<std::string, StageOutco
   job.plugins = wf_.plugins;
   job.threads = options.threads_per_stage;
   for (const auto& [port, in] : node.inputs) {
-    const Artifact& art = done.at(in.from_stage).outputs.at(in.from_port);
+    const auto& upstream = done.at(in.from_stage).outputs;
+    if (!upstream.count(in.from_port)) {
+      out.state = StageOutcome::State::kFailed;
+      out.error = "upstream '" + in.from_stage + "' has no output '" + in.from_port +
+                  "' in its cached result (its stage type changed without a version bump; "
+                  "run `pointbake cache gc` or set a workflow salt)";
+      return;
+    }
+    const Artifact& art = upstream.at(in.from_port);
     digests[port] = art.ComputeDigest().Hex();
     ArtifactView view;
     view.type = art.type;
@@ -77,7 +85,7 @@ void Scheduler::RunOne(StageOutcome& out, const std::map<std::string, StageOutco
   bool would_block = false;
   Expected<FileLock> lock = cache_.LockKey(key, false, &would_block);
   if (lock.ok() && would_block) {
-    if (observer_) observer_->OnStageWaiting(out.id, "another pointbake run is computing it");
+    if (observer_) observer_->OnStageWaiting(out.id, "the same result is being computed elsewhere; waiting to reuse it");
     lock = cache_.LockKey(key, true);
   }
   if (!lock.ok()) {
@@ -199,7 +207,12 @@ std::vector<StageOutcome> Scheduler::Run(const RunOptions& options) {
           std::lock_guard<std::mutex> g(mu);
           local = outcomes[id];
         }
-        RunOne(local, snapshot, options, 0);
+        try {
+          RunOne(local, snapshot, options, 0);
+        } catch (const std::exception& e) {
+          local.state = StageOutcome::State::kFailed;
+          local.error = std::string("internal error: ") + e.what();
+        }
         std::lock_guard<std::mutex> g(mu);
         local.end_s = now_s();
         outcomes[id] = local;
@@ -232,6 +245,8 @@ std::vector<StageOutcome> Scheduler::Run(const RunOptions& options) {
     if (o.state == StageOutcome::State::kPending) {
       o.state = StageOutcome::State::kSkipped;
       o.error = "not run: the run stopped after a failure (use --keep-going to run independent stages)";
+      ++finished;
+      if (observer_) observer_->OnStageEnd(o, finished, static_cast<int>(wf_.order.size()));
     }
     result.push_back(o);
   }

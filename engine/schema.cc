@@ -616,6 +616,35 @@ Expected<JsonSchema> JsonSchema::ParseFile(const std::string& path) {
   return Parse(schema, path);
 }
 
+namespace {
+
+// valijson reports a `propertyNames` failure only as a generic wrapper error at
+// the enclosing object, so keys are checked here against "propertyNames":
+// {"pattern": ...}, following "properties" and "additionalProperties".
+void CheckPropertyNames(const Json& schema, const Json& instance, const std::string& pointer,
+                        std::vector<SchemaError>& out) {
+  if (!schema.is_object() || !instance.is_object()) return;
+  if (auto names = schema.find("propertyNames"); names != schema.end() && names->is_object()) {
+    if (auto pattern = names->find("pattern"); pattern != names->end() && pattern->is_string()) {
+      for (const auto& [key, value] : instance.items())
+        if (!RegexSearch(pattern->get<std::string>(), key))
+          out.push_back({pointer + "/" + PointerToken(key),
+                         "bad key '" + key + "': must match pattern " + pattern->get<std::string>()});
+    }
+  }
+  const auto props = schema.find("properties");
+  const auto extra = schema.find("additionalProperties");
+  for (const auto& [key, value] : instance.items()) {
+    const std::string child = pointer + "/" + PointerToken(key);
+    if (props != schema.end() && props->is_object() && props->contains(key))
+      CheckPropertyNames((*props)[key], value, child, out);
+    else if (extra != schema.end() && extra->is_object())
+      CheckPropertyNames(*extra, value, child, out);
+  }
+}
+
+}  // namespace
+
 std::vector<SchemaError> JsonSchema::Validate(const nlohmann::json& instance) const {
   if (schema_ == nullptr) return {};
   const auto* schema = static_cast<const valijson::Schema*>(schema_.get());
@@ -640,9 +669,19 @@ std::vector<SchemaError> JsonSchema::Validate(const nlohmann::json& instance) co
         {Locate(error.context, instance), error.description, IsWrapper(error.description)});
   }
 
+  std::vector<SchemaError> name_errors;
+  CheckPropertyNames(schema_json_, instance, "", name_errors);
+  for (const SchemaError& e : name_errors) {
+    Location loc;
+    loc.pointer = e.pointer;
+    raw.push_back({loc, e.message, false});
+  }
+
   MessageBuilder builder(schema_json_, instance);
   std::vector<SchemaError> out;
   std::set<std::pair<std::string, std::string>> seen;
+  for (const SchemaError& e : name_errors)
+    if (seen.emplace(e.pointer, e.message).second) out.push_back(e);
   for (const Raw& r : raw) {
     if (r.wrapper) {
       // "Failed to validate against schema associated with property name 'x'." only says that

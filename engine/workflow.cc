@@ -1,6 +1,8 @@
 #include "engine/workflow.h"
 
 #include <algorithm>
+#include <charconv>
+#include <cmath>
 #include <functional>
 #include <queue>
 #include <set>
@@ -76,7 +78,7 @@ void ReportSchemaErrors(const YamlDocument& doc, const std::vector<SchemaError>&
                         const std::string& pointer_prefix, Errors& out) {
   for (const SchemaError& e : errors) {
     const std::string pointer = pointer_prefix + e.pointer;
-    const bool about_key = e.message.rfind("unknown key", 0) == 0;
+    const bool about_key = e.message.rfind("unknown key", 0) == 0 || e.message.rfind("bad key", 0) == 0;
     out.Add(about_key ? doc.KeyPositionOf(pointer) : doc.PositionOf(pointer), e.message);
   }
 }
@@ -87,10 +89,11 @@ const json* SceneLookup(const json& scene, const std::string& dotted) {
   std::stringstream ss(dotted);
   std::string part;
   while (std::getline(ss, part, '.')) {
+    size_t index = 0;
+    const auto [end, ec] = std::from_chars(part.data(), part.data() + part.size(), index);
+    const bool is_index = !part.empty() && ec == std::errc() && end == part.data() + part.size();
     if (cur->is_object() && cur->contains(part)) cur = &(*cur)[part];
-    else if (cur->is_array() && !part.empty() &&
-             std::all_of(part.begin(), part.end(), ::isdigit) && std::stoul(part) < cur->size())
-      cur = &(*cur)[std::stoul(part)];
+    else if (cur->is_array() && is_index && index < cur->size()) cur = &(*cur)[index];
     else return nullptr;
   }
   return cur;
@@ -174,6 +177,19 @@ void SubstituteScene(json& value, const std::string& pointer, const YamlDocument
   } else {
     value = out;
   }
+}
+
+// JSON has no NaN or infinity: they would reach stages (and cache keys) as
+// null. Reports the pointer (relative to `value`) of the first one.
+std::optional<std::string> FindNonFinite(const json& value, const std::string& pointer) {
+  if (value.is_number_float() && !std::isfinite(value.get<double>())) return pointer;
+  if (value.is_object())
+    for (const auto& [k, v] : value.items())
+      if (auto p = FindNonFinite(v, pointer + "/" + PointerToken(k))) return p;
+  if (value.is_array())
+    for (size_t i = 0; i < value.size(); ++i)
+      if (auto p = FindNonFinite(value[i], pointer + "/" + std::to_string(i))) return p;
+  return std::nullopt;
 }
 
 // Applies one --set STAGE.PARAM[.SUB]=VALUE to the stages' `with:` objects.
@@ -350,11 +366,16 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     SubstituteScene(with, "", doc, sp + "/with", scene_ctx, from_scene, errors);
     // An unresolved ${...} would only add a confusing type error below.
     if (errors.size() != errors_before) continue;
+    if (std::optional<std::string> bad = FindNonFinite(with, "")) {
+      errors.Add(pos_of(sp + "/with" + *bad),
+                 "stage '" + id + "' (" + uses + "): must be a finite number (no .inf or .nan)");
+      continue;
+    }
     const json& param_schema = registry.ParamsSchema(uses).json();
     with = ApplyDefaults(param_schema, with);
     for (const SchemaError& e : registry.ParamsSchema(uses).Validate(with)) {
       const std::string pointer = sp + "/with" + e.pointer;
-      const bool about_key = e.message.rfind("unknown key", 0) == 0;
+      const bool about_key = e.message.rfind("unknown key", 0) == 0 || e.message.rfind("bad key", 0) == 0;
       SourcePos pos = pos_of(pointer);
       if (about_key && pos.file.rfind("<command line>", 0) != 0) pos = doc.KeyPositionOf(pointer);
       errors.Add(pos, "stage '" + id + "' (" + uses + "): " + e.message);
@@ -364,7 +385,11 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     for (auto& [name, prop] : properties.items()) {
       if (!prop.value("x-path", false) || !with.contains(name) || !with[name].is_string()) continue;
       const bool scene_value = from_scene.count("/" + PointerToken(name)) > 0;
-      const std::string abs = ResolvePath(scene_value ? scene_ctx.dir : dir, with[name].get<std::string>());
+      // Paths typed on the command line are relative to where it was typed.
+      const bool from_command_line =
+          pos_of(sp + "/with/" + PointerToken(name)).file.rfind("<command line>", 0) == 0;
+      const std::string base = scene_value ? scene_ctx.dir : from_command_line ? "." : dir;
+      const std::string abs = ResolvePath(base, with[name].get<std::string>());
       with[name] = abs;
       if (!Env::Default()->Exists(abs)) {
         const std::string pointer = sp + "/with/" + PointerToken(name);

@@ -2,6 +2,8 @@
 
 #include <gtest/gtest.h>
 
+#include <filesystem>
+
 #include "engine/test_util.h"
 
 namespace pb {
@@ -88,6 +90,57 @@ stages:
             std::string::npos) << msg;
   EXPECT_NE(msg.find("wf.yaml:7:34: type mismatch: input 'in' of stage 'u2' takes table, but m.mesh is mesh"),
             std::string::npos) << msg;
+}
+
+TEST_F(WorkflowTest, RejectsNonFiniteNumbersBadUtf8AndEscapingOutputNames) {
+  const std::string text = "name: demo\nstages:\n  src: { uses: t.text }\n";
+  for (const char* value : {".inf", "-.inf", ".nan"}) {
+    auto wf = Load(text, LoadOptions{"", {std::string("src.threads=") + value}});
+    ASSERT_FALSE(wf.ok()) << value;
+    EXPECT_NE(wf.status().message().find("must be a finite number"), std::string::npos)
+        << wf.status().message();
+  }
+  auto utf8 = Load("name: demo\nstages:\n  src: { uses: t.text, with: { text: \"caf\xe9\" } }\n");
+  ASSERT_FALSE(utf8.ok());
+  EXPECT_NE(utf8.status().message().find("wf.yaml:3:38: text is not valid UTF-8"), std::string::npos)
+      << utf8.status().message();
+  auto escape = Load(text + "outputs: { ../../escape: src.out }\n");
+  ASSERT_FALSE(escape.ok());
+  EXPECT_NE(escape.status().message().find("wf.yaml:4:12:"), std::string::npos)
+      << escape.status().message();
+}
+
+TEST_F(WorkflowTest, SceneReferencesNeverCrashOnOddIndices) {
+  dir_.Write("scene.yaml", "name: s\nviewpoints: [{ eye: [0, 0, 0], target: [1, 0, 0] }]\n");
+  auto wf = Load(R"(name: demo
+scene: scene.yaml
+stages:
+  src: { uses: t.text, with: { text: "${scene.viewpoints.99999999999999999999999}" } }
+)");
+  ASSERT_FALSE(wf.ok());
+  EXPECT_NE(wf.status().message().find("has no key 'viewpoints.99999999999999999999999'"),
+            std::string::npos) << wf.status().message();
+  auto ok = Load(R"(name: demo
+scene: scene.yaml
+stages:
+  src: { uses: t.text, with: { text: "eye=${scene.viewpoints.0.eye}" } }
+)");
+  ASSERT_TRUE(ok.ok()) << ok.status().message();
+  EXPECT_EQ(ok->stages["src"].params["text"], "eye=[0,0,0]");
+}
+
+TEST_F(WorkflowTest, PathsFromTheCommandLineAreRelativeToTheWorkingDirectory) {
+  dir_.Write("sub/data.txt", "x");
+  const std::string text = "name: demo\nstages:\n  f: { uses: t.file, with: { path: sub/data.txt } }\n";
+  auto from_file = Load(text);
+  ASSERT_TRUE(from_file.ok()) << from_file.status().message();
+  EXPECT_EQ(from_file->stages["f"].params["path"], dir_.path() + "/sub/data.txt");
+  const std::string cwd = std::filesystem::current_path();
+  std::filesystem::current_path(dir_.path() + "/sub");
+  auto from_cli = Load(text, LoadOptions{"", {"f.path=data.txt"}});
+  std::filesystem::current_path(cwd);
+  ASSERT_TRUE(from_cli.ok()) << from_cli.status().message();
+  EXPECT_EQ(from_cli->stages["f"].params["path"], dir_.path() + "/sub/data.txt");
 }
 
 TEST_F(WorkflowTest, DetectsCyclesAndMissingInputs) {

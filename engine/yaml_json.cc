@@ -136,6 +136,7 @@ class Converter {
   std::optional<ConvertError> ConvertScalar(const YAML::Node& node, Json* out) {
     const std::string& tag = node.Tag();
     const std::string& s = node.Scalar();
+    if (!IsValidUtf8(s)) return ConvertError{node.Mark(), "text is not valid UTF-8 (save the file as UTF-8)"};
     if (tag == "?") {
       *out = TypePlain(s);
       return std::nullopt;
@@ -225,6 +226,7 @@ class Converter {
                                                std::string(key.IsMap() ? "mapping" : "sequence")};
           }
           const std::string& name = key.Scalar();
+          if (!IsValidUtf8(name)) return ConvertError{key.Mark(), "key is not valid UTF-8 (save the file as UTF-8)"};
           const auto [prev, inserted] = seen.emplace(name, key.Mark().line + 1);
           if (!inserted) {
             return ConvertError{key.Mark(), "duplicate key '" + name + "' (first defined at line " +

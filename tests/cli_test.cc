@@ -291,6 +291,10 @@ TEST_F(Cli, DryRunExecutesNothing) {
   const RunResult ls = pbtest::Run({"cache", "--cache", P("cache"), "ls"});
   ASSERT_EQ(ls.exit_code, 0) << ls.Describe();
   EXPECT_NE(ls.out.find("0 entries"), std::string::npos) << ls.out;
+  // The README's form: --cache after the sub-command.
+  const RunResult ls_after = pbtest::Run({"cache", "ls", "--cache", P("cache")});
+  ASSERT_EQ(ls_after.exit_code, 0) << ls_after.Describe();
+  EXPECT_NE(ls_after.out.find("0 entries"), std::string::npos) << ls_after.out;
   EXPECT_FALSE(Exists(P("out/run.json")));
 }
 

@@ -165,6 +165,7 @@ Expected<FileInfo> Env::Stat(const std::string& path) const {
   info.inode = st.st_ino;
   info.size_bytes = static_cast<uint64_t>(st.st_size);
   info.mtime_ns = static_cast<int64_t>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
+  info.ctime_ns = static_cast<int64_t>(st.st_ctim.tv_sec) * 1000000000LL + st.st_ctim.tv_nsec;
   info.is_directory = S_ISDIR(st.st_mode);
   return info;
 }
@@ -256,6 +257,39 @@ std::string ResolvePath(std::string_view base_dir, std::string_view path) {
   std::filesystem::path abs = std::filesystem::absolute(p, ec);
   if (ec) abs = p;
   return abs.lexically_normal().string();
+}
+
+bool IsValidUtf8(std::string_view text) {
+  size_t i = 0;
+  while (i < text.size()) {
+    const auto c = static_cast<unsigned char>(text[i]);
+    size_t extra;
+    uint32_t cp;
+    if (c < 0x80) {
+      ++i;
+      continue;
+    } else if ((c >> 5) == 0x6) {
+      extra = 1, cp = c & 0x1f;
+    } else if ((c >> 4) == 0xe) {
+      extra = 2, cp = c & 0x0f;
+    } else if ((c >> 3) == 0x1e) {
+      extra = 3, cp = c & 0x07;
+    } else {
+      return false;
+    }
+    if (i + extra >= text.size()) return false;  // truncated sequence
+    for (size_t k = 1; k <= extra; ++k) {
+      const auto cc = static_cast<unsigned char>(text[i + k]);
+      if ((cc >> 6) != 0x2) return false;
+      cp = (cp << 6) | (cc & 0x3f);
+    }
+    // Overlong forms, surrogates, beyond Unicode.
+    if ((extra == 1 && cp < 0x80) || (extra == 2 && cp < 0x800) || (extra == 3 && cp < 0x10000) ||
+        (cp >= 0xd800 && cp <= 0xdfff) || cp > 0x10ffff)
+      return false;
+    i += extra + 1;
+  }
+  return true;
 }
 
 Expected<uint64_t> ParseByteSize(std::string_view text) {

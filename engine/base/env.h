@@ -22,6 +22,7 @@ struct FileInfo {
   uint64_t inode = 0;
   uint64_t size_bytes = 0;
   int64_t mtime_ns = 0;
+  int64_t ctime_ns = 0;  // inode change time: users cannot set it back
   bool is_directory = false;
 };
 
@@ -81,6 +82,9 @@ std::string JoinPath(std::string_view a, std::string_view b);
 std::string DirName(std::string_view path);
 // Absolute, lexically normalized form of `path` relative to `base_dir`.
 std::string ResolvePath(std::string_view base_dir, std::string_view path);
+
+// True if `text` is well-formed UTF-8 (JSON records and job files need it).
+bool IsValidUtf8(std::string_view text);
 
 // Parses "512M", "2G", "1.5GiB", "300000" into bytes.
 Expected<uint64_t> ParseByteSize(std::string_view text);
