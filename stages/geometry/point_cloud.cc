@@ -56,6 +56,20 @@ Status Validate(const PointCloud& cloud) {
     return Status::Invalid("point cloud: " + std::to_string(cloud.colors.size()) +
                            " color bytes for " + std::to_string(n) + " points (expected 3 per point)");
   }
+  if (cloud.has_intensities() && cloud.intensities.size() != n) {
+    return Status::Invalid("point cloud: " + std::to_string(cloud.intensities.size()) +
+                           " intensities for " + std::to_string(n) + " points");
+  }
+  if (cloud.has_stations()) {
+    if (cloud.station_ids.size() != n)
+      return Status::Invalid("point cloud: " + std::to_string(cloud.station_ids.size()) +
+                             " station ids for " + std::to_string(n) + " points");
+    for (size_t i = 0; i < n; ++i)
+      if (cloud.station_ids[i] >= cloud.stations.size())
+        return Status::Invalid("point cloud: point " + std::to_string(i) + " names station " +
+                               std::to_string(cloud.station_ids[i]) + " of " +
+                               std::to_string(cloud.stations.size()));
+  }
   return Status::Ok();
 }
 

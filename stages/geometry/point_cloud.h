@@ -8,6 +8,11 @@
 //   positions: 3 floats per point (x, y, z), meters, relative to origin
 //   normals:   empty, or 3 floats per point (unit length)
 //   colors:    empty, or 3 bytes per point (r, g, b; sRGB 0..255)
+//   intensities: empty, or 1 float per point (scanner return strength,
+//              normalized to [0, 1])
+//   station_ids: empty, or 1 per point: index into `stations` of the scanner
+//              position that saw the point (normals are oriented toward it)
+//   stations:  scanner positions, absolute meters (not relative to origin)
 #pragma once
 
 #include <array>
@@ -25,11 +30,16 @@ struct PointCloud {
   std::vector<float> positions;    // xyz interleaved, meters, relative to origin
   std::vector<float> normals;      // empty or 3 per point
   std::vector<uint8_t> colors;     // empty or rgb per point
+  std::vector<float> intensities;  // empty or 1 per point, [0, 1]
+  std::vector<uint16_t> station_ids;  // empty or 1 per point, index into stations
+  std::vector<std::array<double, 3>> stations;  // absolute meters
 
   size_t size() const { return positions.size() / 3; }
   bool empty() const { return positions.empty(); }
   bool has_normals() const { return !normals.empty(); }
   bool has_colors() const { return !colors.empty(); }
+  bool has_intensities() const { return !intensities.empty(); }
+  bool has_stations() const { return !station_ids.empty(); }
 };
 
 // Axis-aligned bounds in meters. Empty bounds have min = +inf, max = -inf.
