@@ -2,12 +2,14 @@
 
 #include "stages/io/io_stages.h"
 #include "stages/points/points_stages.h"
+#include "stages/synth/synth_stages.h"
 
 namespace pb {
 
 void RegisterBuiltinStages(StageRegistry& registry) {
   RegisterIoStages(registry);
   RegisterPointsStages(registry);
+  RegisterSynthStages(registry);
 }
 
 }  // namespace pb
