@@ -150,7 +150,10 @@ Expected<Digest> Cache::FileDigest(const std::string& path) {
     Expected<std::string> text = env_->ReadFile(memo);
     if (text.ok()) {
       Expected<Digest> d = Digest::FromHex(text->substr(0, 32));
-      if (d.ok()) return d;
+      if (d.ok()) {
+        ::utimensat(AT_FDCWD, memo.c_str(), nullptr, 0);  // last use, for gc
+        return d;
+      }
     }
   }
   uint64_t size = 0;
@@ -383,6 +386,19 @@ Expected<GcReport> Cache::Gc(uint64_t max_bytes) {
       }
     }
   }
+
+  // gc holds the cache exclusively, so no run holds or is about to open a
+  // key lock: their files can go. Input-file memos unused for 30 days too.
+  if (Expected<std::vector<std::string>> locks = env_->ListDir(dir_ + "/locks"); locks.ok())
+    for (const std::string& name : *locks)
+      if (name != "cache.lock") (void)env_->RemoveAll(dir_ + "/locks/" + name);
+  constexpr int64_t kMemoMaxAgeNs = 30LL * 24 * 3600 * 1000000000LL;
+  if (Expected<std::vector<std::string>> memos = env_->ListDir(dir_ + "/filehash"); memos.ok())
+    for (const std::string& name : *memos) {
+      Expected<FileInfo> info = env_->Stat(dir_ + "/filehash/" + name);
+      if (info.ok() && NowNs() - info->mtime_ns > kMemoMaxAgeNs)
+        (void)env_->RemoveAll(dir_ + "/filehash/" + name);
+    }
 
   PB_ASSIGN_OR_RETURN(std::vector<EntryInfo> entries, ListEntries());  // newest first
   // Objects are shared between entries: count each once.

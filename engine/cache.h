@@ -13,7 +13,9 @@
 //                               size, mtime, ctime) so a 1 GB scan is hashed once;
 //                               files changed in the last 2 s are not memoized
 //   locks/                      flock() files; the kernel drops a lock when its
-//                               owner dies, so a killed run never blocks the next
+//                               owner dies, so a killed run never blocks the next;
+//                               gc removes key locks (it runs alone) and memos
+//                               in filehash/ unused for 30 days
 //   tmp/                        staging folders and temporary names; a name
 //                               carries its writer's pid, and gc removes those
 //                               whose process is gone

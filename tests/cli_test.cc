@@ -196,9 +196,14 @@ stages:
   ASSERT_TRUE(big.contains("peak_rss_bytes")) << big.dump();
   const double rss = big["peak_rss_bytes"].get<double>();
   const double mib512 = 512.0 * 1024 * 1024;
-  EXPECT_GE(rss, 0.9 * mib512) << "peak_rss_bytes=" << rss;
-  EXPECT_LE(rss, 1.1 * mib512) << "peak_rss_bytes=" << rss;
   EXPECT_EQ(big["counters"].value("bytes", 0.0), mib512);
+  EXPECT_GE(rss, 0.9 * mib512) << "peak_rss_bytes=" << rss;
+#if defined(__SANITIZE_ADDRESS__)
+  // ASan's shadow memory and quarantine add ~35% here: the upper bound only
+  // holds for a plain build.
+  GTEST_SKIP() << "upper bound not checked under AddressSanitizer; peak_rss_bytes=" << rss;
+#endif
+  EXPECT_LE(rss, 1.1 * mib512) << "peak_rss_bytes=" << rss;
 }
 
 constexpr const char* kFailing = R"(name: failing

@@ -1,0 +1,665 @@
+#include "stages/geometry/e57.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <unistd.h>
+
+#include <bit>
+#include <cmath>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iterator>
+#include <limits>
+#include <numbers>
+#include <sstream>
+
+#include "stages/geometry/e57_binary.h"
+#include "stages/geometry/e57_xml.h"
+#include "stages/geometry/ply.h"
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::string SharedData() {
+  const char* source = std::getenv("PB_SOURCE_DIR");
+  if (source) {
+    const std::filesystem::path candidate =
+        std::filesystem::path(source) / ".." / "shared" / "data";
+    if (std::filesystem::exists(candidate)) return candidate.string();
+  }
+  if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
+  return "";
+}
+
+// ---------------------------------------------------------------------------
+// A minimal E57 writer for hand-made test files: header, one CompressedVector
+// section per scan (bitPackCodec, streams split across small packets so
+// values straddle packet boundaries), XML, CRC-checked pages.
+
+struct TestField {
+  enum class Kind { kFloat32, kFloat64, kInteger, kScaledInteger };
+  std::string name;
+  Kind kind = Kind::kFloat64;
+  int64_t minimum = 0;
+  int64_t maximum = 0;
+  double scale = 1.0;
+  double offset = 0.0;
+  std::vector<double> values;  // floats as is; integers as raw integer values
+
+  std::string Xml() const {
+    std::ostringstream out;
+    out.precision(17);
+    out << "<" << name;
+    switch (kind) {
+      case Kind::kFloat32:
+        out << " type=\"Float\" precision=\"single\"";
+        break;
+      case Kind::kFloat64:
+        out << " type=\"Float\"";
+        break;
+      case Kind::kInteger:
+        out << " type=\"Integer\" minimum=\"" << minimum << "\" maximum=\"" << maximum << "\"";
+        break;
+      case Kind::kScaledInteger:
+        out << " type=\"ScaledInteger\" minimum=\"" << minimum << "\" maximum=\"" << maximum
+            << "\" scale=\"" << scale << "\" offset=\"" << offset << "\"";
+        break;
+    }
+    out << "/>";
+    return out.str();
+  }
+
+  std::vector<uint8_t> Stream() const {
+    std::vector<uint8_t> bytes;
+    if (kind == Kind::kFloat32 || kind == Kind::kFloat64) {
+      for (double v : values) {
+        uint8_t raw[8];
+        size_t size = 8;
+        if (kind == Kind::kFloat32) {
+          const float f = static_cast<float>(v);
+          std::memcpy(raw, &f, 4);
+          size = 4;
+        } else {
+          std::memcpy(raw, &v, 8);
+        }
+        bytes.insert(bytes.end(), raw, raw + size);
+      }
+      return bytes;
+    }
+    const int bits = std::bit_width(static_cast<uint64_t>(maximum - minimum));
+    uint64_t bit_pos = 0;
+    for (double v : values) {
+      const uint64_t packed = static_cast<uint64_t>(std::llround(v) - minimum);
+      for (int b = 0; b < bits; ++b, ++bit_pos) {
+        if (bit_pos / 8 >= bytes.size()) bytes.push_back(0);
+        if ((packed >> b) & 1) bytes[bit_pos / 8] |= static_cast<uint8_t>(1u << (bit_pos % 8));
+      }
+    }
+    return bytes;
+  }
+};
+
+TestField Float64(const std::string& name, std::vector<double> values) {
+  return {name, TestField::Kind::kFloat64, 0, 0, 1.0, 0.0, std::move(values)};
+}
+TestField Float32(const std::string& name, std::vector<double> values) {
+  return {name, TestField::Kind::kFloat32, 0, 0, 1.0, 0.0, std::move(values)};
+}
+TestField Integer(const std::string& name, int64_t minimum, int64_t maximum,
+                  std::vector<double> values) {
+  return {name, TestField::Kind::kInteger, minimum, maximum, 1.0, 0.0, std::move(values)};
+}
+TestField Scaled(const std::string& name, int64_t minimum, int64_t maximum, double scale,
+                 double offset, std::vector<double> values) {
+  return {
+      name, TestField::Kind::kScaledInteger, minimum, maximum, scale, offset, std::move(values)};
+}
+
+struct TestScan {
+  std::vector<TestField> fields;
+  std::string extra_xml;      // pose, colorLimits, ... inside <vectorChild>
+  std::string codecs_xml;     // children of <codecs>
+  int64_t record_count = -1;  // -1: the first field's value count
+  int64_t file_offset = -1;   // -1: the real section offset
+};
+
+struct WriterOptions {
+  size_t stream_bytes_per_packet = 7;  // small, odd: values straddle packets
+  bool empty_and_index_packets = true;
+  int packet_type = 1;
+  uint32_t version_major = 1;
+  std::function<void(std::string*)> edit_xml;  // patches the XML text
+};
+
+void PutLe(std::vector<uint8_t>* out, size_t at, uint64_t value, int bytes) {
+  for (int i = 0; i < bytes; ++i) (*out)[at + i] = static_cast<uint8_t>(value >> (8 * i));
+}
+void AppendLe(std::vector<uint8_t>* out, uint64_t value, int bytes) {
+  out->resize(out->size() + bytes);
+  PutLe(out, out->size() - bytes, value, bytes);
+}
+
+void AppendPacket(std::vector<uint8_t>* logical, int type, const std::vector<uint8_t>& body) {
+  const size_t start = logical->size();
+  logical->push_back(static_cast<uint8_t>(type));
+  logical->push_back(0);
+  AppendLe(logical, 0, 2);  // length, patched below
+  logical->insert(logical->end(), body.begin(), body.end());
+  while ((logical->size() - start) % 4 != 0) logical->push_back(0);
+  PutLe(logical, start + 2, logical->size() - start - 1, 2);
+}
+
+std::vector<uint8_t> BuildE57(const std::vector<TestScan>& scans,
+                              const WriterOptions& options = {}) {
+  std::vector<uint8_t> logical(48, 0);
+  std::string scans_xml;
+  for (const TestScan& scan : scans) {
+    const size_t section_start = logical.size();
+    logical.resize(section_start + 32, 0);
+    std::vector<std::vector<uint8_t>> streams;
+    for (const TestField& field : scan.fields) streams.push_back(field.Stream());
+    std::vector<size_t> sent(streams.size(), 0);
+    bool first = true;
+    while (first || [&] {
+      for (size_t s = 0; s < streams.size(); ++s) {
+        if (sent[s] < streams[s].size()) return true;
+      }
+      return false;
+    }()) {
+      if (!first && options.empty_and_index_packets) AppendPacket(&logical, 2, {});
+      first = false;
+      std::vector<uint8_t> body;
+      AppendLe(&body, streams.size(), 2);
+      std::vector<size_t> take(streams.size());
+      for (size_t s = 0; s < streams.size(); ++s) {
+        take[s] = std::min(options.stream_bytes_per_packet, streams[s].size() - sent[s]);
+        AppendLe(&body, take[s], 2);
+      }
+      for (size_t s = 0; s < streams.size(); ++s) {
+        body.insert(body.end(), streams[s].begin() + sent[s],
+                    streams[s].begin() + sent[s] + take[s]);
+        sent[s] += take[s];
+      }
+      AppendPacket(&logical, options.packet_type, body);
+    }
+    if (options.empty_and_index_packets) {
+      std::vector<uint8_t> index_body(12, 0);  // entryCount 0, indexLevel 0, reserved
+      AppendPacket(&logical, 0, index_body);
+    }
+    logical[section_start] = 1;
+    PutLe(&logical, section_start + 8, logical.size() - section_start, 8);
+    PutLe(&logical, section_start + 16, e57::LogicalToPhysical(section_start + 32), 8);
+
+    const int64_t records = scan.record_count >= 0
+                                ? scan.record_count
+                                : static_cast<int64_t>(scan.fields.at(0).values.size());
+    const int64_t offset = scan.file_offset >= 0
+                               ? scan.file_offset
+                               : static_cast<int64_t>(e57::LogicalToPhysical(section_start));
+    scans_xml += "    <vectorChild type=\"Structure\">\n      " + scan.extra_xml +
+                 "\n      <points type=\"CompressedVector\" fileOffset=\"" +
+                 std::to_string(offset) + "\" recordCount=\"" + std::to_string(records) +
+                 "\">\n        <prototype type=\"Structure\">\n";
+    for (const TestField& field : scan.fields) scans_xml += "          " + field.Xml() + "\n";
+    scans_xml +=
+        "        </prototype>\n        <codecs type=\"Vector\" allowHeterogeneousChildren=\"1\">" +
+        scan.codecs_xml + "</codecs>\n      </points>\n    </vectorChild>\n";
+  }
+  std::string xml =
+      "<?xml version=\"1.0\" encoding=\"UTF-8\"?>\n"
+      "<e57Root type=\"Structure\" xmlns=\"http://www.astm.org/COMMIT/E57/2010-e57-v1.0\">\n"
+      "  <formatName type=\"String\"><![CDATA[ASTM E57 3D Imaging Data File]]></formatName>\n"
+      "  <!-- written by e57_test -->\n"
+      "  <data3D type=\"Vector\" allowHeterogeneousChildren=\"1\">\n" +
+      scans_xml + "  </data3D>\n</e57Root>\n";
+  if (options.edit_xml) options.edit_xml(&xml);
+  const size_t xml_start = logical.size();
+  logical.insert(logical.end(), xml.begin(), xml.end());
+
+  const size_t pages = (logical.size() + 1019) / 1020;
+  std::memcpy(logical.data(), "ASTM-E57", 8);
+  PutLe(&logical, 8, options.version_major, 4);
+  PutLe(&logical, 12, 0, 4);
+  PutLe(&logical, 16, pages * 1024, 8);
+  PutLe(&logical, 24, e57::LogicalToPhysical(xml_start), 8);
+  PutLe(&logical, 32, xml.size(), 8);
+  PutLe(&logical, 40, 1024, 8);
+  logical.resize(pages * 1020, 0);
+  std::vector<uint8_t> file;
+  for (size_t p = 0; p < pages; ++p) {
+    file.insert(file.end(), logical.begin() + p * 1020, logical.begin() + (p + 1) * 1020);
+    const uint32_t crc = e57::Crc32c(logical.data() + p * 1020, 1020);
+    for (int shift = 24; shift >= 0; shift -= 8) file.push_back(static_cast<uint8_t>(crc >> shift));
+  }
+  return file;
+}
+
+class E57Test : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (std::filesystem::temp_directory_path() / "pb_e57_test_XXXXXX").string();
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  std::string Write(const std::string& name, const std::vector<uint8_t>& bytes) const {
+    const std::string path = (dir_ / name).string();
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()),
+               static_cast<std::streamsize>(bytes.size()));
+    return path;
+  }
+  std::string WriteScans(const std::vector<TestScan>& scans, const WriterOptions& options = {}) {
+    return Write("t.e57", BuildE57(scans, options));
+  }
+  // Reads a file expected to fail; returns its message.
+  std::string Error(const std::string& path, const ScanReadOptions& options = {}) {
+    auto read = ReadE57(path, options);
+    EXPECT_FALSE(read.ok());
+    return read.ok() ? "" : read.status().message();
+  }
+
+  std::filesystem::path dir_;
+};
+
+std::vector<uint8_t> ReadBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<uint8_t>(std::istreambuf_iterator<char>(in), {});
+}
+
+TestScan XyzScan(std::vector<double> x, std::vector<double> y, std::vector<double> z) {
+  TestScan scan;
+  scan.fields = {Float64("cartesianX", std::move(x)), Float64("cartesianY", std::move(y)),
+                 Float64("cartesianZ", std::move(z))};
+  return scan;
+}
+
+// ---------------------------------------------------------------------------
+// Shared sample files.
+
+TEST_F(E57Test, PumpMatchesDecodedPly) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  int progress_calls = 0;
+  ScanReadOptions options;
+  options.progress = [&](double) { ++progress_calls; };
+  auto read = ReadE57(data + "/pump_e57/pumpAVisualReferenceImage.e57", options);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  EXPECT_EQ(read->format, "e57");
+  EXPECT_EQ(cloud.size(), 155201u);
+  EXPECT_EQ(read->dropped_points, 0u);
+  ASSERT_TRUE(cloud.has_colors());
+  ASSERT_TRUE(cloud.has_intensities());
+  EXPECT_FALSE(cloud.has_stations());  // no pose in this file
+  EXPECT_GE(progress_calls, 1);
+  EXPECT_TRUE(Validate(cloud).ok());
+  for (float intensity : cloud.intensities) {
+    ASSERT_GE(intensity, 0.f);
+    ASSERT_LE(intensity, 1.f);
+  }
+
+  auto ply = ReadPlyPoints(data + "/pump_e57/pumpA.ply");
+  ASSERT_TRUE(ply.ok()) << ply.status().message();
+  ASSERT_EQ(ply->points.size(), cloud.size());
+  for (size_t i :
+       {size_t{0}, size_t{1}, size_t{2}, size_t{3}, size_t{4}, size_t{77777}, cloud.size() - 1}) {
+    for (int a = 0; a < 3; ++a) {
+      const double e57 = cloud.origin[a] + cloud.positions[3 * i + a];
+      const double reference = ply->points.origin[a] + ply->points.positions[3 * i + a];
+      EXPECT_NEAR(e57, reference, 1e-4) << "point " << i << " axis " << a;
+      EXPECT_EQ(cloud.colors[3 * i + a], ply->points.colors[3 * i + a]) << "point " << i;
+    }
+  }
+  // Bounding box agrees with the file's own cartesianBounds.
+  const Bounds bounds = AbsoluteBounds(cloud);
+  EXPECT_NEAR(bounds.min_m[0], -2.903764, 1e-5);
+  EXPECT_NEAR(bounds.max_m[1], -0.792647, 1e-5);
+  EXPECT_NEAR(bounds.max_m[2], 1.843003, 1e-5);
+}
+
+TEST_F(E57Test, BunnyDoubles) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  auto read = ReadE57(data + "/bunny/bunnyDouble.e57", {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.size(), 30571u);
+  EXPECT_FALSE(read->points.has_colors());
+  EXPECT_FALSE(read->points.has_intensities());
+  EXPECT_EQ(read->dropped_points, 0u);
+  const Bounds bounds = AbsoluteBounds(read->points);
+  EXPECT_NEAR(bounds.min_m[0], -0.094689, 1e-6);
+  EXPECT_NEAR(bounds.max_m[0], 0.061009, 1e-6);
+  EXPECT_NEAR(bounds.min_m[1], 0.040011, 1e-6);
+  EXPECT_NEAR(bounds.max_m[1], 0.187321, 1e-6);
+  EXPECT_NEAR(bounds.min_m[2], -0.061873, 1e-6);
+  EXPECT_NEAR(bounds.max_m[2], 0.058799, 1e-6);
+  EXPECT_EQ(read->points.origin, (std::array<double, 3>{0, 0, 0}));
+}
+
+TEST_F(E57Test, FlippedByteIsCrcErrorNamingThePage) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  std::vector<uint8_t> bytes = ReadBytes(data + "/bunny/bunnyDouble.e57");
+  ASSERT_GT(bytes.size(), 400000u);
+  bytes[300 * 1024 + 517] ^= 0x10;  // inside the point data
+  EXPECT_THAT(Error(Write("flipped.e57", bytes)),
+              HasSubstr("flipped.e57: CRC-32C mismatch in page 300 (byte 307200)"));
+}
+
+TEST_F(E57Test, TruncatedCopy) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  std::vector<uint8_t> bytes = ReadBytes(data + "/bunny/bunnyDouble.e57");
+  bytes.resize(500000);
+  EXPECT_THAT(Error(Write("short.e57", bytes)),
+              HasSubstr("short.e57: truncated: the header says 743424 bytes, the file has 500000"));
+}
+
+// ---------------------------------------------------------------------------
+// Hand-made files.
+
+TEST_F(E57Test, Crc32cKnownValue) {
+  const char* check = "123456789";
+  EXPECT_EQ(e57::Crc32c(reinterpret_cast<const uint8_t*>(check), 9), 0xE3069283u);
+}
+
+TEST_F(E57Test, CartesianFloatSingle) {
+  TestScan scan;
+  scan.fields = {Float32("cartesianX", {1.5, -2.25, 100.125}),
+                 Float32("cartesianY", {0.0, 3.0, 200.0}),
+                 Float32("cartesianZ", {-1.0, 0.5, 300.75})};
+  auto read = ReadE57(WriteScans({scan}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  ASSERT_EQ(cloud.size(), 3u);
+  // bbox center (48.9375, 100, 149.875) rounded to 1 m.
+  EXPECT_EQ(cloud.origin, (std::array<double, 3>{49, 100, 150}));
+  EXPECT_EQ(cloud.positions,
+            (std::vector<float>{1.5f - 49, 0 - 100, -1 - 150, -2.25f - 49, 3 - 100, 0.5f - 150,
+                                100.125f - 49, 200 - 100, 300.75f - 150}));
+  EXPECT_FALSE(cloud.has_colors());
+  EXPECT_FALSE(cloud.has_stations());
+  EXPECT_TRUE(read->warnings.empty());
+}
+
+TEST_F(E57Test, ScaledIntegersStraddlePackets) {
+  // 24-bit values in 7-byte packet slices: most values cross a packet boundary.
+  std::vector<double> x, y, z;
+  for (int i = 0; i < 1000; ++i) {
+    x.push_back(i * 37 % 100000 - 50000);
+    y.push_back(8388607 - i);
+    z.push_back(-8388608 + i * 3);
+  }
+  TestScan scan;
+  scan.fields = {Scaled("cartesianX", -8388608, 8388607, 0.001, 0.0, x),
+                 Scaled("cartesianY", -8388608, 8388607, 0.001, 0.0, y),
+                 Scaled("cartesianZ", -8388608, 8388607, 0.001, 5000.0, z)};
+  auto read = ReadE57(WriteScans({scan}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  ASSERT_EQ(cloud.size(), 1000u);
+  for (size_t i : {size_t{0}, size_t{1}, size_t{2}, size_t{500}, size_t{999}}) {
+    // 1e-5: float32 resolution; one raw step is 1e-3.
+    EXPECT_NEAR(cloud.origin[0] + cloud.positions[3 * i], x[i] * 0.001, 1e-5) << i;
+    EXPECT_NEAR(cloud.origin[1] + cloud.positions[3 * i + 1], y[i] * 0.001, 1e-5) << i;
+    EXPECT_NEAR(cloud.origin[2] + cloud.positions[3 * i + 2], z[i] * 0.001 + 5000.0, 1e-4) << i;
+  }
+}
+
+TEST_F(E57Test, SphericalConvertedToCartesian) {
+  const double pi = std::numbers::pi;
+  TestScan scan;
+  scan.fields = {Float64("sphericalRange", {2.0, 3.0, 4.0}),
+                 Float64("sphericalAzimuth", {0.0, pi / 2, pi / 4}),
+                 Float64("sphericalElevation", {0.0, 0.0, pi / 6})};
+  auto read = ReadE57(WriteScans({scan}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  ASSERT_EQ(cloud.size(), 3u);
+  const double expected[3][3] = {{2, 0, 0},
+                                 {0, 3, 0},
+                                 {4 * std::cos(pi / 6) * std::cos(pi / 4),
+                                  4 * std::cos(pi / 6) * std::sin(pi / 4), 4 * std::sin(pi / 6)}};
+  for (int i = 0; i < 3; ++i) {
+    for (int a = 0; a < 3; ++a) {
+      EXPECT_NEAR(cloud.origin[a] + cloud.positions[3 * i + a], expected[i][a], 1e-6);
+    }
+  }
+}
+
+TEST_F(E57Test, InvalidStatesAreDroppedAndCounted) {
+  TestScan scan = XyzScan({1, 2, 3, 4}, {1, 2, 3, 4}, {1, 2, 3, 4});
+  scan.fields.push_back(Integer("cartesianInvalidState", 0, 2, {0, 1, 0, 2}));
+  scan.fields.push_back(Integer("rowIndex", 0, 2047, {5, 6, 7, 8}));  // decoded, ignored
+  auto read = ReadE57(WriteScans({scan}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->dropped_points, 2u);
+  ASSERT_EQ(read->points.size(), 2u);
+  EXPECT_EQ(read->points.origin, (std::array<double, 3>{2, 2, 2}));
+  EXPECT_EQ(read->points.positions, (std::vector<float>{-1, -1, -1, 1, 1, 1}));
+}
+
+TEST_F(E57Test, TwoScansWithPosesMerge) {
+  // Scan 0: rotated 90 degrees about z, then moved by (1000, 2000, 10).
+  TestScan a = XyzScan({1, 2}, {0, 0}, {0, 1});
+  const double half = std::sqrt(0.5);
+  std::ostringstream pose;
+  pose.precision(17);
+  pose << "<pose type=\"Structure\"><rotation type=\"Structure\"><w type=\"Float\">" << half
+       << "</w><x type=\"Float\"/><y type=\"Float\"/><z type=\"Float\">" << half
+       << "</z></rotation><translation type=\"Structure\"><x type=\"Float\">1000</x>"
+          "<y type=\"Float\">2000</y><z type=\"Float\">10</z></translation></pose>";
+  a.extra_xml = pose.str();
+  // Scan 1: identity rotation (element omitted), moved by (1002, 2000, 10).
+  TestScan b = XyzScan({0}, {0}, {0});
+  b.extra_xml =
+      "<pose type=\"Structure\"><translation type=\"Structure\"><x type=\"Float\">1002</x>"
+      "<y type=\"Float\">2000</y><z type=\"Float\">10</z></translation></pose>";
+  auto read = ReadE57(WriteScans({a, b}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  ASSERT_EQ(cloud.size(), 3u);
+  // Absolute: (1000, 2001, 10), (1000, 2002, 11), (1002, 2000, 10).
+  const double expected[3][3] = {{1000, 2001, 10}, {1000, 2002, 11}, {1002, 2000, 10}};
+  for (int i = 0; i < 3; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      EXPECT_NEAR(cloud.origin[k] + cloud.positions[3 * i + k], expected[i][k], 1e-6);
+    }
+  }
+  EXPECT_EQ(cloud.origin, (std::array<double, 3>{1001, 2001, 11}));  // 10.5 rounds away from 0
+  ASSERT_EQ(cloud.stations.size(), 2u);
+  EXPECT_EQ(cloud.stations[0], (std::array<double, 3>{1000, 2000, 10}));
+  EXPECT_EQ(cloud.stations[1], (std::array<double, 3>{1002, 2000, 10}));
+  EXPECT_EQ(cloud.station_ids, (std::vector<uint16_t>{0, 0, 1}));
+  EXPECT_THAT(read->warnings, ::testing::Contains("2 scans merged"));
+}
+
+TEST_F(E57Test, ColorAndIntensityNormalizedByLimits) {
+  TestScan scan = XyzScan({0, 1, 2}, {0, 0, 0}, {0, 0, 0});
+  scan.fields.push_back(Integer("colorRed", 0, 1023, {0, 1023, 512}));
+  scan.fields.push_back(Integer("colorGreen", 0, 1023, {100, 200, 300}));
+  scan.fields.push_back(Integer("colorBlue", 0, 1023, {0, 0, 1023}));
+  scan.fields.push_back(Scaled("intensity", 0, 4095, 0.01, 0.0, {0, 2000, 4000}));
+  // Green uses its own limits 100..300; red and blue fall back to 0..1023.
+  scan.extra_xml =
+      "<colorLimits type=\"Structure\"><colorGreenMinimum type=\"Integer\">100</colorGreenMinimum>"
+      "<colorGreenMaximum type=\"Integer\">300</colorGreenMaximum></colorLimits>"
+      "<intensityLimits type=\"Structure\"><intensityMinimum type=\"Float\"/>"
+      "<intensityMaximum type=\"ScaledInteger\" scale=\"0.01\">4000</intensityMaximum>"
+      "</intensityLimits>";
+  auto read = ReadE57(WriteScans({scan}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.colors, (std::vector<uint8_t>{0, 0, 0, 255, 128, 0, 128, 255, 255}));
+  ASSERT_EQ(read->points.intensities.size(), 3u);
+  EXPECT_FLOAT_EQ(read->points.intensities[0], 0.f);
+  EXPECT_FLOAT_EQ(read->points.intensities[1], 0.5f);
+  EXPECT_FLOAT_EQ(read->points.intensities[2], 1.f);
+}
+
+TEST_F(E57Test, NonFiniteCoordinateFailsOrIsDropped) {
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const std::string path = WriteScans({XyzScan({0, 1, nan}, {0, 1, 2}, {0, 1, 2})});
+  EXPECT_THAT(Error(path), HasSubstr("t.e57: data3D scan 0 point 2 has a NaN or infinite"));
+  ScanReadOptions options;
+  options.drop_invalid_points = true;
+  auto read = ReadE57(path, options);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.size(), 2u);
+  EXPECT_EQ(read->dropped_points, 1u);
+}
+
+TEST(E57XmlTest, ParsesEntitiesCdataAndPrefixes) {
+  auto root = e57::ParseXml(
+      "<?xml version=\"1.0\"?>\n<!-- c -->\n<a k='&lt;&amp;&#65;&#x42;'>x &gt; y<![CDATA[<raw>]]>"
+      "<nor:n type=\"Float\"/></a>\n");
+  ASSERT_TRUE(root.ok()) << root.status().message();
+  EXPECT_EQ(*root->Attribute("k"), "<&AB");
+  EXPECT_EQ(root->text, "x > y<raw>");
+  ASSERT_EQ(root->children.size(), 1u);
+  EXPECT_EQ(root->children[0].Prefix(), "nor");
+  EXPECT_EQ(root->children[0].line, 3);
+}
+
+TEST(E57XmlTest, RejectsMalformedXml) {
+  EXPECT_THAT(e57::ParseXml("<a><b></a>").status().message(),
+              HasSubstr("line 1: end tag </a> does not match <b>"));
+  EXPECT_THAT(e57::ParseXml("<a>\n&bogus;</a>").status().message(),
+              HasSubstr("line 2: unknown entity '&bogus;'"));
+  EXPECT_THAT(e57::ParseXml("<a x='1' x='2'/>").status().message(),
+              HasSubstr("duplicate attribute 'x'"));
+  EXPECT_THAT(e57::ParseXml("<a/><b/>").status().message(),
+              HasSubstr("unexpected content after the root element"));
+  EXPECT_THAT(e57::ParseXml("<!DOCTYPE a [<!ENTITY e 'x'>]><a/>").status().message(),
+              HasSubstr("DOCTYPE with an internal subset is not supported"));
+  std::string deep;
+  for (int i = 0; i < 200; ++i) deep += "<a>";
+  EXPECT_THAT(e57::ParseXml(deep).status().message(), HasSubstr("nested deeper than 128"));
+}
+
+// ---------------------------------------------------------------------------
+// Malformed inputs.
+
+TEST_F(E57Test, XmlSyntaxErrorNamesLine) {
+  WriterOptions options;
+  options.edit_xml = [](std::string* xml) {
+    const size_t at = xml->find("</prototype>");
+    xml->replace(at, 12, "</prototyp>");
+  };
+  const std::string message = Error(WriteScans({XyzScan({1}, {2}, {3})}, options));
+  EXPECT_THAT(message,
+              HasSubstr("t.e57: XML line 13: end tag </prototyp> does not match <prototype>"));
+}
+
+TEST_F(E57Test, UnsupportedCodec) {
+  TestScan scan = XyzScan({1}, {2}, {3});
+  scan.codecs_xml =
+      "<vectorChild type=\"Structure\"><inputs type=\"Vector\"/>"
+      "<zipCodec type=\"Structure\"/></vectorChild>";
+  EXPECT_THAT(Error(WriteScans({scan})),
+              HasSubstr("codec 'zipCodec' is not supported (only bitPackCodec)"));
+}
+
+TEST_F(E57Test, NotAnE57File) {
+  std::vector<uint8_t> bytes(2048, 'x');
+  EXPECT_THAT(Error(Write("x.e57", bytes)), HasSubstr("x.e57: not an E57 file (no 'ASTM-E57'"));
+  EXPECT_THAT(Error(Write("tiny.e57", {'A', 'S'})), HasSubstr("shorter than the 48-byte header"));
+  EXPECT_THAT(Error((dir_ / "missing.e57").string()), HasSubstr("missing.e57: open"));
+}
+
+TEST_F(E57Test, UnsupportedVersion) {
+  WriterOptions options;
+  options.version_major = 2;
+  EXPECT_THAT(Error(WriteScans({XyzScan({1}, {2}, {3})}, options)),
+              HasSubstr("E57 version 2.0 is not supported"));
+}
+
+TEST_F(E57Test, UnsupportedFieldType) {
+  TestScan scan = XyzScan({1}, {2}, {3});
+  scan.extra_xml = "";
+  WriterOptions options;
+  options.edit_xml = [](std::string* xml) {
+    const size_t at = xml->find("</prototype>");
+    xml->insert(at, "<label type=\"String\"/>");
+  };
+  EXPECT_THAT(Error(WriteScans({scan}, options)),
+              HasSubstr("prototype field 'label' has type 'String', which this reader does not"));
+}
+
+TEST_F(E57Test, PrototypeWithoutCoordinates) {
+  TestScan scan;
+  scan.fields = {Float64("cartesianX", {1}), Float64("cartesianY", {2})};
+  EXPECT_THAT(Error(WriteScans({scan})),
+              HasSubstr("data3D scan 0: prototype has neither cartesianX/Y/Z nor"));
+}
+
+TEST_F(E57Test, RecordCountTooLargeForSection) {
+  TestScan scan = XyzScan({1}, {2}, {3});
+  scan.record_count = 1000000;
+  EXPECT_THAT(Error(WriteScans({scan})), HasSubstr("recordCount 1000000 cannot fit in a"));
+}
+
+TEST_F(E57Test, SectionEndsEarly) {
+  TestScan scan = XyzScan({1, 2, 3, 4, 5, 6, 7, 8, 9, 10}, std::vector<double>(10, 0.0),
+                          std::vector<double>(10, 0.0));
+  scan.record_count = 11;
+  WriterOptions options;
+  options.stream_bytes_per_packet = 1000;
+  options.empty_and_index_packets = false;
+  EXPECT_THAT(Error(WriteScans({scan}, options)),
+              HasSubstr("data3D scan 0 points: section ends after 10 of 11 records"));
+}
+
+TEST_F(E57Test, BytestreamCountMismatch) {
+  WriterOptions options;
+  options.edit_xml = [](std::string* xml) {
+    const size_t at = xml->find("</prototype>");
+    xml->insert(at, "<intensity type=\"Float\"/>");
+  };
+  EXPECT_THAT(Error(WriteScans({XyzScan({1}, {2}, {3})}, options)),
+              HasSubstr("data packet has 3 bytestreams, the prototype has 4 fields"));
+}
+
+TEST_F(E57Test, FileOffsetOutsideFile) {
+  TestScan scan = XyzScan({1}, {2}, {3});
+  scan.file_offset = 1 << 30;
+  EXPECT_THAT(Error(WriteScans({scan})),
+              HasSubstr("fileOffset 1073741824 is not a valid offset in the"));
+}
+
+TEST_F(E57Test, IntegerOutsideDeclaredRange) {
+  TestScan scan = XyzScan({1, 2}, {2, 3}, {3, 4});
+  scan.fields.push_back(Integer("cartesianInvalidState", 0, 2, {0, 3}));  // 3 fits in 2 bits
+  EXPECT_THAT(Error(WriteScans({scan})),
+              HasSubstr("field 3 of record 1 is outside its [minimum, maximum]"));
+}
+
+TEST_F(E57Test, UnknownPacketType) {
+  WriterOptions options;
+  options.packet_type = 7;
+  options.empty_and_index_packets = false;
+  EXPECT_THAT(Error(WriteScans({XyzScan({1}, {2}, {3})}, options)),
+              HasSubstr("unknown packet type 7 (packet at byte 80, record 0 of 1)"));
+}
+
+TEST_F(E57Test, NoScans) {
+  EXPECT_THAT(Error(WriteScans({})), HasSubstr("no 3D data: data3D has no scans"));
+}
+
+TEST_F(E57Test, BadNumberInPose) {
+  TestScan scan = XyzScan({1}, {2}, {3});
+  scan.extra_xml =
+      "<pose type=\"Structure\"><translation type=\"Structure\">"
+      "<x type=\"Float\">1.5m</x></translation></pose>";
+  EXPECT_THAT(Error(WriteScans({scan})),
+              HasSubstr("data3D scan 0: pose x: expected a number, found '1.5m'"));
+}
+
+}  // namespace
+}  // namespace pb

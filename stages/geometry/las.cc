@@ -1,0 +1,308 @@
+#include "stages/geometry/las.h"
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <algorithm>
+#include <array>
+#include <bit>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <type_traits>
+
+namespace pb {
+namespace {
+
+constexpr size_t kMinHeaderBytes = 227;  // LAS 1.0-1.2
+constexpr size_t kHeader14Bytes = 375;   // LAS 1.4
+constexpr size_t kBufferBytes = size_t{1} << 20;
+constexpr uint64_t kProgressBytes = uint64_t{4} << 20;
+// Farther than this from the origin, float32 positions are meaningless (and
+// the cast could overflow): the header's scale or offset is garbage.
+constexpr double kMaxSpanM = 1e8;
+
+// Little-endian loads, independent of the host's byte order.
+template <typename T>
+T Load(const uint8_t* bytes) {
+  using Unsigned = std::conditional_t<
+      sizeof(T) == 1, uint8_t,
+      std::conditional_t<sizeof(T) == 2, uint16_t,
+                         std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>>>;
+  Unsigned value = 0;
+  for (size_t i = 0; i < sizeof(T); ++i) value |= static_cast<Unsigned>(bytes[i]) << (8 * i);
+  return std::bit_cast<T>(value);
+}
+
+// Where the fields we read sit in a point record; -1 = absent.
+struct PointLayout {
+  size_t record_bytes;  // the format's standard size
+  int rgb_offset;
+};
+
+bool LayoutOf(int format, PointLayout* layout) {
+  static constexpr PointLayout kLayouts[] = {
+      {20, -1}, {28, -1}, {26, 20}, {34, 28}, {57, -1}, {63, 28},
+      {30, -1}, {36, 30}, {38, 30}, {59, -1}, {67, 30},
+  };
+  if (format < 0 || format > 10) return false;
+  *layout = kLayouts[format];
+  return true;
+}
+
+struct LasHeader {
+  int version_major = 0;
+  int version_minor = 0;
+  size_t header_bytes = 0;
+  uint64_t point_offset = 0;
+  int point_format = 0;
+  size_t record_bytes = 0;
+  uint64_t point_count = 0;
+  std::array<double, 3> scale{};
+  std::array<double, 3> offset{};
+  std::array<double, 3> min{};
+  std::array<double, 3> max{};
+};
+
+bool EndsWithLaz(const std::string& path) {
+  if (path.size() < 4) return false;
+  std::string tail = path.substr(path.size() - 4);
+  for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return tail == ".laz";
+}
+
+Status Laz(const std::string& path) {
+  return Status::Unsupported(path +
+                             ": compressed LAS (LAZ) is not supported; decompress it first, e.g. "
+                             "with `laszip` or PDAL");
+}
+
+// Reads exactly `n` bytes at `offset`; returns how many were read.
+Expected<size_t> ReadAt(int fd, const std::string& path, uint8_t* out, size_t n, uint64_t offset) {
+  size_t done = 0;
+  while (done < n) {
+    const ssize_t got = ::pread(fd, out + done, n - done, static_cast<off_t>(offset + done));
+    if (got < 0) {
+      if (errno == EINTR) continue;
+      return Status::Errno(path, "read");
+    }
+    if (got == 0) break;
+    done += static_cast<size_t>(got);
+  }
+  return done;
+}
+
+class LasReader {
+ public:
+  LasReader(const std::string& path, const ScanReadOptions& options)
+      : path_(path), options_(options) {}
+  ~LasReader() {
+    if (fd_ >= 0) ::close(fd_);
+  }
+  LasReader(const LasReader&) = delete;
+  LasReader& operator=(const LasReader&) = delete;
+
+  Expected<ScanReadResult> Run() {
+    fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
+    if (fd_ < 0) {
+      if (errno == ENOENT) return Status::NotFound(path_ + ": no such file");
+      return Status::Errno(path_, "open");
+    }
+    struct stat st;
+    if (::fstat(fd_, &st) != 0) return Status::Errno(path_, "stat");
+    if (S_ISDIR(st.st_mode)) return Status::Invalid(path_ + ": is a directory, not a LAS file");
+    file_bytes_ = static_cast<uint64_t>(st.st_size);
+    if (EndsWithLaz(path_)) return Laz(path_);
+
+    PB_RETURN_IF_ERROR(ReadHeader());
+    PB_RETURN_IF_ERROR(ReadPoints());
+    result_.format = "las " + std::to_string(header_.version_major) + "." +
+                     std::to_string(header_.version_minor) + " format " +
+                     std::to_string(header_.point_format);
+    if (options_.progress) options_.progress(1.0);
+    return std::move(result_);
+  }
+
+ private:
+  Status ReadHeader() {
+    uint8_t bytes[kHeader14Bytes] = {};
+    PB_ASSIGN_OR_RETURN(const size_t got, ReadAt(fd_, path_, bytes, sizeof bytes, 0));
+    if (got < 4 || std::memcmp(bytes, "LASF", 4) != 0) {
+      return Status::Invalid(path_ + ": not a LAS file (expected signature 'LASF' at byte 0)");
+    }
+    if (got < kMinHeaderBytes) {
+      return Status::Corrupt(path_ + ": truncated header: " + std::to_string(got) +
+                             " bytes, a LAS header has at least " +
+                             std::to_string(kMinHeaderBytes));
+    }
+    LasHeader& h = header_;
+    h.version_major = bytes[24];
+    h.version_minor = bytes[25];
+    if (h.version_major != 1 || h.version_minor > 4) {
+      return Status::Unsupported(path_ + ": LAS version " + std::to_string(h.version_major) + "." +
+                                 std::to_string(h.version_minor) +
+                                 " is not supported (byte 24; expected 1.0 to 1.4)");
+    }
+    h.header_bytes = Load<uint16_t>(bytes + 94);
+    if (h.header_bytes < kMinHeaderBytes) {
+      return Status::Corrupt(path_ + ": header size " + std::to_string(h.header_bytes) +
+                             " (byte 94) is smaller than the minimum " +
+                             std::to_string(kMinHeaderBytes));
+    }
+    if (got < std::min(h.header_bytes, kHeader14Bytes)) {
+      return Status::Corrupt(path_ + ": truncated header: " + std::to_string(got) +
+                             " bytes, the header declares " + std::to_string(h.header_bytes));
+    }
+    h.point_offset = Load<uint32_t>(bytes + 96);
+    if (h.point_offset < h.header_bytes) {
+      return Status::Corrupt(path_ + ": offset to point data " + std::to_string(h.point_offset) +
+                             " (byte 96) lies inside the " + std::to_string(h.header_bytes) +
+                             "-byte header");
+    }
+    const uint8_t format_byte = bytes[104];
+    if (format_byte & 0xC0) return Laz(path_);
+    h.point_format = format_byte;
+    PointLayout layout;
+    if (!LayoutOf(h.point_format, &layout)) {
+      return Status::Unsupported(path_ + ": point data record format " +
+                                 std::to_string(h.point_format) +
+                                 " (byte 104) is not defined by LAS 1.4 (formats 0 to 10)");
+    }
+    layout_ = layout;
+    h.record_bytes = Load<uint16_t>(bytes + 105);
+    if (h.record_bytes < layout.record_bytes) {
+      return Status::Corrupt(path_ + ": point record length " + std::to_string(h.record_bytes) +
+                             " (byte 105) is smaller than the " +
+                             std::to_string(layout.record_bytes) + " bytes point format " +
+                             std::to_string(h.point_format) + " needs");
+    }
+    h.point_count = Load<uint32_t>(bytes + 107);
+    if (h.version_minor >= 4 && h.header_bytes >= kHeader14Bytes) {
+      const uint64_t count64 = Load<uint64_t>(bytes + 247);
+      if (count64 != 0) h.point_count = count64;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      h.scale[axis] = Load<double>(bytes + 131 + 8 * axis);
+      h.offset[axis] = Load<double>(bytes + 155 + 8 * axis);
+      h.max[axis] = Load<double>(bytes + 179 + 16 * axis);
+      h.min[axis] = Load<double>(bytes + 187 + 16 * axis);
+      if (!std::isfinite(h.scale[axis]) || h.scale[axis] == 0 || !std::isfinite(h.offset[axis])) {
+        return Status::Corrupt(
+            path_ + ": " + "xyz"[axis] + " scale " + std::to_string(h.scale[axis]) + " or offset " +
+            std::to_string(h.offset[axis]) + " (bytes " + std::to_string(131 + 8 * axis) + ", " +
+            std::to_string(155 + 8 * axis) + ") is not a finite non-zero number");
+      }
+    }
+    // Fail before decoding anything if the points cannot all be there.
+    const uint64_t available = file_bytes_ - std::min(file_bytes_, h.point_offset);
+    if (h.point_count > available / h.record_bytes) {
+      return Truncated(available / h.record_bytes);
+    }
+    return Status::Ok();
+  }
+
+  Status Truncated(uint64_t point_index) const {
+    return Status::Corrupt(
+        path_ + ": truncated: point " + std::to_string(point_index) + " of " +
+        std::to_string(header_.point_count) + " at byte " +
+        std::to_string(header_.point_offset + point_index * header_.record_bytes) + " (file has " +
+        std::to_string(file_bytes_) + " bytes)");
+  }
+
+  // The origin: the header's box center, unless the box is unusable.
+  void ChooseOrigin(const std::array<double, 3>& first_point) {
+    const LasHeader& h = header_;
+    bool box_ok = true;
+    for (int axis = 0; axis < 3; ++axis) {
+      box_ok = box_ok && std::isfinite(h.min[axis]) && std::isfinite(h.max[axis]) &&
+               h.min[axis] - 1 <= first_point[axis] && first_point[axis] <= h.max[axis] + 1;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      result_.points.origin[axis] =
+          std::round(box_ok ? 0.5 * (h.min[axis] + h.max[axis]) : first_point[axis]);
+    }
+    if (!box_ok) {
+      result_.warnings.push_back(
+          "the header's bounding box does not contain the first point; origin taken from it");
+    }
+  }
+
+  void AppendColor(const uint8_t* rgb) {
+    std::vector<uint8_t>& colors = result_.points.colors;
+    for (int channel = 0; channel < 3; ++channel) {
+      const uint16_t value = Load<uint16_t>(rgb + 2 * channel);
+      if (value > 255 && !colors_16bit_) {
+        // Every earlier value was <= 255, i.e. 0 once shifted to 8 bits.
+        colors_16bit_ = true;
+        std::fill(colors.begin(), colors.end(), 0);
+      }
+      colors.push_back(static_cast<uint8_t>(colors_16bit_ ? value >> 8 : value));
+    }
+  }
+
+  Status ReadPoints() {
+    const LasHeader& h = header_;
+    PointCloud& cloud = result_.points;
+    const bool has_colors = layout_.rgb_offset >= 0;
+    // ReadHeader bounded the count by the file size.
+    cloud.positions.reserve(3 * h.point_count);
+    cloud.intensities.reserve(h.point_count);
+    if (has_colors) cloud.colors.reserve(3 * h.point_count);
+
+    const uint64_t records_per_chunk = std::max<uint64_t>(1, kBufferBytes / h.record_bytes);
+    std::unique_ptr<uint8_t[]> buffer(new uint8_t[records_per_chunk * h.record_bytes]);
+    uint64_t next_progress = kProgressBytes;
+    for (uint64_t first = 0; first < h.point_count; first += records_per_chunk) {
+      const uint64_t records = std::min(records_per_chunk, h.point_count - first);
+      const uint64_t chunk_offset = h.point_offset + first * h.record_bytes;
+      PB_ASSIGN_OR_RETURN(const size_t got,
+                          ReadAt(fd_, path_, buffer.get(), records * h.record_bytes, chunk_offset));
+      if (got < records * h.record_bytes) return Truncated(first + got / h.record_bytes);
+      for (uint64_t r = 0; r < records; ++r) {
+        const uint8_t* record = buffer.get() + r * h.record_bytes;
+        std::array<double, 3> p;
+        for (int axis = 0; axis < 3; ++axis) {
+          p[axis] = Load<int32_t>(record + 4 * axis) * h.scale[axis] + h.offset[axis];
+        }
+        if (first + r == 0) ChooseOrigin(p);
+        for (int axis = 0; axis < 3; ++axis) p[axis] -= cloud.origin[axis];
+        if (!(std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])}) <= kMaxSpanM)) {
+          return Status::Corrupt(path_ + ": point " + std::to_string(first + r) + " at byte " +
+                                 std::to_string(chunk_offset + r * h.record_bytes) +
+                                 " lies more than 1e8 m from the origin; check the header's "
+                                 "scale and offset");
+        }
+        for (int axis = 0; axis < 3; ++axis) cloud.positions.push_back(static_cast<float>(p[axis]));
+        cloud.intensities.push_back(static_cast<float>(Load<uint16_t>(record + 12) / 65535.0));
+        if (has_colors) AppendColor(record + layout_.rgb_offset);
+      }
+      const uint64_t done = chunk_offset + records * h.record_bytes;
+      if (options_.progress && done >= next_progress) {
+        options_.progress(static_cast<double>(done) / file_bytes_);
+        next_progress = done + kProgressBytes;
+      }
+    }
+    return Status::Ok();
+  }
+
+  const std::string& path_;
+  const ScanReadOptions& options_;
+  int fd_ = -1;
+  uint64_t file_bytes_ = 0;
+  LasHeader header_;
+  PointLayout layout_{};
+  bool colors_16bit_ = false;
+  ScanReadResult result_;
+};
+
+}  // namespace
+
+Expected<ScanReadResult> ReadLas(const std::string& path, const ScanReadOptions& options) {
+  return LasReader(path, options).Run();
+}
+
+}  // namespace pb

@@ -1,0 +1,237 @@
+#include "stages/geometry/normals.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <chrono>
+#include <cmath>
+#include <ctime>
+#include <cstdio>
+#include <numbers>
+#include <random>
+#include <vector>
+
+#include "stages/geometry/knn.h"
+#include "stages/geometry/outliers.h"
+#include "stages/geometry/spacing.h"
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+const double kCos2Deg = std::cos(2.0 * std::numbers::pi / 180.0);
+
+double Dot(const float* n, const double v[3]) { return n[0] * v[0] + n[1] * v[1] + n[2] * v[2]; }
+
+// Points on a sphere (Fibonacci lattice, even spacing) with Gaussian radial
+// noise, appended to `cloud`.
+void AddSphere(PointCloud& cloud, const double center[3], double radius_m, int points, double noise_m,
+               uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, noise_m);
+  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < points; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / points;
+    const double r = std::sqrt(1.0 - z * z);
+    const double r_m = radius_m + noise(rng);
+    cloud.positions.insert(cloud.positions.end(),
+                           {static_cast<float>(center[0] + r_m * r * std::cos(golden * i)),
+                            static_cast<float>(center[1] + r_m * r * std::sin(golden * i)),
+                            static_cast<float>(center[2] + r_m * z)});
+  }
+}
+
+TEST(NormalsTest, SmallestEigenvector) {
+  const double diagonal[9] = {3, 0, 0, 0, 1, 0, 0, 0, 2};
+  double v[3];
+  EXPECT_DOUBLE_EQ(SmallestEigenvector(diagonal, v), 1.0);
+  EXPECT_DOUBLE_EQ(std::fabs(v[1]), 1.0);
+  // I + u u^T has eigenvalue 1 (twice) orthogonal to u and 1 + |u|^2 along u;
+  // 5 I - 2 w w^T (|w| = 1) has its smallest eigenvalue 3 along w.
+  const double w[3] = {1 / std::sqrt(14.0), 2 / std::sqrt(14.0), 3 / std::sqrt(14.0)};
+  double m[9];
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) m[3 * r + c] = (r == c ? 5.0 : 0.0) - 2 * w[r] * w[c];
+  }
+  EXPECT_NEAR(SmallestEigenvector(m, v), 3.0, 1e-12);
+  EXPECT_NEAR(std::fabs(v[0] * w[0] + v[1] * w[1] + v[2] * w[2]), 1.0, 1e-12);
+}
+
+TEST(NormalsTest, NoisyPlaneWithinTwoDegrees) {
+  // Plane through the origin with normal (1, 2, 3)/|.|, 2 mm grid, 0.05 mm noise.
+  const double normal[3] = {1 / std::sqrt(14.0), 2 / std::sqrt(14.0), 3 / std::sqrt(14.0)};
+  const double u[3] = {2 / std::sqrt(5.0), -1 / std::sqrt(5.0), 0};
+  const double v[3] = {normal[1] * u[2] - normal[2] * u[1], normal[2] * u[0] - normal[0] * u[2],
+                       normal[0] * u[1] - normal[1] * u[0]};
+  std::mt19937 rng(3);
+  std::normal_distribution<double> noise(0.0, 0.00005);
+  PointCloud cloud;
+  cloud.origin = {654321.0, 5432100.0, 250.0};
+  for (int i = 0; i < 100; ++i) {
+    for (int j = 0; j < 100; ++j) {
+      const double a = 0.002 * i, b = 0.002 * j, h = noise(rng);
+      for (int axis = 0; axis < 3; ++axis) {
+        cloud.positions.push_back(static_cast<float>(a * u[axis] + b * v[axis] + h * normal[axis]));
+      }
+    }
+  }
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(cloud, {.k = 16, .orientation = NormalOrientation::kPropagate}, &report).ok());
+  EXPECT_EQ(report.points, 10000u);
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kPropagate);
+  ASSERT_EQ(cloud.normals.size(), cloud.positions.size());
+  // Propagation makes every normal agree with the first one's side.
+  const double side = Dot(&cloud.normals[0], normal) > 0 ? 1.0 : -1.0;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    ASSERT_GT(side * Dot(&cloud.normals[3 * i], normal), kCos2Deg) << "point " << i;
+  }
+}
+
+TEST(NormalsTest, SpherePointsOutwardAfterPropagation) {
+  PointCloud cloud;
+  const double center[3] = {0.3, -0.2, 1.0};
+  AddSphere(cloud, center, 0.5, 20000, 0.0002, 5);
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(cloud, {}, &report).ok());  // auto -> propagate: no stations
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kPropagate);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    double radial[3];
+    for (int a = 0; a < 3; ++a) radial[a] = cloud.positions[3 * i + a] - center[a];
+    const double length = std::sqrt(radial[0] * radial[0] + radial[1] * radial[1] + radial[2] * radial[2]);
+    ASSERT_GT(Dot(&cloud.normals[3 * i], radial) / length, std::cos(10.0 * std::numbers::pi / 180.0))
+        << "point " << i;
+  }
+}
+
+TEST(NormalsTest, TwoSeparateSpheresBothOutward) {
+  PointCloud cloud;
+  const double left[3] = {-2, 0, 0}, right[3] = {2, 0, 0};
+  AddSphere(cloud, left, 0.3, 5000, 0.0, 1);
+  AddSphere(cloud, right, 0.3, 5000, 0.0, 2);
+  ASSERT_TRUE(EstimateNormals(cloud, {.orientation = NormalOrientation::kPropagate}).ok());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const double* c = i < 5000 ? left : right;
+    double radial[3];
+    for (int a = 0; a < 3; ++a) radial[a] = cloud.positions[3 * i + a] - c[a];
+    ASSERT_GT(Dot(&cloud.normals[3 * i], radial), 0) << "point " << i;
+  }
+}
+
+TEST(NormalsTest, StationOrientationFacesTheScanner) {
+  // A horizontal plane seen from above (station 0) for x < 0.1 and from below
+  // (station 1) otherwise; stations are absolute, positions relative to origin.
+  PointCloud cloud;
+  cloud.origin = {1000.0, 2000.0, 30.0};
+  cloud.stations = {{1000.1, 2000.1, 32.0}, {1000.1, 2000.1, 28.0}};
+  for (int i = 0; i < 100; ++i) {
+    for (int j = 0; j < 100; ++j) {
+      cloud.positions.insert(cloud.positions.end(), {0.002f * i, 0.002f * j, 0.0f});
+      cloud.station_ids.push_back(i < 50 ? 0 : 1);
+    }
+  }
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(cloud, {}, &report).ok());
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kStations);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const float expected_z = cloud.station_ids[i] == 0 ? 1.0f : -1.0f;
+    ASSERT_NEAR(cloud.normals[3 * i + 2], expected_z, 1e-6) << "point " << i;
+  }
+  // Exactly half the normals point away from their station before orienting.
+  PointCloud unoriented = cloud;
+  ASSERT_TRUE(EstimateNormals(unoriented, {.orientation = NormalOrientation::kNone}).ok());
+  size_t wrong = 0;
+  for (size_t i = 0; i < cloud.size(); ++i) wrong += unoriented.normals[3 * i + 2] != cloud.normals[3 * i + 2];
+  EXPECT_EQ(report.flipped, wrong);
+}
+
+TEST(NormalsTest, Errors) {
+  PointCloud cloud;
+  cloud.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
+  EXPECT_THAT(EstimateNormals(cloud, {.orientation = NormalOrientation::kStations}).message(),
+              HasSubstr("orientation 'stations' needs per-point station ids"));
+  EXPECT_THAT(EstimateNormals(cloud, {.k = 2}).message(), HasSubstr("k must be between 3 and 100, got 2"));
+  cloud.station_ids = {0, 0, 3, 0};
+  cloud.stations = {{0, 0, 1}};
+  EXPECT_THAT(EstimateNormals(cloud, {}).message(),
+              HasSubstr("point 2 names station 3 of 1"));
+  PointCloud two;
+  two.positions = {0, 0, 0, 1, 0, 0};
+  EXPECT_THAT(EstimateNormals(two, {}).message(), HasSubstr("needs at least 3 points, the cloud has 2"));
+}
+
+TEST(NormalsTest, SameNormalsWithOneAndTwoThreads) {
+  PointCloud cloud;
+  const double center[3] = {0, 0, 0};
+  AddSphere(cloud, center, 0.4, 30000, 0.001, 9);
+  PointCloud one = cloud, two = cloud;
+  NormalReport report_one, report_two;
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 1);
+    ASSERT_TRUE(EstimateNormals(one, {}, &report_one).ok());
+  }
+  {
+    tbb::global_control limit(tbb::global_control::max_allowed_parallelism, 2);
+    ASSERT_TRUE(EstimateNormals(two, {.threads = 2}, &report_two).ok());
+  }
+  EXPECT_EQ(one.normals, two.normals);
+  EXPECT_EQ(report_one.flipped, report_two.flipped);
+}
+
+// Timing on ~10^7 points of a noisy curved surface 2 mm apart, in shuffled
+// order. Run by hand:
+//   geometry_test --gtest_also_run_disabled_tests --gtest_filter='NormalsTest.DISABLED_Bench*'
+TEST(NormalsTest, DISABLED_BenchTenMillionPoints) {
+  const int side = 3163;
+  std::mt19937 rng(1);
+  std::normal_distribution<float> noise(0.0f, 0.0003f);
+  std::vector<uint32_t> order(static_cast<size_t>(side) * side);
+  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<uint32_t>(i);
+  std::shuffle(order.begin(), order.end(), rng);
+  PointCloud cloud;
+  cloud.positions.resize(3 * order.size());
+  for (size_t i = 0; i < order.size(); ++i) {
+    const float x = 0.002f * (order[i] % side), y = 0.002f * (order[i] / side);
+    cloud.positions[3 * i] = x + noise(rng);
+    cloud.positions[3 * i + 1] = y + noise(rng);
+    cloud.positions[3 * i + 2] = 0.2f * std::sin(2 * x) * std::cos(3 * y) + noise(rng);
+  }
+  // Wall and CPU seconds (all threads): on a shared machine CPU time / cores
+  // estimates the unloaded wall time.
+  using Clock = std::chrono::steady_clock;
+  struct Start {
+    Clock::time_point wall = Clock::now();
+    std::clock_t cpu = std::clock();
+  };
+  auto seconds = [](const Start& since) {
+    static char text[64];
+    std::snprintf(text, sizeof(text), "%.2f s wall, %.2f s CPU",
+                  std::chrono::duration<double>(Clock::now() - since.wall).count(),
+                  static_cast<double>(std::clock() - since.cpu) / CLOCKS_PER_SEC);
+    return text;
+  };
+  Start start;
+  auto index = KnnIndex::Build(cloud.positions);
+  ASSERT_TRUE(index.ok());
+  std::printf("points %zu\nindex build: %s\n", cloud.size(), seconds(start));
+  std::fflush(stdout);
+  start = Start();
+  ASSERT_TRUE(EstimateNormals(cloud, {.orientation = NormalOrientation::kNone}).ok());
+  std::fflush(stdout);
+  std::printf("normals k=16, no orientation (build included): %s\n", seconds(start));
+  start = Start();
+  ASSERT_TRUE(EstimateNormals(cloud, {.orientation = NormalOrientation::kPropagate}).ok());
+  std::printf("normals k=16, propagation (build included): %s\n", seconds(start));
+  start = Start();
+  OutlierReport outliers;
+  ASSERT_TRUE(RemoveStatisticalOutliers(cloud, {}, &outliers).ok());
+  std::printf("outliers k=16 (build included): %s, removed %zu\n", seconds(start), outliers.removed);
+  start = Start();
+  auto spacing = MedianSpacing(cloud, {});
+  ASSERT_TRUE(spacing.ok());
+  std::printf("spacing (build included): %s, %.6f m\n", seconds(start), *spacing);
+}
+
+}  // namespace
+}  // namespace pb

@@ -67,7 +67,7 @@ const char* FormatName(Format format) {
 // What a property means to us; kSkip for everything we do not read.
 enum Role : uint8_t {
   kSkip, kX, kY, kZ, kNx, kNy, kNz, kRed, kGreen, kBlue, kU, kV, kTx, kTy, kTz, kTw,
-  kFaceIndices, kRoleCount
+  kIntensity, kStation, kFaceIndices, kRoleCount
 };
 
 struct RoleName {
@@ -83,6 +83,8 @@ constexpr RoleName kVertexRoles[] = {
     {"v", kV},           {"texture_u", kU},   {"texture_v", kV},
     {"texture_s", kU},   {"texture_t", kV},   {"tx", kTx},
     {"ty", kTy},         {"tz", kTz},         {"tw", kTw},
+    {"intensity", kIntensity}, {"scalar_intensity", kIntensity}, {"scalar_Intensity", kIntensity},
+    {"station", kStation},
 };
 
 struct Property {
@@ -316,6 +318,11 @@ class PlyParser {
   PlyParser(const std::string& path, const PlyReadOptions& options, bool keep_faces)
       : path_(path), options_(options), keep_faces_(keep_faces) {}
 
+  // Per-point attributes that meshes do not carry, for ReadPlyPoints.
+  std::vector<float> TakeIntensities() { return std::move(intensities_); }
+  std::vector<uint16_t> TakeStationIds() { return std::move(station_ids_); }
+  std::vector<std::array<double, 3>> TakeStations() { return std::move(stations_); }
+
   Status Run(Mesh* mesh, PlyReadReport* report) {
     PB_RETURN_IF_ERROR(in_.Open(path_, &options_.progress));
     PB_RETURN_IF_ERROR(ParseHeader());
@@ -405,6 +412,21 @@ class PlyParser {
                                        " format version " + std::to_string(version) +
                                        "; this build reads version " + std::to_string(supported));
           }
+        } else if (keyword == "comment" && words.size() >= 2 && words[1] == "station") {
+          // "comment station I X Y Z": scanner position I, absolute meters.
+          size_t index = 0;
+          std::array<double, 3> position{};
+          bool parsed = words.size() == 6 &&
+                        std::from_chars(words[2].data(), words[2].data() + words[2].size(), index)
+                                .ec == std::errc() &&
+                        index == stations_.size() && index < 65535;
+          for (int axis = 0; parsed && axis < 3; ++axis)
+            parsed = ParseDouble(words[3 + axis], &position[axis]) && std::isfinite(position[axis]);
+          if (!parsed)
+            return HeaderError(line_number, "expected 'comment station " +
+                                                std::to_string(stations_.size()) +
+                                                " X Y Z' (stations numbered from 0, in order)");
+          stations_.push_back(position);
         } else if (keyword == "comment" && words.size() >= 2 && words[1] == "origin") {
           bool parsed = words.size() == 5;
           for (int axis = 0; parsed && axis < 3; ++axis) {
@@ -526,6 +548,11 @@ class PlyParser {
     has_colors_ = present[kRed] && present[kGreen] && present[kBlue];
     has_uvs_ = present[kU] && present[kV];
     has_tangents_ = present[kTx] && present[kTy] && present[kTz] && present[kTw];
+    has_intensities_ = present[kIntensity];
+    has_stations_ = present[kStation];
+    if (has_stations_ && stations_.empty())
+      return Status::Corrupt(path_ + ": vertices have a 'station' property but the header "
+                                     "names no 'comment station I X Y Z'");
     vertex_count_ = vertex->count;
     report_.vertices_in_file = vertex->count;
     for (const Element& element : elements_) {
@@ -546,6 +573,8 @@ class PlyParser {
     if (has_colors_) mesh_.colors.reserve(3 * reserve);
     if (has_uvs_) mesh_.uvs.reserve(2 * reserve);
     if (has_tangents_) mesh_.tangents.reserve(4 * reserve);
+    if (has_intensities_) intensities_.reserve(reserve);
+    if (has_stations_) station_ids_.reserve(reserve);
     return Status::Ok();
   }
 
@@ -796,8 +825,18 @@ class PlyParser {
     if (has_tangents_) {
       for (Role role : {kTx, kTy, kTz, kTw}) mesh_.tangents.push_back(static_cast<float>(values_[role]));
     }
+    if (has_intensities_) intensities_.push_back(static_cast<float>(values_[kIntensity]));
+    if (has_stations_) {
+      const double station = values_[kStation];
+      if (!(station >= 0 && station < static_cast<double>(stations_.size())))
+        return BodyError(place, "vertex " + std::to_string(index) + " names station " +
+                                    FormatDouble(station) + " but the header lists " +
+                                    std::to_string(stations_.size()));
+      station_ids_.push_back(static_cast<uint16_t>(station));
+    }
     return Status::Ok();
   }
+
 
   Status AddFace(uint64_t index, uint64_t place) {
     if (face_.size() < 3) {
@@ -878,6 +917,10 @@ class PlyParser {
   bool have_provisional_origin_ = false;
   std::array<double, 3> provisional_origin_{};
   bool has_normals_ = false, has_colors_ = false, has_uvs_ = false, has_tangents_ = false;
+  bool has_intensities_ = false, has_stations_ = false;
+  std::vector<float> intensities_;
+  std::vector<uint16_t> station_ids_;
+  std::vector<std::array<double, 3>> stations_;
   bool has_face_indices_ = false;
   Scalar color_types_[3] = {Scalar::kUint8, Scalar::kUint8, Scalar::kUint8};
   uint64_t vertex_count_ = 0;
@@ -949,6 +992,9 @@ struct PlyArrays {
   std::span<const float> positions, normals;
   std::span<const uint8_t> colors;
   std::span<const float> uvs, tangents;
+  std::span<const float> intensities;
+  std::span<const uint16_t> station_ids;
+  std::span<const std::array<double, 3>> stations;
   std::span<const uint32_t> indices;
   bool has_normals() const { return !normals.empty(); }
   bool has_colors() const { return !colors.empty(); }
@@ -964,6 +1010,10 @@ Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh) {
                     : "comment pointbake points " + std::to_string(kPlyPointsVersion) + "\n";
   header += "comment origin " + FormatDouble(mesh.origin[0]) + " " + FormatDouble(mesh.origin[1]) +
             " " + FormatDouble(mesh.origin[2]) + "\n";
+  for (size_t s = 0; s < mesh.stations.size(); ++s)
+    header += "comment station " + std::to_string(s) + " " + FormatDouble(mesh.stations[s][0]) +
+              " " + FormatDouble(mesh.stations[s][1]) + " " + FormatDouble(mesh.stations[s][2]) +
+              "\n";
   header += "element vertex " + std::to_string(n) + "\n";
   header += "property float x\nproperty float y\nproperty float z\n";
   if (mesh.has_normals()) header += "property float nx\nproperty float ny\nproperty float nz\n";
@@ -972,6 +1022,8 @@ Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh) {
   if (mesh.has_tangents()) {
     header += "property float tx\nproperty float ty\nproperty float tz\nproperty float tw\n";
   }
+  if (!mesh.intensities.empty()) header += "property float intensity\n";
+  if (!mesh.station_ids.empty()) header += "property ushort station\n";
   if (is_mesh) {
     header += "element face " + std::to_string(mesh.face_count()) + "\n";
     header += "property list uchar uint vertex_indices\n";
@@ -993,6 +1045,8 @@ Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh) {
     if (mesh.has_tangents()) {
       for (int k = 0; k < 4; ++k) out.AppendLittleEndian(mesh.tangents[4 * i + k]);
     }
+    if (!mesh.intensities.empty()) out.AppendLittleEndian(mesh.intensities[i]);
+    if (!mesh.station_ids.empty()) out.AppendLittleEndian(mesh.station_ids[i]);
     PB_RETURN_IF_ERROR(out.MaybeFlush());
   }
   if (is_mesh) {
@@ -1024,6 +1078,9 @@ Expected<PlyPoints> ReadPlyPoints(const std::string& path, const PlyReadOptions&
   result.points.positions = std::move(mesh.positions);
   result.points.normals = std::move(mesh.normals);
   result.points.colors = std::move(mesh.colors);
+  result.points.intensities = parser.TakeIntensities();
+  result.points.station_ids = parser.TakeStationIds();
+  result.points.stations = parser.TakeStations();
   return result;
 }
 
@@ -1034,6 +1091,9 @@ Status WritePlyPoints(const std::string& path, const PointCloud& cloud) {
   arrays.positions = cloud.positions;
   arrays.normals = cloud.normals;
   arrays.colors = cloud.colors;
+  arrays.intensities = cloud.intensities;
+  arrays.station_ids = cloud.station_ids;
+  arrays.stations = cloud.stations;
   return WritePly(path, arrays, /*is_mesh=*/false);
 }
 

@@ -11,6 +11,8 @@
 //                                          the layout below changes.
 //   comment origin X Y Z                <- double origin, printf %.17g, meters;
 //                                          absolute = origin + stored position
+//   comment station I X Y Z             <- points, optional: scanner position I
+//                                          (0, 1, ... in order), absolute meters
 //   element vertex N
 //   property float x                    <- meters, relative to origin
 //   property float y
@@ -27,6 +29,9 @@
 //   property float ty                      (handedness ±1, glTF convention)
 //   property float tz
 //   property float tw
+//   property float intensity            <- optional (points), [0, 1]
+//   property ushort station             <- optional (points), index of the
+//                                          station that saw the point
 //   element face M                      <- meshes only
 //   property list uchar uint vertex_indices
 //   end_header
@@ -41,7 +46,8 @@
 //           doubles, are re-centered on an origin = their bounding-box center
 //           rounded to 1 m), nx ny nz, red green blue (or diffuse_red ...;
 //           uchar as is, ushort scaled to 8 bit, float/double in [0,1]; alpha
-//           ignored), s t | u v | texture_u texture_v, tx ty tz tw;
+//           ignored), s t | u v | texture_u texture_v, tx ty tz tw,
+//           intensity (or scalar_intensity), station (with the comments);
 //   face:   vertex_indices or vertex_index (polygons are fan-triangulated).
 // It streams the file through a 1 MiB buffer: memory is the decoded arrays,
 // never a copy of the file. `comment origin` restores the origin.
@@ -63,7 +69,7 @@
 
 namespace pb {
 
-inline constexpr int kPlyPointsVersion = 1;  // "comment pointbake points 1"
+inline constexpr int kPlyPointsVersion = 2;  // 2: intensity, station  // "comment pointbake points 1"
 inline constexpr int kPlyMeshVersion = 1;    // "comment pointbake mesh 1"
 
 struct PlyReadOptions {

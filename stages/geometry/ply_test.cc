@@ -60,6 +60,9 @@ TEST_F(PlyTest, PointsRoundTripWithAllAttributes) {
   cloud.positions = {0.f, 0.f, 0.f, 1.5f, -2.25f, 3.125f, 1e-4f, 1e4f, -7.f};
   cloud.normals = {0, 0, 1, 0, 1, 0, 0.6f, 0.8f, 0};
   cloud.colors = {0, 0, 0, 255, 128, 1, 10, 20, 30};
+  cloud.intensities = {0.f, 0.5f, 1.f};
+  cloud.stations = {{652340.5, 5412344.0, 313.75}, {652342.0, 5412346.0, 311.0}};
+  cloud.station_ids = {1, 0, 1};
   ASSERT_TRUE(WritePlyPoints(Path("p.ply"), cloud).ok());
 
   auto read = ReadPlyPoints(Path("p.ply"));
@@ -68,9 +71,12 @@ TEST_F(PlyTest, PointsRoundTripWithAllAttributes) {
   EXPECT_EQ(read->points.positions, cloud.positions);
   EXPECT_EQ(read->points.normals, cloud.normals);
   EXPECT_EQ(read->points.colors, cloud.colors);
+  EXPECT_EQ(read->points.intensities, cloud.intensities);
+  EXPECT_EQ(read->points.stations, cloud.stations);
+  EXPECT_EQ(read->points.station_ids, cloud.station_ids);
   EXPECT_EQ(read->report.format, "binary_little_endian");
   EXPECT_EQ(read->report.pointbake_kind, "points");
-  EXPECT_EQ(read->report.pointbake_version, 1);
+  EXPECT_EQ(read->report.pointbake_version, 2);
 
   // The header is what the format documentation promises.
   std::ifstream in(Path("p.ply"));
@@ -81,7 +87,7 @@ TEST_F(PlyTest, PointsRoundTripWithAllAttributes) {
   std::getline(in, line4);
   EXPECT_EQ(line1, "ply");
   EXPECT_EQ(line2, "format binary_little_endian 1.0");
-  EXPECT_EQ(line3, "comment pointbake points 1");
+  EXPECT_EQ(line3, "comment pointbake points 2");
   EXPECT_EQ(line4, "comment origin 652341 5412345.25 312.5");
 }
 
@@ -306,8 +312,8 @@ TEST_F(PlyTest, HeaderErrorsNameTheLine) {
       {"ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\nend_header\n",
        ":3: element 'vertex' has no property 'z'"},
       {"ply\nformat ascii 1.0\nelement face 0\nend_header\n", ": no 'vertex' element"},
-      {"ply\nformat ascii 1.0\ncomment pointbake points 2\nend_header\n",
-       ":3: pointbake points format version 2; this build reads version 1"},
+      {"ply\nformat ascii 1.0\ncomment pointbake points 3\nend_header\n",
+       ":3: pointbake points format version 3; this build reads version 2"},
       {"ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
        "property float z\nend_header\n1 2 abc\n",
        ":8: vertex 0: expected a number for 'z', got 'abc'"},
@@ -410,6 +416,34 @@ TEST_F(PlyTest, StanfordBunny) {
   auto mesh = ReadPlyMesh(path);
   ASSERT_TRUE(mesh.ok()) << mesh.status().message();
   EXPECT_EQ(mesh->mesh.face_count(), 69451u);
+}
+
+}  // namespace
+}  // namespace pb
+
+namespace pb {
+namespace {
+
+TEST(PlyStationsTest, StationIndexBeyondTheListIsAnError) {
+  char tmpl[] = "/tmp/pbply.XXXXXX";
+  const std::string dir = ::mkdtemp(tmpl);
+  const std::string path = dir + "/s.ply";
+  std::ofstream(path) << "ply\nformat ascii 1.0\ncomment station 0 1 2 3\nelement vertex 2\n"
+                         "property float x\nproperty float y\nproperty float z\n"
+                         "property ushort station\nend_header\n0 0 0 0\n1 1 1 3\n";
+  auto read = ReadPlyPoints(path);
+  ASSERT_FALSE(read.ok());
+  EXPECT_NE(read.status().message().find("vertex 1 names station 3 but the header lists 1"),
+            std::string::npos)
+      << read.status().message();
+  std::ofstream(path) << "ply\nformat ascii 1.0\ncomment station 1 1 2 3\nelement vertex 0\n"
+                         "property float x\nproperty float y\nproperty float z\nend_header\n";
+  auto misnumbered = ReadPlyPoints(path);
+  ASSERT_FALSE(misnumbered.ok());
+  EXPECT_NE(misnumbered.status().message().find("s.ply:3: expected 'comment station 0 X Y Z'"),
+            std::string::npos)
+      << misnumbered.status().message();
+  std::filesystem::remove_all(dir);
 }
 
 }  // namespace

@@ -1,0 +1,61 @@
+// Median nearest-neighbour spacing: exact 1-NN by kd-tree (knn.h) over a
+// deterministic subsample; the median (not the mean) so that duplicates and
+// sparse far-field points do not move it.
+#include "stages/geometry/spacing.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "stages/geometry/knn.h"
+
+namespace pb {
+namespace {
+
+Expected<double> SpacingInArena(const PointCloud& cloud, size_t sample) {
+  const size_t n = cloud.size();
+  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
+  const size_t count = sample == 0 || sample >= n ? n : sample;
+  std::vector<double> distances(count);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    Neighbor nearest[1];
+    for (size_t j = range.begin(); j < range.end(); ++j) {
+      // floor(j * n / count); j * n < 2^64 because j < count <= n < 2^32.
+      const size_t i = static_cast<size_t>(static_cast<uint64_t>(j) * n / count);
+      index.QueryPoint(static_cast<uint32_t>(i), 1, nearest);
+      distances[j] = std::sqrt(nearest[0].squared_distance_m2);
+    }
+  });
+  const size_t middle = count / 2;
+  std::nth_element(distances.begin(), distances.begin() + middle, distances.end());
+  const double upper = distances[middle];
+  if (count % 2 == 1) return upper;
+  const double lower = *std::max_element(distances.begin(), distances.begin() + middle);
+  return (lower + upper) / 2;
+}
+
+}  // namespace
+
+Expected<double> MedianSpacing(const PointCloud& cloud, const SpacingOptions& options) {
+  PB_RETURN_IF_ERROR(Validate(cloud));
+  if (cloud.size() < 2) {
+    return Status::Invalid("point spacing: needs at least 2 points, the cloud has " +
+                           std::to_string(cloud.size()));
+  }
+  Expected<double> spacing = Status::Internal("not run");
+  if (options.threads > 0) {
+    tbb::task_arena arena(options.threads);
+    spacing = arena.execute([&] { return SpacingInArena(cloud, options.sample); });
+  } else {
+    spacing = SpacingInArena(cloud, options.sample);
+  }
+  return spacing;
+}
+
+}  // namespace pb

@@ -3,7 +3,15 @@
 #include <string>
 #include <string_view>
 
+#include <cstdio>
+
+#include "stages/geometry/e57.h"
+#include "stages/geometry/las.h"
+#include "stages/geometry/pcd.h"
 #include "stages/geometry/ply.h"
+#include "stages/geometry/ptx.h"
+#include "stages/geometry/scan_read.h"
+#include "stages/geometry/xyz.h"
 #include "stages/io/io_stages.h"
 #include "stages/params.h"
 
@@ -12,38 +20,54 @@ namespace {
 
 constexpr const char* kId = "io.read_points";
 
-struct ReadRequest {
-  bool drop_invalid = false;
-  std::function<void(double)> progress;
-};
-
-struct ReadOutcome {
-  PointCloud points;
-  uint64_t dropped_points = 0;
-};
-
-Expected<ReadOutcome> ReadPly(const std::string& path, const ReadRequest& request) {
-  PlyReadOptions options;
-  options.drop_invalid_points = request.drop_invalid;
-  options.progress = request.progress;
-  PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(path, options));
-  return ReadOutcome{std::move(ply.points), ply.report.dropped_points};
+Expected<ScanReadResult> ReadPly(const std::string& path, const ScanReadOptions& options) {
+  PlyReadOptions ply_options;
+  ply_options.drop_invalid_points = options.drop_invalid_points;
+  ply_options.progress = options.progress;
+  PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(path, ply_options));
+  ScanReadResult result;
+  result.points = std::move(ply.points);
+  result.dropped_points = ply.report.dropped_points;
+  result.format = "ply " + ply.report.format;
+  return result;
 }
 
 // The scan formats this stage reads, by name; `auto` matches the extension.
 struct ScanFormat {
   std::string_view name;
-  std::string_view extension;  // lower case, with the dot
-  Expected<ReadOutcome> (*read)(const std::string& path, const ReadRequest& request);
+  std::string_view extensions;  // lower case, with the dot, space separated
+  Expected<ScanReadResult> (*read)(const std::string& path, const ScanReadOptions& options);
 };
+Expected<ScanReadResult> ReadPcdScan(const std::string& p, const ScanReadOptions& o) { return ReadPcd(p, o); }
+Expected<ScanReadResult> ReadXyzScan(const std::string& p, const ScanReadOptions& o) { return ReadXyz(p, o); }
+Expected<ScanReadResult> ReadPtxScan(const std::string& p, const ScanReadOptions& o) { return ReadPtx(p, o); }
+Expected<ScanReadResult> ReadE57Scan(const std::string& p, const ScanReadOptions& o) { return ReadE57(p, o); }
+Expected<ScanReadResult> ReadLasScan(const std::string& p, const ScanReadOptions& o) { return ReadLas(p, o); }
 constexpr ScanFormat kScanFormats[] = {
     {"ply", ".ply", &ReadPly},
+    {"pcd", ".pcd", &ReadPcdScan},
+    {"xyz", ".xyz .txt .pts .csv", &ReadXyzScan},
+    {"ptx", ".ptx", &ReadPtxScan},
+    {"e57", ".e57", &ReadE57Scan},
+    // .laz goes to the LAS reader, which explains that compressed LAS is not supported.
+    {"las", ".las .laz", &ReadLasScan},
 };
+
+bool HasExtension(const ScanFormat& format, const std::string& extension) {
+  std::string_view list = format.extensions;
+  while (!list.empty()) {
+    const size_t space = list.find(' ');
+    if (list.substr(0, space) == extension) return true;
+    if (space == std::string_view::npos) break;
+    list.remove_prefix(space + 1);
+  }
+  return false;
+}
 
 std::string SupportedFormats() {
   std::string list;
   for (const ScanFormat& format : kScanFormats) {
-    list += (list.empty() ? "" : ", ") + std::string(format.name) + " (" + std::string(format.extension) + ")";
+    list += (list.empty() ? "" : ", ") + std::string(format.name) + " (" + std::string(format.extensions) + ")";
   }
   return list;
 }
@@ -67,7 +91,7 @@ Expected<const ScanFormat*> ChooseFormat(const std::string& path, const std::str
   }
   const std::string extension = LowerExtension(path);
   for (const ScanFormat& format : kScanFormats) {
-    if (format.extension == extension) return &format;
+    if (HasExtension(format, extension)) return &format;
   }
   return Status::Unsupported(std::string(kId) + ": cannot read '" + path + "': " +
                              (extension.empty() ? std::string("no file extension")
@@ -100,7 +124,15 @@ std::string ParamsSchema() {
              {"default", false},
              {"description",
               "Drop points with NaN or infinite coordinates (counted as dropped_points) "
-              "instead of failing on the first one."}}},
+              "instead of failing on the first one. (PTX 0,0,0 points, NaN points of "
+              "organized PCD clouds and E57 invalid states are always dropped and counted.)"}}},
+           {"columns",
+            {{"type", "string"},
+             {"default", ""},
+             {"description",
+              "XYZ/TXT/PTS only: column names in order, e.g. \"x y z r g b\" or "
+              "\"x y z i r g b nx ny nz\"; \"_\" skips a column. Empty: the format's default "
+              "(PTS: x y z i r g b) or detected from the first data line."}}},
        }},
   };
   return schema.dump();
@@ -112,21 +144,40 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const bool drop_invalid, BoolParam(ctx, kId, "drop_invalid", false));
   PB_ASSIGN_OR_RETURN(const ScanFormat* format, ChooseFormat(path, format_name));
 
-  PB_PHASE(ctx, "io");
-  ReadRequest request;
-  request.drop_invalid = drop_invalid;
-  request.progress = [&ctx](double fraction) { ctx.progress(0.9 * fraction); };
-  PB_ASSIGN_OR_RETURN(ReadOutcome outcome, format->read(path, request));
-  const PointCloud& points = outcome.points;
+  PB_ASSIGN_OR_RETURN(const std::string columns, StringParam(ctx, kId, "columns", ""));
 
-  PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), points));
+  ScanReadOptions options;
+  options.drop_invalid_points = drop_invalid;
+  options.columns = columns;
+  options.progress = [&ctx](double fraction) { ctx.progress(0.9 * fraction); };
+  ctx.begin_phase("read");
+  Expected<ScanReadResult> read = format->read(path, options);
+  ctx.end_phase("read");
+  if (!read.ok()) return read.status();
+  const ScanReadResult& outcome = *read;
+  const PointCloud& points = outcome.points;
+  // Warnings go to the stage's log (out/<workflow>/logs/<stage>.log).
+  for (const std::string& warning : outcome.warnings)
+    std::fprintf(stderr, "warning: %s: %s\n", path.c_str(), warning.c_str());
+  if (outcome.dropped_points > 0)
+    std::fprintf(stderr, "warning: %s: dropped %llu invalid points\n", path.c_str(),
+                 static_cast<unsigned long long>(outcome.dropped_points));
+
+  {
+    PB_PHASE(ctx, "write");
+    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), points));
+  }
   ctx.set_output_meta("points", {{"origin", points.origin},
                                  {"points", points.size()},
                                  {"has_normals", points.has_normals()},
                                  {"has_colors", points.has_colors()},
-                                 {"source_format", std::string(format->name)}});
+                                 {"has_intensities", points.has_intensities()},
+                                 {"stations", points.stations.size()},
+                                 {"source_format", outcome.format.empty() ? std::string(format->name)
+                                                                          : outcome.format}});
   ctx.counter("points", static_cast<double>(points.size()));
   ctx.counter("dropped_points", static_cast<double>(outcome.dropped_points));
+  ctx.counter("warnings", static_cast<double>(outcome.warnings.size()));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -136,12 +187,19 @@ Status Run(StageContext& ctx) {
 StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
-  type.summary = "Read a scan file (PLY) into points";
+  type.version = 2;
+  type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters, and normals "
-      "and 8-bit sRGB colors when the file has them. Supported now: PLY (ascii, binary little "
-      "and big endian; any scalar types; unknown elements and properties are ignored).\n\n"
+      "and 8-bit sRGB colors, intensities and scanner stations when the file has them.\n\n"
+      "Formats (chosen by extension, or `format:`): PLY (ascii, binary little and big endian; "
+      "any scalar types; unknown elements and properties ignored); PCD v0.6/0.7 (ascii, binary, "
+      "binary_compressed; VIEWPOINT applied and kept as the station); XYZ/TXT/CSV/PTS (columns "
+      "declared with `columns:` or detected); PTX (several scans; each scan's 4x4 transform "
+      "applied, its scanner position kept as a station, 0,0,0 points dropped); E57 (ASTM E2807: "
+      "CRC-32C checked, bitPackCodec, float/scaled-integer/integer fields, cartesian or "
+      "spherical, poses, several scans, color and intensity); LAS 1.0-1.4 uncompressed, point "
+      "formats 0-10 (LAZ is refused with an explanation).\n\n"
       "Double-precision (e.g. georeferenced) coordinates are stored as float32 offsets from an "
       "origin at the scan's bounding-box center rounded to 1 m, which keeps float32 precision "
       "(about 1e-7 of the scan's extent) for any location on Earth; the "

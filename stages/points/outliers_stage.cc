@@ -1,0 +1,99 @@
+// points.outliers: statistical outlier removal (stages/geometry/outliers.h).
+#include <cmath>
+#include <string>
+
+#include "stages/geometry/outliers.h"
+#include "stages/geometry/ply.h"
+#include "stages/params.h"
+#include "stages/points/points_stages.h"
+
+namespace pb {
+namespace {
+
+constexpr const char* kId = "points.outliers";
+
+constexpr const char* kSchema = R"({
+  "type": "object",
+  "additionalProperties": false,
+  "properties": {
+    "k": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 1000,
+      "default": 16,
+      "description": "Neighbours (the point excluded) over which each point's mean distance is taken."
+    },
+    "std_ratio": {
+      "type": "number",
+      "minimum": 0,
+      "default": 2.0,
+      "description": "A point is removed when its mean neighbour distance exceeds the cloud's mean of those distances by more than std_ratio standard deviations. Smaller removes more."
+    }
+  }
+})";
+
+Status Run(StageContext& ctx) {
+  PB_ASSIGN_OR_RETURN(const double k, NumberParam(ctx, kId, "k", 16));
+  if (k != std::floor(k) || k < 1 || k > 1000) {
+    return Status::Invalid(std::string(kId) + ": parameter 'k' must be an integer in 1..1000, got " +
+                           std::to_string(k));
+  }
+  PB_ASSIGN_OR_RETURN(const double std_ratio, NumberParam(ctx, kId, "std_ratio", 2.0));
+  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
+  PointCloud input;
+  {
+    PB_PHASE(ctx, "io");
+    PlyReadOptions options;
+    options.progress = [&ctx](double fraction) { ctx.progress(0.3 * fraction); };
+    PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(input_path, options));
+    input = std::move(ply.points);
+  }
+  PointCloud output;
+  OutlierReport report;
+  {
+    PB_PHASE(ctx, "compute");
+    OutlierOptions options;
+    options.k = static_cast<int>(k);
+    options.std_ratio = std_ratio;
+    options.threads = ctx.threads();
+    options.progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); };
+    PB_ASSIGN_OR_RETURN(output, RemoveStatisticalOutliers(input, options, &report));
+  }
+  ctx.counter("points_in", static_cast<double>(report.points_in));
+  ctx.counter("points_out", static_cast<double>(report.points_out));
+  ctx.counter("removed", static_cast<double>(report.removed));
+  {
+    PB_PHASE(ctx, "io");
+    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), output));
+  }
+  nlohmann::json meta = ctx.input("points").meta;
+  meta["points"] = output.size();
+  meta["outliers_removed"] = report.removed;
+  meta["outliers_threshold_m"] = report.threshold_m;
+  ctx.set_output_meta("points", std::move(meta));
+  ctx.progress(1.0);
+  return Status::Ok();
+}
+
+}  // namespace
+
+StageType OutliersStage() {
+  StageType type;
+  type.id = kId;
+  type.version = 1;
+  type.summary = "Statistical outlier removal (as PCL's StatisticalOutlierRemoval)";
+  type.doc =
+      "For every point, the mean distance to its `k` nearest other points (exact kd-tree "
+      "search); points whose mean exceeds the cloud-wide mean of those distances plus "
+      "`std_ratio` sample standard deviations are removed. Kept points keep all their "
+      "attributes and their order. The result does not depend on the thread count.\n\n"
+      "Meta added: `points`, `outliers_removed`, `outliers_threshold_m` (meters). "
+      "Counters: `points_in`, `points_out`, `removed`.";
+  type.params_schema = kSchema;
+  type.inputs = {{"points", "points", "The points to clean.", false}};
+  type.outputs = {{"points", "points", "The points that are not outliers.", false}};
+  type.run = &Run;
+  return type;
+}
+
+}  // namespace pb

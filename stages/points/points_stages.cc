@@ -5,7 +5,7 @@
 namespace pb {
 
 void RegisterPointsStages(StageRegistry& registry) {
-  for (StageType type : {DownsampleStage(), StatsStage()}) {
+  for (StageType type : {DownsampleStage(), StatsStage(), OutliersStage(), NormalsStage(), SpacingStage()}) {
     [[maybe_unused]] const Status status = registry.Register(std::move(type));
     assert(status.ok());
   }

@@ -9,6 +9,12 @@ namespace pb {
 StageType DownsampleStage();
 // points.stats: counts, bounds, centroid and mean color as a table.
 StageType StatsStage();
+// points.outliers: statistical outlier removal.
+StageType OutliersStage();
+// points.normals: k-NN PCA normals, oriented.
+StageType NormalsStage();
+// points.spacing: median nearest-neighbour distance into the meta.
+StageType SpacingStage();
 
 void RegisterPointsStages(StageRegistry& registry);
 

@@ -49,9 +49,11 @@ class FakeContext : public StageContext {
   FakeContext(std::filesystem::path dir, nlohmann::json params)
       : dir_(std::move(dir)), params_(std::move(params)) {}
 
-  void AddInput(const std::string& port, const std::string& type, const std::string& file) {
+  void AddInput(const std::string& port, const std::string& type, const std::string& file,
+                nlohmann::json meta = nlohmann::json::object()) {
     ArtifactView view;
     view.type = type;
+    view.meta = std::move(meta);
     view.files[std::filesystem::path(file).filename().string()] = file;
     inputs_[port] = view;
   }
@@ -133,7 +135,11 @@ class PointsStagesTest : public ::testing::Test {
 
 TEST_F(PointsStagesTest, RegistersWellFormedTypes) {
   const std::vector<const StageType*> all = registry_.All();
-  ASSERT_EQ(all.size(), 3u);
+  // Other families register here too; check that ours are all present.
+  for (const char* id : {"io.read_points", "points.downsample", "points.stats", "points.outliers",
+                         "points.normals", "points.spacing"}) {
+    EXPECT_NE(registry_.Find(id), nullptr) << id;
+  }
   for (const StageType* type : all) {
     SCOPED_TRACE(type->id);
     EXPECT_GE(type->version, 1);
@@ -154,6 +160,30 @@ TEST_F(PointsStagesTest, RegistersWellFormedTypes) {
   const nlohmann::json downsample_schema =
       nlohmann::json::parse(registry_.Find("points.downsample")->params_schema);
   EXPECT_EQ(downsample_schema["properties"]["voxel"]["exclusiveMinimum"], 0);
+  for (const char* id : {"points.outliers", "points.normals", "points.spacing"}) {
+    SCOPED_TRACE(id);
+    const StageType* type = registry_.Find(id);
+    const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
+    for (const auto& [name, property] : schema["properties"].items()) {
+      EXPECT_TRUE(property.contains("default")) << name;
+    }
+    ASSERT_EQ(type->inputs.size(), 1u);
+    EXPECT_EQ(type->inputs[0].name, "points");
+    EXPECT_EQ(type->inputs[0].type, "points");
+    ASSERT_EQ(type->outputs.size(), 1u);
+    EXPECT_EQ(type->outputs[0].name, "points");
+    EXPECT_EQ(type->outputs[0].type, "points");
+  }
+  const nlohmann::json normals_schema = nlohmann::json::parse(registry_.Find("points.normals")->params_schema);
+  EXPECT_EQ(normals_schema["properties"]["k"]["default"], 16);
+  EXPECT_EQ(normals_schema["properties"]["k"]["minimum"], 3);
+  EXPECT_EQ(normals_schema["properties"]["k"]["maximum"], 100);
+  EXPECT_EQ(normals_schema["properties"]["orientation"]["enum"],
+            nlohmann::json({"auto", "stations", "propagate", "none"}));
+  const nlohmann::json outliers_schema = nlohmann::json::parse(registry_.Find("points.outliers")->params_schema);
+  EXPECT_EQ(outliers_schema["properties"]["std_ratio"]["default"], 2.0);
+  const nlohmann::json spacing_schema = nlohmann::json::parse(registry_.Find("points.spacing")->params_schema);
+  EXPECT_EQ(spacing_schema["properties"]["sample"]["default"], 100000);
 }
 
 TEST_F(PointsStagesTest, DownsampleThenStats) {
@@ -245,6 +275,124 @@ TEST_F(PointsStagesTest, ReadPointsUnsupportedExtension) {
   EXPECT_THAT(status.message(), HasSubstr("unsupported extension '.xyz'"));
   EXPECT_THAT(status.message(), HasSubstr("formats supported now: ply (.ply)"));
   EXPECT_TRUE(ctx.outputs_.empty());
+}
+
+// A 30 x 30 grid 2 mm apart on z = 0 with a color per point, plus `far`
+// points well off the plane.
+PointCloud GridCloud(int far) {
+  PointCloud cloud;
+  cloud.origin = {500000.0, 4000000.0, 100.0};
+  for (int y = 0; y < 30; ++y) {
+    for (int x = 0; x < 30; ++x) {
+      cloud.positions.insert(cloud.positions.end(), {0.002f * x, 0.002f * y, 0.0f});
+      cloud.colors.insert(cloud.colors.end(), {static_cast<uint8_t>(x), static_cast<uint8_t>(y), 200});
+    }
+  }
+  for (int i = 0; i < far; ++i) {
+    cloud.positions.insert(cloud.positions.end(), {0.03f, 0.03f, 0.5f + 0.3f * i});
+    cloud.colors.insert(cloud.colors.end(), {255, 0, 0});
+  }
+  return cloud;
+}
+
+TEST_F(PointsStagesTest, OutliersRemovesFarPoints) {
+  const PointCloud cloud = GridCloud(2);
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+  FakeContext ctx(dir_ / "o", {{"k", 16}, {"std_ratio", 2.0}});
+  ctx.AddInput("points", "points", input, {{"scene", "grid"}, {"points", 902}});
+  const Status status = Run("points.outliers", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["points_in"], 902);
+  EXPECT_EQ(ctx.counters_["points_out"], 900);
+  EXPECT_EQ(ctx.counters_["removed"], 2);
+  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io", "compute"}));
+  EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
+  EXPECT_EQ(ctx.meta_["points"]["scene"], "grid");
+  EXPECT_EQ(ctx.meta_["points"]["points"], 900);
+  EXPECT_EQ(ctx.meta_["points"]["outliers_removed"], 2);
+  auto out = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  EXPECT_EQ(out->points.origin, cloud.origin);
+  EXPECT_EQ(out->points.positions, std::vector<float>(cloud.positions.begin(), cloud.positions.begin() + 2700));
+  EXPECT_EQ(out->points.colors, std::vector<uint8_t>(cloud.colors.begin(), cloud.colors.begin() + 2700));
+}
+
+TEST_F(PointsStagesTest, NormalsOfASphereFaceOutward) {
+  PointCloud cloud;
+  const int n = 4000;
+  const double golden = 3.14159265358979323846 * (3.0 - std::sqrt(5.0));
+  for (int i = 0; i < n; ++i) {
+    const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1.0 - z * z);
+    cloud.positions.insert(cloud.positions.end(), {static_cast<float>(0.2 * r * std::cos(golden * i)),
+                                                   static_cast<float>(0.2 * r * std::sin(golden * i)),
+                                                   static_cast<float>(0.2 * z)});
+  }
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+  FakeContext ctx(dir_ / "n", {{"k", 12}, {"orientation", "auto"}});
+  ctx.AddInput("points", "points", input, {{"spacing_m", 0.01}});
+  const Status status = Run("points.normals", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["points"], n);
+  EXPECT_TRUE(ctx.counters_.count("flipped"));
+  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io", "compute"}));
+  EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
+  EXPECT_EQ(ctx.meta_["points"]["spacing_m"], 0.01);
+  EXPECT_EQ(ctx.meta_["points"]["has_normals"], true);
+  EXPECT_EQ(ctx.meta_["points"]["normals_k"], 12);
+  EXPECT_EQ(ctx.meta_["points"]["normals_orientation"], "propagate");
+  auto out = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ASSERT_EQ(out->points.normals.size(), 3u * n);
+  for (int i = 0; i < n; ++i) {
+    const float* p = &out->points.positions[3 * i];
+    const float* normal = &out->points.normals[3 * i];
+    ASSERT_GT((p[0] * normal[0] + p[1] * normal[1] + p[2] * normal[2]) / 0.2, 0.98) << "point " << i;
+  }
+}
+
+TEST_F(PointsStagesTest, NormalsRejectsBadParameters) {
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, GridCloud(0)).ok());
+  FakeContext small_k(dir_ / "a", {{"k", 2}});
+  small_k.AddInput("points", "points", input);
+  EXPECT_THAT(Run("points.normals", small_k).message(), HasSubstr("parameter 'k' must be an integer in 3..100"));
+  FakeContext stations(dir_ / "b", {{"orientation", "stations"}});
+  stations.AddInput("points", "points", input);
+  const Status status = Run("points.normals", stations);
+  EXPECT_EQ(status.code(), Status::Code::kInvalid);
+  EXPECT_THAT(status.message(), HasSubstr("orientation 'stations' needs per-point station ids"));
+  EXPECT_TRUE(stations.meta_.empty());
+}
+
+TEST_F(PointsStagesTest, SpacingOfTwoMillimeterGrid) {
+  const PointCloud cloud = GridCloud(0);
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+  FakeContext ctx(dir_ / "s", {{"sample", 0}});
+  ctx.AddInput("points", "points", input, {{"scene", "grid"}});
+  const Status status = Run("points.spacing", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_NEAR(ctx.meta_["points"]["spacing_m"].get<double>(), 0.002, 1e-6);
+  EXPECT_EQ(ctx.meta_["points"]["scene"], "grid");
+  EXPECT_NEAR(ctx.counters_["spacing_mm"], 2.0, 1e-3);
+  EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
+  auto read_bytes = [](const std::string& path) {
+    std::ifstream file(path, std::ios::binary);
+    return std::string(std::istreambuf_iterator<char>(file), {});
+  };
+  EXPECT_EQ(read_bytes(ctx.outputs_["points"]), read_bytes(input));
+}
+
+TEST_F(PointsStagesTest, SpacingNeedsTwoPoints) {
+  PointCloud cloud;
+  cloud.positions = {1, 2, 3};
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+  FakeContext ctx(dir_ / "s", nlohmann::json::object());
+  ctx.AddInput("points", "points", input);
+  EXPECT_THAT(Run("points.spacing", ctx).message(), HasSubstr("needs at least 2 points, the cloud has 1"));
 }
 
 }  // namespace

@@ -1,0 +1,65 @@
+// Normal estimation for point clouds: k-nearest-neighbour PCA plus a sign
+// (orientation) step.
+//
+// The unoriented normal of point i is the eigenvector of the smallest
+// eigenvalue of the 3x3 covariance of its k nearest points (the point itself
+// included, as PCL's NormalEstimation does), a unit vector in the cloud's
+// frame. Coincident neighbourhoods (zero covariance) get an arbitrary but
+// deterministic unit axis.
+//
+// Orientation picks each normal's sign:
+//   kStations:  toward the scanner that saw the point, dot(station - p, n) > 0
+//               (stations are absolute; p = origin + position). Needs
+//               station_ids and stations.
+//   kPropagate: Hoppe et al. 1992: a minimum spanning tree over the kNN graph
+//               (edge weight 1 - |n_i . n_j| quantized to 1/256, Prim's
+//               algorithm; each point's 8 nearest as edges) grown from a
+//               seed whose normal points away from the cloud's centroid; each
+//               point takes its tree parent's side. Disconnected parts are
+//               seeded the same way. Right for closed objects (a sphere gets
+//               outward normals); for interiors scanned from inside, use
+//               stations.
+//   kAuto:      kStations when the cloud has stations, else kPropagate.
+//   kNone:      the sign the eigen solver happens to produce.
+//
+// Output is identical whatever the thread count. Cost: one kNN query per
+// point (see knn.h, ~21 bytes per point for the index) plus, for
+// propagation, 32 bytes per point of neighbour graph and a sequential pass.
+#pragma once
+
+#include <cstddef>
+#include <functional>
+
+#include "engine/base/status.h"
+#include "stages/geometry/point_cloud.h"
+
+namespace pb {
+
+enum class NormalOrientation { kAuto, kStations, kPropagate, kNone };
+
+struct NormalOptions {
+  int k = 16;  // points in each PCA neighbourhood, the point included; 3..100
+  NormalOrientation orientation = NormalOrientation::kAuto;
+  int threads = 0;  // worker threads; 0 = TBB's default (all cores)
+  // Called from the calling thread with the fraction done, in [0, 1].
+  std::function<void(double fraction)> progress;
+};
+
+struct NormalReport {
+  size_t points = 0;
+  size_t flipped = 0;  // normals whose sign orientation reversed
+  NormalOrientation orientation_used = NormalOrientation::kNone;  // kAuto resolved
+};
+
+// Replaces cloud.normals with estimated, oriented unit normals (3 floats per
+// point). Status::Invalid if k is outside 3..100, the cloud has fewer than 3
+// points or a non-finite coordinate, kStations is asked for a cloud without
+// stations, or (from Validate) a station id is out of range.
+Status EstimateNormals(PointCloud& cloud, const NormalOptions& options, NormalReport* report = nullptr);
+
+// Eigen-decomposition of the symmetric 3x3 matrix `a` (row-major, only
+// symmetric input is meaningful) by cyclic Jacobi rotations: returns the unit
+// eigenvector of the smallest eigenvalue in `vector`, and that eigenvalue.
+double SmallestEigenvector(const double a[9], double vector[3]);
+
+}  // namespace pb

@@ -1,0 +1,28 @@
+// Point spacing: the median distance from a point to its nearest other point,
+// in meters. Later stages express thresholds in spacings, so it is measured
+// once per cloud.
+//
+// Exact nearest neighbours (kd-tree over all points, see knn.h); duplicates
+// count as distance 0. For speed the median is taken over a deterministic
+// subsample of `sample` points, indices floor(j * n / sample) for j in
+// 0..sample-1, or over every point when sample is 0 or >= n. With an even
+// count the median is the mean of the two middle values.
+#pragma once
+
+#include <cstddef>
+
+#include "engine/base/status.h"
+#include "stages/geometry/point_cloud.h"
+
+namespace pb {
+
+struct SpacingOptions {
+  size_t sample = 100000;  // points measured; 0 = all
+  int threads = 0;         // worker threads; 0 = TBB's default (all cores)
+};
+
+// Median nearest-neighbour distance in meters. Status::Invalid if the cloud
+// has fewer than 2 points or a non-finite coordinate (naming the point).
+Expected<double> MedianSpacing(const PointCloud& cloud, const SpacingOptions& options = {});
+
+}  // namespace pb
