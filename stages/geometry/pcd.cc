@@ -7,143 +7,22 @@
 // block can be larger than the memory we want to spend on it.
 #include "stages/geometry/pcd.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <bit>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <functional>
 #include <limits>
-#include <memory>
 #include <string_view>
 #include <vector>
 
+#include "stages/geometry/buffered_input.h"
+
 namespace pb {
 namespace {
-
-// ---------------------------------------------------------------------------
-// Buffered input: one 1 MiB buffer, whatever the file size.
-
-class PcdInput {
- public:
-  static constexpr size_t kBufferBytes = size_t{1} << 20;
-  static constexpr size_t kMaxLineBytes = size_t{1} << 16;
-
-  PcdInput() = default;
-  ~PcdInput() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  PcdInput(const PcdInput&) = delete;
-  PcdInput& operator=(const PcdInput&) = delete;
-
-  Status Open(const std::string& path, const std::function<void(double)>* progress) {
-    path_ = path;
-    progress_ = progress;
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) {
-      if (errno == ENOENT) return Status::NotFound(path + ": no such file");
-      return Status::Errno(path, "open");
-    }
-    struct stat st;
-    if (::fstat(fd_, &st) != 0) return Status::Errno(path, "stat");
-    if (S_ISDIR(st.st_mode)) return Status::Invalid(path + ": is a directory, not a PCD file");
-    size_ = static_cast<uint64_t>(st.st_size);
-    buffer_.reset(new uint8_t[kBufferBytes]);
-    return Status::Ok();
-  }
-
-  uint64_t offset() const { return buffer_offset_ + pos_; }
-  uint64_t size() const { return size_; }
-  uint64_t remaining() const { return size_ - std::min(size_, offset()); }
-  const Status& error() const { return error_; }
-  bool line_too_long() const { return line_too_long_; }
-
-  // One line without "\n" / "\r\n"; false at end of file, on a read error or
-  // when the line exceeds kMaxLineBytes.
-  bool ReadLine(std::string* line) {
-    line->clear();
-    bool any = false;
-    while (true) {
-      if (pos_ == end_ && !Fill()) break;
-      any = true;
-      const uint8_t* start = buffer_.get() + pos_;
-      const void* newline = std::memchr(start, '\n', end_ - pos_);
-      const size_t take =
-          newline ? static_cast<const uint8_t*>(newline) - start : end_ - pos_;
-      line->append(reinterpret_cast<const char*>(start), take);
-      pos_ += take;
-      if (line->size() > kMaxLineBytes) {
-        line_too_long_ = true;
-        return false;
-      }
-      if (newline) {
-        ++pos_;
-        break;
-      }
-    }
-    if (!line->empty() && line->back() == '\r') line->pop_back();
-    return any;
-  }
-
-  // Copies `n` bytes; false if fewer remain.
-  bool Read(void* destination, size_t n) {
-    uint8_t* out = static_cast<uint8_t*>(destination);
-    while (n > 0) {
-      if (pos_ == end_ && !Fill()) return false;
-      const size_t take = std::min(n, end_ - pos_);
-      std::memcpy(out, buffer_.get() + pos_, take);
-      pos_ += take;
-      out += take;
-      n -= take;
-    }
-    return true;
-  }
-
-  // Next byte, or -1 at end of file / on error.
-  int GetByte() {
-    if (pos_ == end_ && !Fill()) return -1;
-    return buffer_[pos_++];
-  }
-
- private:
-  bool Fill() {
-    if (!error_.ok()) return false;
-    buffer_offset_ += end_;
-    pos_ = end_ = 0;
-    while (true) {
-      const ssize_t n = ::read(fd_, buffer_.get(), kBufferBytes);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        error_ = Status::Errno(path_, "read");
-        return false;
-      }
-      end_ = static_cast<size_t>(n);
-      break;
-    }
-    if (progress_ && *progress_ && size_ > 0) {
-      (*progress_)(std::min(1.0, static_cast<double>(buffer_offset_ + end_) / size_));
-    }
-    return end_ > 0;
-  }
-
-  std::string path_;
-  const std::function<void(double)>* progress_ = nullptr;
-  int fd_ = -1;
-  uint64_t size_ = 0;
-  std::unique_ptr<uint8_t[]> buffer_;
-  uint64_t buffer_offset_ = 0;  // file offset of buffer_[0]
-  size_t pos_ = 0;
-  size_t end_ = 0;
-  bool line_too_long_ = false;
-  Status error_;
-};
 
 // An LZF instruction of 3 bytes yields at most 264 bytes; shorter ones less.
 constexpr uint64_t kLzfMaxExpansion = 88;
@@ -291,7 +170,7 @@ class PcdReader {
       : path_(path), options_(options) {}
 
   Expected<ScanReadResult> Run() {
-    PB_RETURN_IF_ERROR(in_.Open(path_, &options_.progress));
+    PB_RETURN_IF_ERROR(in_.Open(path_, "a PCD file", &options_.progress));
     PB_RETURN_IF_ERROR(ParseHeader());
     PB_RETURN_IF_ERROR(Prepare());
     switch (header_.data) {
@@ -932,7 +811,7 @@ class PcdReader {
 
   const std::string path_;
   const ScanReadOptions& options_;
-  PcdInput in_;
+  BufferedInput in_{size_t{1} << 16};  // longest line: 64 KiB
   Header header_;
   bool has_normals_ = false, has_packed_rgb_ = false, has_channels_ = false,
        has_intensity_ = false, organized_ = false;

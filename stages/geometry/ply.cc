@@ -1,20 +1,16 @@
 #include "stages/geometry/ply.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <limits>
-#include <memory>
 #include <span>
 #include <string_view>
+
+#include "stages/geometry/buffered_input.h"
 
 namespace pb {
 namespace {
@@ -106,141 +102,6 @@ struct Element {
 };
 
 // ---------------------------------------------------------------------------
-// Buffered input: one 1 MiB buffer, so a 1 GB file costs 1 MiB beyond the
-// decoded arrays.
-
-class InputFile {
- public:
-  static constexpr size_t kBufferBytes = size_t{1} << 20;
-  static constexpr size_t kMaxLineBytes = size_t{1} << 20;
-
-  InputFile() = default;
-  ~InputFile() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  InputFile(const InputFile&) = delete;
-  InputFile& operator=(const InputFile&) = delete;
-
-  Status Open(const std::string& path, const std::function<void(double)>* progress) {
-    path_ = path;
-    progress_ = progress;
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) {
-      if (errno == ENOENT) return Status::NotFound(path + ": no such file");
-      return Status::Errno(path, "open");
-    }
-    struct stat st;
-    if (::fstat(fd_, &st) != 0) return Status::Errno(path, "stat");
-    if (S_ISDIR(st.st_mode)) return Status::Invalid(path + ": is a directory, not a PLY file");
-    size_ = static_cast<uint64_t>(st.st_size);
-    buffer_.reset(new char[kBufferBytes]);
-    return Status::Ok();
-  }
-
-  uint64_t offset() const { return buffer_offset_ + pos_; }
-  uint64_t size() const { return size_; }
-  const Status& error() const { return error_; }
-
-  // Reads one line without its "\n" or "\r\n". False at end of file, on a
-  // read error (see error()) or when the line exceeds kMaxLineBytes.
-  bool ReadLine(std::string* line) {
-    line->clear();
-    bool any = false;
-    while (true) {
-      if (pos_ == end_ && !Fill()) break;
-      any = true;
-      const char* start = buffer_.get() + pos_;
-      const void* newline = std::memchr(start, '\n', end_ - pos_);
-      const size_t take = newline ? static_cast<const char*>(newline) - start : end_ - pos_;
-      line->append(start, take);
-      pos_ += take;
-      if (line->size() > kMaxLineBytes) {
-        line_too_long_ = true;
-        return false;
-      }
-      if (newline) {
-        ++pos_;
-        break;
-      }
-    }
-    if (!line->empty() && line->back() == '\r') line->pop_back();
-    return any;
-  }
-  bool line_too_long() const { return line_too_long_; }
-
-  // Copies `n` bytes; false if fewer remain (what remains is consumed).
-  bool Read(void* destination, size_t n) {
-    char* out = static_cast<char*>(destination);
-    if (end_ - pos_ >= n) {  // the common case: one memcpy
-      std::memcpy(out, buffer_.get() + pos_, n);
-      pos_ += n;
-      return true;
-    }
-    while (n > 0) {
-      if (pos_ == end_ && !Fill()) return false;
-      const size_t take = std::min(n, end_ - pos_);
-      std::memcpy(out, buffer_.get() + pos_, take);
-      pos_ += take;
-      out += take;
-      n -= take;
-    }
-    return true;
-  }
-
-  // Skips up to `n` bytes; returns how many were skipped.
-  uint64_t Skip(uint64_t n) {
-    const uint64_t in_buffer = std::min<uint64_t>(n, end_ - pos_);
-    pos_ += in_buffer;
-    uint64_t skipped = in_buffer;
-    if (skipped == n) return n;
-    // Seek past the rest without reading it.
-    const uint64_t target = std::min(size_, offset() + (n - skipped));
-    skipped += target - offset();
-    buffer_offset_ = target;
-    pos_ = end_ = 0;
-    if (::lseek(fd_, static_cast<off_t>(target), SEEK_SET) < 0) error_ = Status::Errno(path_, "seek");
-    Report();
-    return skipped;
-  }
-
- private:
-  bool Fill() {
-    if (!error_.ok()) return false;
-    buffer_offset_ += end_;
-    pos_ = end_ = 0;
-    while (true) {
-      const ssize_t n = ::read(fd_, buffer_.get(), kBufferBytes);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        error_ = Status::Errno(path_, "read");
-        return false;
-      }
-      end_ = static_cast<size_t>(n);
-      break;
-    }
-    Report();
-    return end_ > 0;
-  }
-
-  void Report() {
-    if (progress_ && *progress_ && size_ > 0) {
-      (*progress_)(std::min(1.0, static_cast<double>(offset() + (end_ - pos_)) / size_));
-    }
-  }
-
-  std::string path_;
-  const std::function<void(double)>* progress_ = nullptr;
-  int fd_ = -1;
-  uint64_t size_ = 0;
-  std::unique_ptr<char[]> buffer_;
-  uint64_t buffer_offset_ = 0;  // file offset of buffer_[0]
-  size_t pos_ = 0;
-  size_t end_ = 0;
-  bool line_too_long_ = false;
-  Status error_;
-};
-
-// ---------------------------------------------------------------------------
 // Scalar decoding.
 
 template <typename T>
@@ -324,7 +185,7 @@ class PlyParser {
   std::vector<std::array<double, 3>> TakeStations() { return std::move(stations_); }
 
   Status Run(Mesh* mesh, PlyReadReport* report) {
-    PB_RETURN_IF_ERROR(in_.Open(path_, &options_.progress));
+    PB_RETURN_IF_ERROR(in_.Open(path_, "a PLY file", &options_.progress));
     PB_RETURN_IF_ERROR(ParseHeader());
     PB_RETURN_IF_ERROR(PrepareElements());
     for (const Element& element : elements_) {
@@ -564,7 +425,7 @@ class PlyParser {
     }
     // Reserve, but never more than the bytes left in the file could hold, so a
     // corrupt count fails as truncation instead of exhausting memory.
-    const uint64_t remaining = in_.size() - std::min(in_.size(), in_.offset());
+    const uint64_t remaining = in_.remaining();
     const uint64_t min_bytes =
         format_ == Format::kAscii ? 2 * vertex->properties.size() : std::max<size_t>(1, vertex->record_bytes);
     const size_t reserve = static_cast<size_t>(std::min(vertex_count_, remaining / std::max<uint64_t>(1, min_bytes)));
@@ -907,7 +768,7 @@ class PlyParser {
   const std::string path_;
   const PlyReadOptions& options_;
   const bool keep_faces_;
-  InputFile in_;
+  BufferedInput in_;  // longest line: 1 MiB
   Format format_ = Format::kAscii;
   bool swap_ = false;
   std::vector<Element> elements_;

@@ -23,6 +23,7 @@ Expected<PointCloud> VoxelDownsample(const PointCloud& cloud, const VoxelDownsam
   PB_RETURN_IF_ERROR(Validate(cloud));
   PointCloud out;
   out.origin = cloud.origin;
+  out.stations = cloud.stations;
   const size_t n = cloud.size();
   if (n == 0) return out;
 
@@ -62,8 +63,10 @@ Expected<PointCloud> VoxelDownsample(const PointCloud& cloud, const VoxelDownsam
     double position[3] = {0, 0, 0};
     double normal[3] = {0, 0, 0};
     uint64_t color[3] = {0, 0, 0};
+    double intensity = 0;
     for (size_t k = begin; k < end; ++k) {
       const size_t i = keyed[k].second;
+      if (cloud.has_intensities()) intensity += cloud.intensities[i];
       for (int axis = 0; axis < 3; ++axis) {
         position[axis] += cloud.positions[3 * i + axis];
         if (cloud.has_normals()) normal[axis] += cloud.normals[3 * i + axis];
@@ -87,6 +90,10 @@ Expected<PointCloud> VoxelDownsample(const PointCloud& cloud, const VoxelDownsam
                                              : static_cast<float>(normal[axis] / length));
       }
     }
+    if (cloud.has_intensities()) out.intensities.push_back(static_cast<float>(intensity / count));
+    // A station cannot be averaged: the voxel keeps the one that saw its first
+    // point (in input order), which still faces the surface it sampled.
+    if (cloud.has_stations()) out.station_ids.push_back(cloud.station_ids[keyed[begin].second]);
     begin = end;
   }
   return out;

@@ -16,6 +16,9 @@ TEST(VoxelDownsampleTest, ExactAveragesPerVoxel) {
                      0.5f,  1.5f, 0.0f,  1.0f,  0.0f,  0.5f,  0.5f,  1.5f,  0.5f};
   cloud.colors = {10, 20, 30, 200, 200, 200, 11, 21, 31, 0, 0, 0, 12, 22, 33, 255, 255, 255};
   cloud.normals = {0, 0, 1, 1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 1, 0, 0, -1};
+  cloud.intensities = {0.1f, 0.2f, 0.3f, 0.4f, 0.5f, 0.6f};
+  cloud.stations = {{0, 0, 0}, {5, 5, 5}};
+  cloud.station_ids = {1, 0, 0, 1, 0, 1};
   auto result = VoxelDownsample(cloud, {.voxel_m = 1.0});
   ASSERT_TRUE(result.ok()) << result.status().message();
   const PointCloud& out = *result;
@@ -35,6 +38,13 @@ TEST(VoxelDownsampleTest, ExactAveragesPerVoxel) {
   EXPECT_FLOAT_EQ(out.normals[6], 0.0f);
   EXPECT_FLOAT_EQ(out.normals[7], inv);
   EXPECT_FLOAT_EQ(out.normals[8], 2 * inv);
+  // Intensities average; each voxel keeps the station of its first point.
+  ASSERT_EQ(out.intensities.size(), 3u);
+  EXPECT_FLOAT_EQ(out.intensities[0], 0.2f);
+  EXPECT_FLOAT_EQ(out.intensities[1], 0.5f);
+  EXPECT_FLOAT_EQ(out.intensities[2], 0.3f);
+  EXPECT_EQ(out.stations, cloud.stations);
+  EXPECT_EQ(out.station_ids, (std::vector<uint16_t>{0, 1, 1}));
 }
 
 TEST(VoxelDownsampleTest, GridIsAlignedToAbsoluteCoordinates) {

@@ -2,14 +2,9 @@
 // range (-2048..2047) follows Leica Cyclone's export documentation.
 #include "stages/geometry/xyz.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -17,104 +12,13 @@
 #include <filesystem>
 #include <limits>
 #include <functional>
-#include <memory>
 #include <string_view>
 #include <vector>
 
+#include "stages/geometry/buffered_input.h"
+
 namespace pb {
 namespace {
-
-// Line input through one 1 MiB buffer.
-class LineInput {
- public:
-  static constexpr size_t kBufferBytes = size_t{1} << 20;
-  static constexpr size_t kMaxLineBytes = size_t{1} << 16;
-
-  LineInput() = default;
-  ~LineInput() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  LineInput(const LineInput&) = delete;
-  LineInput& operator=(const LineInput&) = delete;
-
-  Status Open(const std::string& path, const std::function<void(double)>* progress) {
-    path_ = path;
-    progress_ = progress;
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) {
-      if (errno == ENOENT) return Status::NotFound(path + ": no such file");
-      return Status::Errno(path, "open");
-    }
-    struct stat st;
-    if (::fstat(fd_, &st) != 0) return Status::Errno(path, "stat");
-    if (S_ISDIR(st.st_mode)) return Status::Invalid(path + ": is a directory, not a point file");
-    size_ = static_cast<uint64_t>(st.st_size);
-    buffer_.reset(new char[kBufferBytes]);
-    return Status::Ok();
-  }
-
-  uint64_t size() const { return size_; }
-  const Status& error() const { return error_; }
-  bool line_too_long() const { return line_too_long_; }
-
-  // One line without "\n" / "\r\n"; false at end of file, on a read error or
-  // when the line exceeds kMaxLineBytes.
-  bool ReadLine(std::string* line) {
-    line->clear();
-    bool any = false;
-    while (true) {
-      if (pos_ == end_ && !Fill()) break;
-      any = true;
-      const char* start = buffer_.get() + pos_;
-      const void* newline = std::memchr(start, '\n', end_ - pos_);
-      const size_t take = newline ? static_cast<const char*>(newline) - start : end_ - pos_;
-      line->append(start, take);
-      pos_ += take;
-      if (line->size() > kMaxLineBytes) {
-        line_too_long_ = true;
-        return false;
-      }
-      if (newline) {
-        ++pos_;
-        break;
-      }
-    }
-    if (!line->empty() && line->back() == '\r') line->pop_back();
-    return any;
-  }
-
- private:
-  bool Fill() {
-    if (!error_.ok()) return false;
-    offset_ += end_;
-    pos_ = end_ = 0;
-    while (true) {
-      const ssize_t n = ::read(fd_, buffer_.get(), kBufferBytes);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        error_ = Status::Errno(path_, "read");
-        return false;
-      }
-      end_ = static_cast<size_t>(n);
-      break;
-    }
-    if (progress_ && *progress_ && size_ > 0) {
-      (*progress_)(std::min(1.0, static_cast<double>(offset_ + end_) / size_));
-    }
-    return end_ > 0;
-  }
-
-  std::string path_;
-  const std::function<void(double)>* progress_ = nullptr;
-  int fd_ = -1;
-  uint64_t size_ = 0;
-  std::unique_ptr<char[]> buffer_;
-  uint64_t offset_ = 0;  // file offset of buffer_[0]
-  size_t pos_ = 0;
-  size_t end_ = 0;
-  bool line_too_long_ = false;
-  Status error_;
-};
 
 enum Role : uint8_t { kSkip, kX, kY, kZ, kR, kG, kB, kI, kNx, kNy, kNz, kRoleCount };
 
@@ -202,7 +106,7 @@ class XyzReader {
   }
 
   Expected<ScanReadResult> Run() {
-    PB_RETURN_IF_ERROR(in_.Open(path_, &options_.progress));
+    PB_RETURN_IF_ERROR(in_.Open(path_, "a point file", &options_.progress));
     if (!options_.columns.empty()) {
       PB_RETURN_IF_ERROR(SetColumns(options_.columns, 0));
       explicit_columns_ = true;
@@ -233,7 +137,7 @@ class XyzReader {
     PB_RETURN_IF_ERROR(in_.error());
     if (in_.line_too_long()) {
       ++line_number_;
-      return LineError("line longer than " + std::to_string(LineInput::kMaxLineBytes) +
+      return LineError("line longer than " + std::to_string(in_.max_line_bytes()) +
                        " bytes (is this a text point file?)");
     }
     if (is_pts_ && block_remaining_ > 0) {
@@ -494,7 +398,7 @@ class XyzReader {
   const ScanReadOptions& options_;
   bool is_pts_ = false;
   std::string extension_;
-  LineInput in_;
+  BufferedInput in_{size_t{1} << 16};  // longest line: 64 KiB
   uint64_t line_number_ = 0;
   std::vector<Role> columns_;  // trailing skips removed
   std::string column_names_;

@@ -156,7 +156,8 @@ TEST_F(PointsStagesTest, RegistersWellFormedTypes) {
   const nlohmann::json read_schema = nlohmann::json::parse(registry_.Find("io.read_points")->params_schema);
   EXPECT_EQ(read_schema["required"], nlohmann::json({"path"}));
   EXPECT_EQ(read_schema["properties"]["path"]["x-path"], true);
-  EXPECT_EQ(read_schema["properties"]["format"]["enum"], nlohmann::json({"auto", "ply"}));
+  EXPECT_EQ(read_schema["properties"]["format"]["enum"],
+            nlohmann::json({"auto", "ply", "pcd", "xyz", "ptx", "e57", "las"}));
   const nlohmann::json downsample_schema =
       nlohmann::json::parse(registry_.Find("points.downsample")->params_schema);
   EXPECT_EQ(downsample_schema["properties"]["voxel"]["exclusiveMinimum"], 0);
@@ -246,7 +247,7 @@ TEST_F(PointsStagesTest, ReadPointsBunny) {
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(ctx.counters_["points"], 35947);
   EXPECT_EQ(ctx.counters_["dropped_points"], 0);
-  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io"}));
+  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"read", "write"}));
   EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
   auto read = ReadPlyPoints(ctx.outputs_["points"]);
   ASSERT_TRUE(read.ok()) << read.status().message();
@@ -269,12 +270,31 @@ TEST_F(PointsStagesTest, ReadPointsDropsInvalid) {
 }
 
 TEST_F(PointsStagesTest, ReadPointsUnsupportedExtension) {
-  FakeContext ctx(dir_, {{"path", (dir_ / "foo.xyz").string()}, {"format", "auto"}});
+  FakeContext ctx(dir_, {{"path", (dir_ / "foo.obj").string()}, {"format", "auto"}});
   const Status status = Run("io.read_points", ctx);
   EXPECT_EQ(status.code(), Status::Code::kUnsupported);
-  EXPECT_THAT(status.message(), HasSubstr("unsupported extension '.xyz'"));
-  EXPECT_THAT(status.message(), HasSubstr("formats supported now: ply (.ply)"));
+  EXPECT_THAT(status.message(), HasSubstr("unsupported extension '.obj'"));
+  EXPECT_THAT(status.message(), HasSubstr("formats supported now: ply (.ply), pcd (.pcd), xyz "
+                                          "(.xyz .txt .pts .csv), ptx (.ptx), e57 (.e57), las "
+                                          "(.las .laz)"));
   EXPECT_TRUE(ctx.outputs_.empty());
+}
+
+TEST_F(PointsStagesTest, ReadPointsEveryFormatByExtension) {
+  const std::string shared = SharedData();
+  if (shared.empty()) GTEST_SKIP() << "shared data not found";
+  const std::filesystem::path data = shared;
+  const std::pair<const char*, double> cases[] = {
+      {"pump_e57/pumpAVisualReferenceImage.e57", 155201}, {"bunny/bunnyDouble.e57", 30571},
+      {"office_kinect/office1.pcd", 254456},             {"livingroom_fragment/fragment.pcd", 113662},
+      {"ptx/1.2-with-color.ptx", 1065},                  {"bunny/bun_zipper.ply", 35947}};
+  int i = 0;
+  for (const auto& [file, points] : cases) {
+    FakeContext ctx(dir_ / std::to_string(i++), {{"path", (data / file).string()}});
+    const Status status = Run("io.read_points", ctx);
+    ASSERT_TRUE(status.ok()) << file << ": " << status.message();
+    EXPECT_EQ(ctx.counters_["points"], points) << file;
+  }
 }
 
 // A 30 x 30 grid 2 mm apart on z = 0 with a color per point, plus `far`
