@@ -34,7 +34,7 @@ work, points = sys.argv[1], int(sys.argv[2])
 gen = {s["stage"]: s for s in json.load(open(f"{work}/gen/run.json"))["stages"]}
 rd = {s["stage"]: s for s in json.load(open(f"{work}/read/run.json"))["stages"]}
 size = os.path.getsize(f"{work}/gen/scan.ply")
-n = rd["read"]["counters"].get("points", points)
+n = int(rd["read"]["counters"].get("points", points))
 cloud_bytes = n * (12 + 3 + 2)  # xyz float32, rgb, station id (as decoded)
 def row(what, s, extra=""):
     return f"| {what} | {s['wall_s']:.2f} s | {s['user_s'] + s['sys_s']:.2f} s | {s['peak_rss_bytes'] / 2**20:.0f} MiB | {extra} |"
@@ -44,7 +44,7 @@ print(row("synth.scan (generate + write)", gen["scan"]))
 io = [p for p in rd["read"]["phases"] if p["name"] == "read"]
 io_s = io[0]["dur_s"] if io else rd["read"]["wall_s"]
 print(row("io.read_points (binary PLY)", rd["read"],
-          f"{size / 2**20 / io_s:.0f} MB/s reading (its read phase); peak / decoded cloud "
+          f"{size / 1e6 / io_s:.0f} MB/s (10^6 B/s) in its read phase; peak / decoded cloud "
           f"{rd['read']['peak_rss_bytes'] / cloud_bytes:.2f}"))
 print(row("points.normals (k = 16)", rd["normals"]))
 PY

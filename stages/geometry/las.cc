@@ -1,27 +1,21 @@
 #include "stages/geometry/las.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <bit>
 #include <cctype>
-#include <cerrno>
 #include <cmath>
 #include <cstring>
-#include <limits>
-#include <memory>
 #include <type_traits>
+#include <vector>
+
+#include "stages/geometry/buffered_input.h"
 
 namespace pb {
 namespace {
 
 constexpr size_t kMinHeaderBytes = 227;  // LAS 1.0-1.2
 constexpr size_t kHeader14Bytes = 375;   // LAS 1.4
-constexpr size_t kBufferBytes = size_t{1} << 20;
-constexpr uint64_t kProgressBytes = uint64_t{4} << 20;
 // Farther than this from the origin, float32 positions are meaningless (and
 // the cast could overflow): the header's scale or offset is garbage.
 constexpr double kMaxSpanM = 1e8;
@@ -81,41 +75,14 @@ Status Laz(const std::string& path) {
                              "with `laszip` or PDAL");
 }
 
-// Reads exactly `n` bytes at `offset`; returns how many were read.
-Expected<size_t> ReadAt(int fd, const std::string& path, uint8_t* out, size_t n, uint64_t offset) {
-  size_t done = 0;
-  while (done < n) {
-    const ssize_t got = ::pread(fd, out + done, n - done, static_cast<off_t>(offset + done));
-    if (got < 0) {
-      if (errno == EINTR) continue;
-      return Status::Errno(path, "read");
-    }
-    if (got == 0) break;
-    done += static_cast<size_t>(got);
-  }
-  return done;
-}
-
 class LasReader {
  public:
   LasReader(const std::string& path, const ScanReadOptions& options)
       : path_(path), options_(options) {}
-  ~LasReader() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  LasReader(const LasReader&) = delete;
-  LasReader& operator=(const LasReader&) = delete;
 
   Expected<ScanReadResult> Run() {
-    fd_ = ::open(path_.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) {
-      if (errno == ENOENT) return Status::NotFound(path_ + ": no such file");
-      return Status::Errno(path_, "open");
-    }
-    struct stat st;
-    if (::fstat(fd_, &st) != 0) return Status::Errno(path_, "stat");
-    if (S_ISDIR(st.st_mode)) return Status::Invalid(path_ + ": is a directory, not a LAS file");
-    file_bytes_ = static_cast<uint64_t>(st.st_size);
+    PB_RETURN_IF_ERROR(in_.Open(path_, "a LAS file", &options_.progress));
+    file_bytes_ = in_.size();
     if (EndsWithLaz(path_)) return Laz(path_);
 
     PB_RETURN_IF_ERROR(ReadHeader());
@@ -130,7 +97,8 @@ class LasReader {
  private:
   Status ReadHeader() {
     uint8_t bytes[kHeader14Bytes] = {};
-    PB_ASSIGN_OR_RETURN(const size_t got, ReadAt(fd_, path_, bytes, sizeof bytes, 0));
+    const size_t got = in_.ReadUpTo(bytes, sizeof bytes);
+    PB_RETURN_IF_ERROR(in_.error());
     if (got < 4 || std::memcmp(bytes, "LASF", 4) != 0) {
       return Status::Invalid(path_ + ": not a LAS file (expected signature 'LASF' at byte 0)");
     }
@@ -253,45 +221,36 @@ class LasReader {
     cloud.intensities.reserve(h.point_count);
     if (has_colors) cloud.colors.reserve(3 * h.point_count);
 
-    const uint64_t records_per_chunk = std::max<uint64_t>(1, kBufferBytes / h.record_bytes);
-    std::unique_ptr<uint8_t[]> buffer(new uint8_t[records_per_chunk * h.record_bytes]);
-    uint64_t next_progress = kProgressBytes;
-    for (uint64_t first = 0; first < h.point_count; first += records_per_chunk) {
-      const uint64_t records = std::min(records_per_chunk, h.point_count - first);
-      const uint64_t chunk_offset = h.point_offset + first * h.record_bytes;
-      PB_ASSIGN_OR_RETURN(const size_t got,
-                          ReadAt(fd_, path_, buffer.get(), records * h.record_bytes, chunk_offset));
-      if (got < records * h.record_bytes) return Truncated(first + got / h.record_bytes);
-      for (uint64_t r = 0; r < records; ++r) {
-        const uint8_t* record = buffer.get() + r * h.record_bytes;
-        std::array<double, 3> p;
-        for (int axis = 0; axis < 3; ++axis) {
-          p[axis] = Load<int32_t>(record + 4 * axis) * h.scale[axis] + h.offset[axis];
-        }
-        if (first + r == 0) ChooseOrigin(p);
-        for (int axis = 0; axis < 3; ++axis) p[axis] -= cloud.origin[axis];
-        if (!(std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])}) <= kMaxSpanM)) {
-          return Status::Corrupt(path_ + ": point " + std::to_string(first + r) + " at byte " +
-                                 std::to_string(chunk_offset + r * h.record_bytes) +
-                                 " lies more than 1e8 m from the origin; check the header's "
-                                 "scale and offset");
-        }
-        for (int axis = 0; axis < 3; ++axis) cloud.positions.push_back(static_cast<float>(p[axis]));
-        cloud.intensities.push_back(static_cast<float>(Load<uint16_t>(record + 12) / 65535.0));
-        if (has_colors) AppendColor(record + layout_.rgb_offset);
+    if (!in_.Seek(h.point_offset)) return in_.error();
+    std::vector<uint8_t> record_bytes(h.record_bytes);
+    const uint8_t* record = record_bytes.data();
+    for (uint64_t i = 0; i < h.point_count; ++i) {
+      if (!in_.Read(record_bytes.data(), h.record_bytes)) {
+        PB_RETURN_IF_ERROR(in_.error());
+        return Truncated(i);
       }
-      const uint64_t done = chunk_offset + records * h.record_bytes;
-      if (options_.progress && done >= next_progress) {
-        options_.progress(static_cast<double>(done) / file_bytes_);
-        next_progress = done + kProgressBytes;
+      std::array<double, 3> p;
+      for (int axis = 0; axis < 3; ++axis) {
+        p[axis] = Load<int32_t>(record + 4 * axis) * h.scale[axis] + h.offset[axis];
       }
+      if (i == 0) ChooseOrigin(p);
+      for (int axis = 0; axis < 3; ++axis) p[axis] -= cloud.origin[axis];
+      if (!(std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])}) <= kMaxSpanM)) {
+        return Status::Corrupt(path_ + ": point " + std::to_string(i) + " at byte " +
+                               std::to_string(h.point_offset + i * h.record_bytes) +
+                               " lies more than 1e8 m from the origin; check the header's "
+                               "scale and offset");
+      }
+      for (int axis = 0; axis < 3; ++axis) cloud.positions.push_back(static_cast<float>(p[axis]));
+      cloud.intensities.push_back(static_cast<float>(Load<uint16_t>(record + 12) / 65535.0));
+      if (has_colors) AppendColor(record + layout_.rgb_offset);
     }
     return Status::Ok();
   }
 
   const std::string& path_;
   const ScanReadOptions& options_;
-  int fd_ = -1;
+  BufferedInput in_;
   uint64_t file_bytes_ = 0;
   LasHeader header_;
   PointLayout layout_{};

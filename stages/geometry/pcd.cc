@@ -494,7 +494,9 @@ class PcdReader {
   void Finish() {
     PointCloud& cloud = result_.points;
     if (has_intensity_) NormalizeIntensities();
-    if (header_.have_viewpoint) {
+    // PCL writes the identity VIEWPOINT into every file, fused clouds included,
+    // so only a pose that moves the points names a real sensor position.
+    if (rotate_ || translate_) {
       cloud.stations = {{header_.viewpoint[0], header_.viewpoint[1], header_.viewpoint[2]}};
       cloud.station_ids.assign(cloud.size(), 0);
     }

@@ -32,8 +32,10 @@
 //
 // VIEWPOINT: the pose (rotation qw qx qy qz, then translation tx ty tz) is
 // applied to the points and normals, and the translation becomes the cloud's
-// only station (every point has station id 0). Without VIEWPOINT there is no
-// station. The origin stays (0, 0, 0) when x y z are F4 and tx ty tz are zero
+// only station (every point has station id 0). The identity pose (tx ty tz
+// zero, qx qy qz zero) makes no station: PCL writes `VIEWPOINT 0 0 0 1 0 0 0`
+// into every file by default, fused clouds included, and a station at the
+// origin would orient normals wrongly. Without VIEWPOINT there is no station. The origin stays (0, 0, 0) when x y z are F4 and tx ty tz are zero
 // (the floats are kept bit for bit); otherwise points are re-centered on their
 // bounding-box center rounded to 1 m, as the PLY reader does for doubles.
 //

@@ -193,9 +193,9 @@ TEST_F(PcdTest, BinarySkipsUnknownFieldsIncludingCountGreaterThanOne) {
   EXPECT_EQ(cloud.normals, (std::vector<float>{0, 1, 0, 0, 1, 0}));
   EXPECT_EQ(cloud.colors, (std::vector<uint8_t>{200, 100, 50, 200, 101, 50}));
   EXPECT_FALSE(cloud.has_intensities());
-  // The identity VIEWPOINT still names the sensor position.
-  EXPECT_EQ(cloud.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
-  EXPECT_EQ(cloud.station_ids, (std::vector<uint16_t>{0, 0}));
+  // The identity VIEWPOINT (PCL's default) names no sensor position.
+  EXPECT_FALSE(cloud.has_stations());
+  EXPECT_TRUE(cloud.stations.empty());
 }
 
 TEST_F(PcdTest, BinaryCompressedIsFieldByFieldAndOrganizedNanPointsAreDropped) {
@@ -219,7 +219,8 @@ TEST_F(PcdTest, BinaryCompressedIsFieldByFieldAndOrganizedNanPointsAreDropped) {
   EXPECT_EQ(read->dropped_points, 1u);
   EXPECT_EQ(cloud.positions, (std::vector<float>{1, 0, -1, 2, 0, -1, 4, 0, -1}));
   EXPECT_EQ(cloud.colors, (std::vector<uint8_t>{1, 2, 3, 4, 5, 6, 10, 11, 12}));
-  EXPECT_EQ(cloud.station_ids.size(), 3u);
+  EXPECT_FALSE(cloud.has_stations());  // identity VIEWPOINT
+  EXPECT_TRUE(cloud.stations.empty());
 }
 
 TEST_F(PcdTest, BinaryCompressedLongRunsUseExtendedBackReferences) {
@@ -239,6 +240,18 @@ TEST_F(PcdTest, BinaryCompressedLongRunsUseExtendedBackReferences) {
   EXPECT_EQ(read->points.positions[3 * 149 + 1], 7.0f);
   EXPECT_EQ(read->points.positions[3 * 150 + 2], -3.5f);
   EXPECT_EQ(read->points.positions[3 * 299 + 0], 0.0f);
+}
+
+TEST_F(PcdTest, IdentityViewpointMakesNoStationWhateverTheQuaternionScale) {
+  // qw = -2: the identity once normalized; the points stay bit for bit.
+  const auto read = ReadPcd(Write("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\n"
+                                  "VIEWPOINT 0 0 0 -2 0 0 0\nPOINTS 1\nDATA ascii\n1.5 -2 3\n"),
+                            {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.origin, (std::array<double, 3>{0, 0, 0}));
+  EXPECT_EQ(read->points.positions, (std::vector<float>{1.5f, -2, 3}));
+  EXPECT_TRUE(read->points.stations.empty());
+  EXPECT_TRUE(read->points.station_ids.empty());
 }
 
 TEST_F(PcdTest, ViewpointPoseIsAppliedAndBecomesTheStation) {
@@ -446,7 +459,9 @@ TEST_F(PcdTest, OfficeKinectBinaryCompressed) {
   // x: every point lies in front of the sensor at negative z.
   const Bounds bounds = LocalBounds(cloud);
   EXPECT_LT(bounds.max_m[2], 0);
+  // Not the identity, so the pose is kept as the one station.
   EXPECT_EQ(cloud.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+  EXPECT_EQ(cloud.station_ids.size(), cloud.size());
 }
 
 TEST_F(PcdTest, LivingroomFragmentBinaryWithNormals) {
@@ -462,6 +477,9 @@ TEST_F(PcdTest, LivingroomFragmentBinaryWithNormals) {
   ASSERT_TRUE(cloud.has_colors());
   ASSERT_TRUE(Validate(cloud).ok());
   EXPECT_TRUE(read->warnings.empty());
+  // VIEWPOINT 0 0 0 1 0 0 0, PCL's default for a fused cloud: no station.
+  EXPECT_FALSE(cloud.has_stations());
+  EXPECT_TRUE(cloud.stations.empty());
   size_t nonzero = 0;
   for (size_t i = 0; i < cloud.size(); ++i) {
     nonzero += cloud.colors[3 * i] != 0 || cloud.colors[3 * i + 1] != 0 ||

@@ -1,120 +1,15 @@
 #include "stages/geometry/ptx.h"
 
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
-#include <cerrno>
 #include <charconv>
 #include <cmath>
-#include <cstring>
-#include <memory>
 #include <string_view>
+
+#include "stages/geometry/buffered_input.h"
 
 namespace pb {
 namespace {
-
-// Streams a text file line by line through one fixed buffer; a line is
-// returned as a view into the buffer, valid until the next call.
-class LineReader {
- public:
-  static constexpr size_t kBufferBytes = size_t{1} << 20;  // also the longest line
-  static constexpr uint64_t kProgressBytes = uint64_t{4} << 20;
-
-  LineReader() = default;
-  ~LineReader() {
-    if (fd_ >= 0) ::close(fd_);
-  }
-  LineReader(const LineReader&) = delete;
-  LineReader& operator=(const LineReader&) = delete;
-
-  Status Open(const std::string& path, const std::function<void(double)>* progress) {
-    path_ = path;
-    progress_ = progress;
-    fd_ = ::open(path.c_str(), O_RDONLY | O_CLOEXEC);
-    if (fd_ < 0) {
-      if (errno == ENOENT) return Status::NotFound(path + ": no such file");
-      return Status::Errno(path, "open");
-    }
-    struct stat st;
-    if (::fstat(fd_, &st) != 0) return Status::Errno(path, "stat");
-    if (S_ISDIR(st.st_mode)) return Status::Invalid(path + ": is a directory, not a PTX file");
-    size_ = static_cast<uint64_t>(st.st_size);
-    buffer_.reset(new char[kBufferBytes]);
-    return Status::Ok();
-  }
-
-  // Next line without its "\n" / "\r\n"; false at end of file or on error
-  // (see status()).
-  bool Next(std::string_view* line) {
-    while (true) {
-      const void* newline = std::memchr(buffer_.get() + pos_, '\n', end_ - pos_);
-      if (newline != nullptr || (eof_ && pos_ < end_)) {
-        const char* start = buffer_.get() + pos_;
-        const size_t length = newline ? static_cast<const char*>(newline) - start : end_ - pos_;
-        pos_ += newline ? length + 1 : length;
-        ++line_number_;
-        *line = std::string_view(start, length);
-        if (!line->empty() && line->back() == '\r') line->remove_suffix(1);
-        return true;
-      }
-      if (eof_ || !status_.ok()) return false;
-      if (pos_ == 0 && end_ == kBufferBytes) {
-        status_ = Status::Invalid(path_ + ":" + std::to_string(line_number_ + 1) +
-                                  ": line longer than 1 MiB; not a PTX file?");
-        return false;
-      }
-      Fill();
-    }
-  }
-
-  int64_t line_number() const { return line_number_; }
-  uint64_t bytes_consumed() const { return consumed_before_ + pos_; }
-  uint64_t size() const { return size_; }
-  const Status& status() const { return status_; }
-
- private:
-  // Moves the unread tail to the front and appends what the file has next.
-  void Fill() {
-    consumed_before_ += pos_;
-    std::memmove(buffer_.get(), buffer_.get() + pos_, end_ - pos_);
-    end_ -= pos_;
-    pos_ = 0;
-    while (end_ < kBufferBytes) {
-      const ssize_t n = ::read(fd_, buffer_.get() + end_, kBufferBytes - end_);
-      if (n < 0) {
-        if (errno == EINTR) continue;
-        status_ = Status::Errno(path_, "read");
-        return;
-      }
-      if (n == 0) {
-        eof_ = true;
-        break;
-      }
-      end_ += static_cast<size_t>(n);
-      break;
-    }
-    if (progress_ != nullptr && *progress_ && size_ > 0 && consumed_before_ >= next_progress_) {
-      (*progress_)(std::min(1.0, static_cast<double>(consumed_before_) / size_));
-      next_progress_ = consumed_before_ + kProgressBytes;
-    }
-  }
-
-  std::string path_;
-  const std::function<void(double)>* progress_ = nullptr;
-  int fd_ = -1;
-  uint64_t size_ = 0;
-  std::unique_ptr<char[]> buffer_;
-  size_t pos_ = 0;
-  size_t end_ = 0;
-  bool eof_ = false;
-  uint64_t consumed_before_ = 0;  // file bytes before buffer_[0]
-  uint64_t next_progress_ = kProgressBytes;
-  int64_t line_number_ = 0;
-  Status status_;
-};
 
 bool IsBlank(std::string_view line) {
   return line.find_first_not_of(" \t\r\f\v") == std::string_view::npos;
@@ -167,13 +62,13 @@ class PtxParser {
       : path_(path), options_(options) {}
 
   Expected<ScanReadResult> Run() {
-    PB_RETURN_IF_ERROR(in_.Open(path_, &options_.progress));
+    PB_RETURN_IF_ERROR(in_.Open(path_, "a PTX file", &options_.progress));
     PointCloud& cloud = result_.points;
     uint64_t scan_count = 0;
     while (true) {
       std::string_view line;
       if (!NextNonBlank(&line)) {
-        PB_RETURN_IF_ERROR(in_.status());
+        PB_RETURN_IF_ERROR(InputStatus());
         break;
       }
       if (scan_count == kMaxScans) {
@@ -213,8 +108,18 @@ class PtxParser {
 
   std::string Where() const { return path_ + ":" + std::to_string(in_.line_number()); }
 
+  // Why the last NextNonBlank returned false, if not the end of the file.
+  Status InputStatus() const {
+    PB_RETURN_IF_ERROR(in_.error());
+    if (in_.line_too_long()) {
+      return Status::Invalid(path_ + ":" + std::to_string(in_.line_number() + 1) +
+                             ": line longer than 1 MiB; not a PTX file?");
+    }
+    return Status::Ok();
+  }
+
   bool NextNonBlank(std::string_view* line) {
-    while (in_.Next(line)) {
+    while (in_.ReadLine(line)) {
       if (!IsBlank(*line)) return true;
     }
     return false;
@@ -224,7 +129,7 @@ class PtxParser {
   Status ReadNumbers(size_t count, const char* what, double* values) {
     std::string_view line;
     if (!NextNonBlank(&line)) {
-      PB_RETURN_IF_ERROR(in_.status());
+      PB_RETURN_IF_ERROR(InputStatus());
       return Status::Invalid(Where() + ": truncated header: expected " + what);
     }
     return ParseNumbers(line, count, what, values);
@@ -265,7 +170,7 @@ class PtxParser {
     PB_RETURN_IF_ERROR(ParseGridSide(columns_line, "column", &header->columns));
     std::string_view line;
     if (!NextNonBlank(&line)) {
-      PB_RETURN_IF_ERROR(in_.status());
+      PB_RETURN_IF_ERROR(InputStatus());
       return Status::Invalid(Where() + ": truncated header: expected the row count");
     }
     PB_RETURN_IF_ERROR(ParseGridSide(line, "row", &header->rows));
@@ -292,7 +197,7 @@ class PtxParser {
   // file can hold so that a lying header cannot allocate terabytes.
   void Reserve(uint64_t count, bool colors) {
     constexpr uint64_t kMinBytesPerPoint = 8;  // "0 0 0 0\n"
-    const uint64_t remaining = in_.size() - std::min(in_.size(), in_.bytes_consumed());
+    const uint64_t remaining = in_.remaining();
     PointCloud& cloud = result_.points;
     const size_t target = cloud.size() + std::min(count, remaining / kMinBytesPerPoint);
     if (target <= cloud.size() || target * 3 <= cloud.positions.capacity()) return;
@@ -312,7 +217,7 @@ class PtxParser {
     for (uint64_t i = 0; i < count; ++i) {
       std::string_view line;
       if (!NextNonBlank(&line)) {
-        PB_RETURN_IF_ERROR(in_.status());
+        PB_RETURN_IF_ERROR(InputStatus());
         return Status::Invalid(Where() + ": truncated: scan " + std::to_string(scan_index + 1) +
                                " ends after " + std::to_string(i) + " of " + std::to_string(count) +
                                " points (" + std::to_string(header.columns) + " columns x " +
@@ -403,7 +308,7 @@ class PtxParser {
 
   const std::string& path_;
   const ScanReadOptions& options_;
-  LineReader in_;
+  BufferedInput in_;  // longest line: 1 MiB
   ScanReadResult result_;
   bool have_origin_ = false;
   bool any_colors_ = false;
