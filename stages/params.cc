@@ -1,5 +1,7 @@
 #include "stages/params.h"
 
+#include <cmath>
+
 namespace pb {
 namespace {
 
@@ -53,6 +55,26 @@ Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, con
   }
   if (!value->is_boolean()) return WrongType(stage_id, name, "true or false", *value);
   return value->get<bool>();
+}
+
+Expected<int64_t> IntegerParam(const StageContext& ctx, std::string_view stage_id, const char* name,
+                               std::optional<int64_t> fallback, int64_t min,
+                               std::optional<int64_t> max) {
+  // Doubles hold every integer up to 2^53 exactly; beyond, "integer" means little.
+  constexpr int64_t kMaxExact = int64_t{1} << 53;
+  std::optional<double> fallback_number;
+  if (fallback) fallback_number = static_cast<double>(*fallback);
+  PB_ASSIGN_OR_RETURN(const double value, NumberParam(ctx, stage_id, name, fallback_number));
+  const int64_t upper = max ? *max : kMaxExact;
+  const bool above = value > static_cast<double>(upper);
+  if (value != std::floor(value) || value < static_cast<double>(min) || above) {
+    const std::string range = max || above
+                                  ? "in " + std::to_string(min) + ".." + std::to_string(upper)
+                                  : ">= " + std::to_string(min);
+    return Status::Invalid(std::string(stage_id) + ": parameter '" + name +
+                           "' must be an integer " + range + ", got " + std::to_string(value));
+  }
+  return static_cast<int64_t>(value);
 }
 
 Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id, std::string_view port) {

@@ -6,6 +6,7 @@
 // never an exception.
 #pragma once
 
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <string_view>
@@ -23,6 +24,13 @@ Expected<double> NumberParam(const StageContext& ctx, std::string_view stage_id,
                              std::optional<double> fallback = std::nullopt);
 Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, const char* name,
                          std::optional<bool> fallback = std::nullopt);
+
+// A whole number in [min, max] (JSON has one number type, so 16.0 counts as
+// 16); without `max`, any whole number >= min up to 2^53. Out of range or
+// fractional is Status::Invalid naming the range.
+Expected<int64_t> IntegerParam(const StageContext& ctx, std::string_view stage_id, const char* name,
+                               std::optional<int64_t> fallback, int64_t min,
+                               std::optional<int64_t> max = std::nullopt);
 
 // The single file of input `port`, or Status::Invalid if it is missing.
 Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id, std::string_view port);

@@ -7,11 +7,13 @@
 // density and needs no cell size. Each node splits its points at the median
 // count along the widest axis of its bounding box, so the tree's shape depends
 // only on the point count and it is stored implicitly (children of node i are
-// 2i+1 and 2i+2): 5 bytes per node, a copy of the points in tree order (16
-// bytes per point: x, y, z, original index) for cache-friendly leaves, and
+// 2i+1 and 2i+2): 5 bytes per node, a copy of the points in tree order as
+// separate x, y, z float arrays plus the original index (16 bytes per point;
+// a leaf's coordinates are contiguous, so its distance loop vectorizes), and
 // the inverse permutation (4 bytes per point). Total memory ~21 bytes per
-// point; 10^7 points build in about a second on 2 cores. Queries descend nearest-side first and
-// prune with the incremental box distance of Arya & Mount (1993).
+// point; 10^7 points build in about a second on 2 cores. Queries descend
+// nearest-side first and prune with the incremental box distance of Arya &
+// Mount (1993).
 //
 // Results are exact and deterministic: neighbours are ordered by (squared
 // distance, point index), so ties (duplicate points, regular grids) resolve
@@ -21,6 +23,7 @@
 // not depend on the thread count; queries are const and thread-safe.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -30,8 +33,10 @@
 
 namespace pb {
 
+// Neighbours are ordered by (squared_distance_m2, index).
 struct Neighbor {
   uint32_t index = 0;              // point index in the positions given to Build
+  uint32_t slot = 0;               // where the point sits in the tree (KnnIndex::PositionAtSlot)
   double squared_distance_m2 = 0;  // squared Euclidean distance, square meters
 };
 
@@ -44,7 +49,7 @@ class KnnIndex {
   static Expected<KnnIndex> Build(std::span<const float> xyz);
 
   KnnIndex() = default;
-  size_t size() const { return entries_.size(); }
+  size_t size() const { return index_.size(); }
 
   // The min(k, size()) points nearest to `position` (x, y, z meters, same
   // frame as Build), nearest first, written to `out[0..count)`; returns the
@@ -58,19 +63,19 @@ class KnnIndex {
   // The point index stored at position `slot` (0..size()) of the tree. Points
   // close in slot order are close in space: batch queries that walk slots in
   // order reuse the cache.
-  uint32_t PointAtSlot(size_t slot) const { return entries_[slot].index; }
-  // Position of point `index` (as given to Build).
-  const float* PositionOf(uint32_t index) const { return &entries_[slot_of_[index]].x; }
+  uint32_t PointAtSlot(size_t slot) const { return index_[slot]; }
+  // Slot of point `index` (as given to Build).
+  uint32_t SlotOf(uint32_t index) const { return slot_of_[index]; }
+  // Position (x, y, z meters) of the point at `slot`.
+  std::array<float, 3> PositionAtSlot(size_t slot) const { return {x_[slot], y_[slot], z_[slot]}; }
 
  private:
-  struct Entry {
-    float x, y, z;
-    uint32_t index;
-  };
-  int Search(const float position[3], int k, int64_t exclude, std::span<Neighbor> out) const;
+  int Search(const float position[3], int k, int64_t exclude_slot, std::span<Neighbor> out) const;
 
-  std::vector<Entry> entries_;     // points in tree order
-  std::vector<uint32_t> slot_of_;  // point index -> slot in entries_
+  // Points in tree order, one array per coordinate.
+  std::vector<float> x_, y_, z_;
+  std::vector<uint32_t> index_;    // slot -> point index
+  std::vector<uint32_t> slot_of_;  // point index -> slot
   std::vector<float> split_;       // per implicit node: split coordinate
   std::vector<uint8_t> axis_;      // per implicit node: split axis 0..2
 };

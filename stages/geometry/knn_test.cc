@@ -7,6 +7,7 @@
 #include <tbb/global_control.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <random>
@@ -27,7 +28,8 @@ std::vector<Neighbor> BruteForce(const std::vector<float>& xyz, const float q[3]
     const double dx = static_cast<double>(xyz[3 * i]) - q[0];
     const double dy = static_cast<double>(xyz[3 * i + 1]) - q[1];
     const double dz = static_cast<double>(xyz[3 * i + 2]) - q[2];
-    all.push_back({static_cast<uint32_t>(i), dx * dx + dy * dy + dz * dz});
+    all.push_back({.index = static_cast<uint32_t>(i), 
+                   .squared_distance_m2 = dx * dx + dy * dy + dz * dz});
   }
   std::sort(all.begin(), all.end(), [](const Neighbor& a, const Neighbor& b) {
     return a.squared_distance_m2 < b.squared_distance_m2 ||
@@ -81,6 +83,27 @@ TEST(KnnTest, MatchesBruteForce) {
         ExpectSame(BruteForce(xyz, off, k, -1), out, index->Query(off, k, out));
       }
     }
+  }
+}
+
+// Slots: a permutation of the points; each neighbour's slot holds it.
+TEST(KnnTest, SlotsLocateThePoints) {
+  const size_t n = 500;
+  const std::vector<float> xyz = RandomCloud(n, 4);
+  auto index = KnnIndex::Build(xyz);
+  ASSERT_TRUE(index.ok());
+  std::vector<bool> seen(n, false);
+  std::vector<Neighbor> out(16);
+  for (size_t slot = 0; slot < n; ++slot) {
+    const uint32_t i = index->PointAtSlot(slot);
+    ASSERT_LT(i, n);
+    EXPECT_FALSE(seen[i]) << "point " << i << " in two slots";
+    seen[i] = true;
+    EXPECT_EQ(index->SlotOf(i), slot);
+    EXPECT_EQ(index->PositionAtSlot(slot), (std::array<float, 3>{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}));
+    const int count = index->QueryPoint(i, 16, out);
+    ASSERT_EQ(count, 16);
+    for (int j = 0; j < count; ++j) EXPECT_EQ(index->PointAtSlot(out[j].slot), out[j].index);
   }
 }
 

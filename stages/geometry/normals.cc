@@ -54,19 +54,21 @@ void EstimateUnoriented(const KnnIndex& index, int k, std::vector<float>& normal
       std::vector<Neighbor> neighbors(std::max(k, kPropagationNeighbors + 1));
       for (size_t slot = range.begin(); slot < range.end(); ++slot) {
         const uint32_t i = index.PointAtSlot(slot);
-        const float* p = index.PositionOf(i);
-        const int count = index.Query(p, k, neighbors);
+        const std::array<float, 3> p = index.PositionAtSlot(slot);
+        const int count = index.Query(p.data(), k, neighbors);
         // Covariance about the neighbourhood's mean, relative to p for
-        // precision far from the origin.
+        // precision far from the origin; the sums are double because a
+        // near-planar neighbourhood's smallest eigenvalue is ~1e-6 of the
+        // largest.
         double mean[3] = {0, 0, 0};
         for (int j = 0; j < count; ++j) {
-          const float* q = index.PositionOf(neighbors[j].index);
+          const std::array<float, 3> q = index.PositionAtSlot(neighbors[j].slot);
           for (int a = 0; a < 3; ++a) mean[a] += static_cast<double>(q[a]) - p[a];
         }
         for (double& m : mean) m /= count;
         double cov[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
         for (int j = 0; j < count; ++j) {
-          const float* q = index.PositionOf(neighbors[j].index);
+          const std::array<float, 3> q = index.PositionAtSlot(neighbors[j].slot);
           double d[3];
           for (int a = 0; a < 3; ++a) d[a] = static_cast<double>(q[a]) - p[a] - mean[a];
           for (int r = 0; r < 3; ++r) {

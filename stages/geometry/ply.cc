@@ -1,16 +1,21 @@
 #include "stages/geometry/ply.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <initializer_list>
 #include <limits>
+#include <optional>
 #include <span>
+#include <type_traits>
 #include <string_view>
 
 #include "stages/geometry/buffered_input.h"
+#include "stages/geometry/text_parse.h"
 
 namespace pb {
 namespace {
@@ -130,6 +135,61 @@ double Decode(const uint8_t* bytes, Scalar type, bool swap) {
   return 0;
 }
 
+// Column decoding for the binary vertex fast path: one property of `n`
+// fixed-size records (`stride` bytes apart) into every `dst_stride`-th slot of
+// `dst`. Values convert as in Decode (through double), so both paths agree
+// bit for bit.
+template <typename T>
+T ByteSwapped(T value) {
+  if constexpr (sizeof(T) == 1) {
+    return value;
+  } else {
+    using Bits = std::conditional_t<sizeof(T) == 2, uint16_t,
+                                    std::conditional_t<sizeof(T) == 4, uint32_t, uint64_t>>;
+    Bits bits = std::bit_cast<Bits>(value);
+    if constexpr (sizeof(T) == 2) bits = __builtin_bswap16(bits);
+    if constexpr (sizeof(T) == 4) bits = __builtin_bswap32(bits);
+    if constexpr (sizeof(T) == 8) bits = __builtin_bswap64(bits);
+    return std::bit_cast<T>(bits);
+  }
+}
+
+template <typename In, bool kSwap, typename Out>
+void DecodeColumnAs(const uint8_t* src, size_t stride, size_t n, Out* dst, size_t dst_stride) {
+  for (size_t j = 0; j < n; ++j) {
+    In value;
+    std::memcpy(&value, src + j * stride, sizeof(In));
+    if constexpr (kSwap) value = ByteSwapped(value);
+    if constexpr (std::is_same_v<In, Out>) {
+      dst[j * dst_stride] = value;
+    } else {
+      dst[j * dst_stride] = static_cast<Out>(static_cast<double>(value));
+    }
+  }
+}
+
+template <typename Out>
+void DecodeColumn(Scalar type, bool swap, const uint8_t* src, size_t stride, size_t n, Out* dst,
+                  size_t dst_stride) {
+  auto run = [&]<typename In>() {
+    if (swap) {
+      DecodeColumnAs<In, true>(src, stride, n, dst, dst_stride);
+    } else {
+      DecodeColumnAs<In, false>(src, stride, n, dst, dst_stride);
+    }
+  };
+  switch (type) {
+    case Scalar::kInt8: return run.template operator()<int8_t>();
+    case Scalar::kUint8: return run.template operator()<uint8_t>();
+    case Scalar::kInt16: return run.template operator()<int16_t>();
+    case Scalar::kUint16: return run.template operator()<uint16_t>();
+    case Scalar::kInt32: return run.template operator()<int32_t>();
+    case Scalar::kUint32: return run.template operator()<uint32_t>();
+    case Scalar::kFloat32: return run.template operator()<float>();
+    case Scalar::kFloat64: return run.template operator()<double>();
+  }
+}
+
 uint8_t ColorToByte(double value, Scalar type) {
   double scaled = value;
   if (type == Scalar::kUint16) {
@@ -140,35 +200,6 @@ uint8_t ColorToByte(double value, Scalar type) {
   if (!(scaled > 0)) return 0;  // also NaN
   if (scaled >= 255) return 255;
   return static_cast<uint8_t>(std::lround(scaled));
-}
-
-std::string FormatDouble(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
-}
-
-std::vector<std::string_view> SplitWords(std::string_view line) {
-  std::vector<std::string_view> words;
-  size_t i = 0;
-  while (i < line.size()) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    const size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-    if (i > start) words.push_back(line.substr(start, i - start));
-  }
-  return words;
-}
-
-bool ParseDouble(std::string_view text, double* value) {
-  if (!text.empty() && text[0] == '+') text.remove_prefix(1);
-  const auto result = std::from_chars(text.data(), text.data() + text.size(), *value);
-  return result.ec == std::errc() && result.ptr == text.data() + text.size();
-}
-
-bool ParseCount(std::string_view text, uint64_t* value) {
-  const auto result = std::from_chars(text.data(), text.data() + text.size(), *value);
-  return result.ec == std::errc() && result.ptr == text.data() + text.size();
 }
 
 // ---------------------------------------------------------------------------
@@ -275,11 +306,9 @@ class PlyParser {
           }
         } else if (keyword == "comment" && words.size() >= 2 && words[1] == "station") {
           // "comment station I X Y Z": scanner position I, absolute meters.
-          size_t index = 0;
+          uint64_t index = 0;
           std::array<double, 3> position{};
-          bool parsed = words.size() == 6 &&
-                        std::from_chars(words[2].data(), words[2].data() + words[2].size(), index)
-                                .ec == std::errc() &&
+          bool parsed = words.size() == 6 && ParseUint(words[2], &index) &&
                         index == stations_.size() && index < 65535;
           for (int axis = 0; parsed && axis < 3; ++axis)
             parsed = ParseDouble(words[3 + axis], &position[axis]) && std::isfinite(position[axis]);
@@ -304,7 +333,7 @@ class PlyParser {
         report_.comments.push_back(std::move(text));
       } else if (keyword == "element") {
         Element element;
-        if (words.size() != 3 || !ParseCount(words[2], &element.count)) {
+        if (words.size() != 3 || !ParseUint(words[2], &element.count)) {
           return HeaderError(line_number, "expected 'element <name> <count>', got '" + line + "'");
         }
         element.name = std::string(words[1]);
@@ -469,6 +498,7 @@ class PlyParser {
 
   Status ReadBinaryElement(const Element& element) {
     const Kind kind = KindOf(element);
+    if (kind == Kind::kVertex && element.fixed_size) return ReadFixedBinaryVertices(element);
     if (kind == Kind::kOther && element.fixed_size) {
       const uint64_t start = in_.offset();
       const uint64_t want = element.count * element.record_bytes;
@@ -528,19 +558,203 @@ class PlyParser {
     return Status::Ok();
   }
 
+  // Records per fast-path block: their bytes and the decoded columns fit in a
+  // typical 32-48 KiB L1 data cache for the usual 12-40 byte records.
+  static constexpr size_t kFastBlockBytes = 16 * 1024;
+
+  // The fast path for the usual binary vertex element (no list properties):
+  // blocks of records are decoded column by column, each column by a loop
+  // specialized for its type and byte order, into block-sized arrays that
+  // stay in cache; the points kept are then appended to the output arrays
+  // (reserved in PrepareElements, so they grow without reallocating and
+  // without zero-filling). Errors, NaN handling and recentering are those of
+  // the generic path (AddVertex), record for record.
+  Status ReadFixedBinaryVertices(const Element& element) {
+    const size_t record_bytes = element.record_bytes;
+    // The last property of a role wins, as values_[role] does in the generic path.
+    const Property* field[kRoleCount] = {};
+    for (const Property& property : element.properties) field[property.role] = &property;
+
+    const size_t block_records =
+        std::max<size_t>(1, std::min<size_t>(4096, kFastBlockBytes / record_bytes));
+    // One block of decoded values per output array.
+    struct FloatArray {
+      std::vector<float>* out;
+      size_t width;
+      std::vector<float> block;
+      // Set when all components are native-order float32 stored side by side
+      // in the record (e.g. x y z as pointbake writes them): one memcpy each.
+      std::optional<size_t> packed_offset;
+    };
+    struct FloatColumn {
+      const Property* property;
+      size_t array, component;
+    };
+    std::vector<FloatArray> arrays;
+    std::vector<FloatColumn> columns;  // for the arrays that are not packed
+    auto add_array = [&](std::vector<float>* out, std::initializer_list<Role> roles) {
+      FloatArray array{out, roles.size(), std::vector<float>(roles.size() * block_records), {}};
+      bool packed = !swap_;
+      size_t component = 0;
+      for (Role role : roles) {
+        packed = packed && field[role]->type == Scalar::kFloat32 &&
+                 field[role]->offset == field[*roles.begin()]->offset + 4 * component;
+        ++component;
+      }
+      if (packed) array.packed_offset = field[*roles.begin()]->offset;
+      component = 0;
+      for (Role role : roles) {
+        if (!packed) columns.push_back({field[role], arrays.size(), component});
+        ++component;
+      }
+      arrays.push_back(std::move(array));
+    };
+    if (!recenter_) add_array(&mesh_.positions, {kX, kY, kZ});  // positions are arrays[0]
+    if (has_normals_) add_array(&mesh_.normals, {kNx, kNy, kNz});
+    if (has_uvs_) add_array(&mesh_.uvs, {kU, kV});
+    if (has_tangents_) add_array(&mesh_.tangents, {kTx, kTy, kTz, kTw});
+    if (has_intensities_) add_array(&intensities_, {kIntensity});
+    std::vector<double> xyz(recenter_ ? 3 * block_records : 0);
+    std::vector<float> recentered(recenter_ ? 3 * block_records : 0);
+    std::vector<uint8_t> colors(has_colors_ ? 3 * block_records : 0);
+    std::vector<double> stations(has_stations_ ? block_records : 0);
+    std::vector<uint16_t> station_ids(has_stations_ ? block_records : 0);
+    std::vector<double> scratch(block_records);
+    const double station_limit = static_cast<double>(stations_.size());
+
+    std::vector<uint8_t> records(block_records * record_bytes);
+    for (uint64_t first = 0; first < element.count;) {
+      const size_t want =
+          static_cast<size_t>(std::min<uint64_t>(block_records, element.count - first));
+      const uint64_t block_start = in_.offset();
+      const size_t n = in_.ReadUpTo(records.data(), want * record_bytes) / record_bytes;
+      for (FloatArray& array : arrays) {
+        if (!array.packed_offset) continue;
+        const uint8_t* source = records.data() + *array.packed_offset;
+        float* destination = array.block.data();
+        // A constant size lets the compiler inline each memcpy as one move.
+        auto copy = [&]<size_t kWidth>() {
+          for (size_t j = 0; j < n; ++j) {
+            std::memcpy(destination + kWidth * j, source + record_bytes * j, 4 * kWidth);
+          }
+        };
+        switch (array.width) {
+          case 1: copy.template operator()<1>(); break;
+          case 2: copy.template operator()<2>(); break;
+          case 3: copy.template operator()<3>(); break;
+          default: copy.template operator()<4>(); break;  // tangents
+        }
+      }
+      for (const FloatColumn& column : columns) {
+        FloatArray& array = arrays[column.array];
+        DecodeColumn(column.property->type, swap_, records.data() + column.property->offset,
+                     record_bytes, n, array.block.data() + column.component, array.width);
+      }
+      if (recenter_) {
+        for (Role role : {kX, kY, kZ}) {
+          DecodeColumn(field[role]->type, swap_, records.data() + field[role]->offset,
+                       record_bytes, n, xyz.data() + (role - kX), 3);
+        }
+      }
+      if (has_colors_) {
+        for (int channel = 0; channel < 3; ++channel) {
+          const Property& property = *field[kRed + channel];
+          const uint8_t* source = records.data() + property.offset;
+          if (property.type == Scalar::kUint8) {
+            DecodeColumn(property.type, swap_, source, record_bytes, n, colors.data() + channel, 3);
+          } else {
+            DecodeColumn(property.type, swap_, source, record_bytes, n, scratch.data(), 1);
+            for (size_t j = 0; j < n; ++j) {
+              colors[3 * j + channel] = ColorToByte(scratch[j], property.type);
+            }
+          }
+        }
+      }
+      if (has_stations_) {
+        DecodeColumn(field[kStation]->type, swap_, records.data() + field[kStation]->offset,
+                     record_bytes, n, stations.data(), 1);
+      }
+
+      // Check the records in order. The leading run of good records needs no
+      // moving; after the first bad one, record j moves to slot kept < j.
+      size_t kept = 0;
+      if (!recenter_) {
+        const float* positions = arrays[0].block.data();
+        for (; kept < n; ++kept) {
+          const float* p = positions + 3 * kept;
+          if (!(std::isfinite(p[0]) && std::isfinite(p[1]) && std::isfinite(p[2]))) break;
+        }
+      }
+      if (has_stations_) {
+        size_t good = 0;
+        for (; good < kept; ++good) {
+          if (!(stations[good] >= 0 && stations[good] < station_limit)) break;
+          station_ids[good] = static_cast<uint16_t>(stations[good]);
+        }
+        kept = good;
+      }
+      if (!remap_.empty()) {
+        const uint32_t base = static_cast<uint32_t>(Count(mesh_.positions));
+        for (size_t j = 0; j < kept; ++j) remap_[first + j] = base + static_cast<uint32_t>(j);
+      }
+      for (size_t j = kept; j < n; ++j) {
+        const uint64_t index = first + j;
+        double position[3];
+        for (int axis = 0; axis < 3; ++axis) {
+          position[axis] = recenter_ ? xyz[3 * j + axis] : arrays[0].block[3 * j + axis];
+        }
+        if (!(std::isfinite(position[0]) && std::isfinite(position[1]) &&
+              std::isfinite(position[2]))) {
+          PB_RETURN_IF_ERROR(DropInvalidVertex(index, block_start + j * record_bytes, position));
+          continue;
+        }
+        if (has_stations_) {
+          if (!(stations[j] >= 0 && stations[j] < station_limit)) {
+            return StationError(index, block_start + j * record_bytes, stations[j]);
+          }
+          station_ids[kept] = static_cast<uint16_t>(stations[j]);
+        }
+        if (!remap_.empty()) {
+          remap_[index] = static_cast<uint32_t>(Count(mesh_.positions) + kept);
+        }
+        if (recenter_) std::copy_n(&xyz[3 * j], 3, &xyz[3 * kept]);
+        if (has_colors_) std::copy_n(&colors[3 * j], 3, &colors[3 * kept]);
+        for (FloatArray& array : arrays) {
+          std::copy_n(&array.block[array.width * j], array.width, &array.block[array.width * kept]);
+        }
+        ++kept;
+      }
+
+      if (recenter_) {
+        for (size_t j = 0; j < kept; ++j) StoreRecentered(&xyz[3 * j], &recentered[3 * j]);
+        mesh_.positions.insert(mesh_.positions.end(), recentered.begin(),
+                               recentered.begin() + 3 * kept);
+      }
+      for (FloatArray& array : arrays) {
+        array.out->insert(array.out->end(), array.block.begin(),
+                          array.block.begin() + array.width * kept);
+      }
+      if (has_colors_) {
+        mesh_.colors.insert(mesh_.colors.end(), colors.begin(), colors.begin() + 3 * kept);
+      }
+      if (has_stations_) {
+        station_ids_.insert(station_ids_.end(), station_ids.begin(), station_ids.begin() + kept);
+      }
+      first += n;
+      if (n < want) return Truncated(element, first, block_start + n * record_bytes);
+    }
+    return Status::Ok();
+  }
+
+  static size_t Count(const std::vector<float>& positions) { return positions.size() / 3; }
+
   // Next whitespace-separated token of the ascii body; false at end of file.
   bool NextToken(std::string_view* token) {
     while (true) {
-      while (token_pos_ < line_.size() &&
-             (line_[token_pos_] == ' ' || line_[token_pos_] == '\t' || line_[token_pos_] == '\r')) {
-        ++token_pos_;
-      }
+      while (token_pos_ < line_.size() && IsBlankChar(line_[token_pos_])) ++token_pos_;
       if (token_pos_ < line_.size()) {
         const size_t start = token_pos_;
-        while (token_pos_ < line_.size() && line_[token_pos_] != ' ' && line_[token_pos_] != '\t' &&
-               line_[token_pos_] != '\r') {
-          ++token_pos_;
-        }
+        while (token_pos_ < line_.size() && !IsBlankChar(line_[token_pos_])) ++token_pos_;
         *token = std::string_view(line_).substr(start, token_pos_ - start);
         return true;
       }
@@ -637,39 +851,63 @@ class PlyParser {
     return Status::Ok();
   }
 
+  // A vertex with a non-finite coordinate: the error, or (drop_invalid_points)
+  // counted and, for meshes, remembered so that faces can be remapped.
+  Status DropInvalidVertex(uint64_t index, uint64_t place, const double position[3]) {
+    if (!options_.drop_invalid_points) {
+      return BodyError(place, "vertex " + std::to_string(index) + " has a non-finite coordinate (" +
+                                  FormatDouble(position[0]) + " " + FormatDouble(position[1]) +
+                                  " " + FormatDouble(position[2]) +
+                                  "); drop such points with drop_invalid_points");
+    }
+    if (remap_.empty() && keep_faces_ && has_face_indices_) {
+      remap_.resize(vertex_count_, kDropped);
+      for (uint64_t k = 0; k < index; ++k) remap_[k] = static_cast<uint32_t>(k);
+    }
+    ++report_.dropped_points;
+    return Status::Ok();
+  }
+
+  Status StationError(uint64_t index, uint64_t place, double station) const {
+    return BodyError(place, "vertex " + std::to_string(index) + " names station " +
+                                FormatDouble(station) + " but the header lists " +
+                                std::to_string(stations_.size()));
+  }
+
+  // Non-float32 coordinates may be georeferenced: store them relative to a
+  // provisional origin (the first point, rounded to 1 m) and move to the
+  // bounding-box center in Finish().
+  void StoreRecentered(double position[3], float* out) {
+    for (int axis = 0; axis < 3; ++axis) position[axis] += origin_[axis];
+    if (!have_provisional_origin_) {
+      for (int axis = 0; axis < 3; ++axis) provisional_origin_[axis] = std::round(position[axis]);
+      have_provisional_origin_ = true;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      out[axis] = static_cast<float>(position[axis] - provisional_origin_[axis]);
+    }
+  }
+
+  // The generic path: one vertex from values_.
   Status AddVertex(uint64_t index, uint64_t place) {
     double position[3] = {values_[kX], values_[kY], values_[kZ]};
     const bool finite =
         std::isfinite(position[0]) && std::isfinite(position[1]) && std::isfinite(position[2]);
-    if (!finite) {
-      if (!options_.drop_invalid_points) {
-        return BodyError(place, "vertex " + std::to_string(index) + " has a non-finite coordinate (" +
-                                    FormatDouble(position[0]) + " " + FormatDouble(position[1]) +
-                                    " " + FormatDouble(position[2]) +
-                                    "); drop such points with drop_invalid_points");
-      }
-      if (remap_.empty() && keep_faces_ && has_face_indices_) {
-        remap_.resize(vertex_count_, kDropped);
-        for (uint64_t k = 0; k < index; ++k) remap_[k] = static_cast<uint32_t>(k);
-      }
-      ++report_.dropped_points;
-      return Status::Ok();
+    if (!finite) return DropInvalidVertex(index, place, position);
+    if (has_stations_) {
+      const double station = values_[kStation];
+      if (!(station >= 0 && station < static_cast<double>(stations_.size())))
+        return StationError(index, place, station);
     }
     if (!remap_.empty()) remap_[index] = static_cast<uint32_t>(mesh_.positions.size() / 3);
     if (recenter_) {
-      // Non-float32 coordinates may be georeferenced: store them relative to a
-      // provisional origin (the first point, rounded to 1 m) and move to the
-      // bounding-box center in Finish().
-      for (int axis = 0; axis < 3; ++axis) position[axis] += origin_[axis];
-      if (!have_provisional_origin_) {
-        for (int axis = 0; axis < 3; ++axis) provisional_origin_[axis] = std::round(position[axis]);
-        have_provisional_origin_ = true;
-      }
-      for (int axis = 0; axis < 3; ++axis) {
-        mesh_.positions.push_back(static_cast<float>(position[axis] - provisional_origin_[axis]));
-      }
+      float stored[3];
+      StoreRecentered(position, stored);
+      mesh_.positions.insert(mesh_.positions.end(), stored, stored + 3);
     } else {
-      for (int axis = 0; axis < 3; ++axis) mesh_.positions.push_back(static_cast<float>(position[axis]));
+      for (int axis = 0; axis < 3; ++axis) {
+        mesh_.positions.push_back(static_cast<float>(position[axis]));
+      }
     }
     if (has_normals_) {
       for (Role role : {kNx, kNy, kNz}) mesh_.normals.push_back(static_cast<float>(values_[role]));
@@ -684,20 +922,14 @@ class PlyParser {
       mesh_.uvs.push_back(static_cast<float>(values_[kV]));
     }
     if (has_tangents_) {
-      for (Role role : {kTx, kTy, kTz, kTw}) mesh_.tangents.push_back(static_cast<float>(values_[role]));
+      for (Role role : {kTx, kTy, kTz, kTw}) {
+        mesh_.tangents.push_back(static_cast<float>(values_[role]));
+      }
     }
     if (has_intensities_) intensities_.push_back(static_cast<float>(values_[kIntensity]));
-    if (has_stations_) {
-      const double station = values_[kStation];
-      if (!(station >= 0 && station < static_cast<double>(stations_.size())))
-        return BodyError(place, "vertex " + std::to_string(index) + " names station " +
-                                    FormatDouble(station) + " but the header lists " +
-                                    std::to_string(stations_.size()));
-      station_ids_.push_back(static_cast<uint16_t>(station));
-    }
+    if (has_stations_) station_ids_.push_back(static_cast<uint16_t>(values_[kStation]));
     return Status::Ok();
   }
-
 
   Status AddFace(uint64_t index, uint64_t place) {
     if (face_.size() < 3) {

@@ -2,38 +2,17 @@
 
 #include <algorithm>
 #include <array>
-#include <charconv>
 #include <cmath>
 #include <string_view>
 
 #include "stages/geometry/buffered_input.h"
+#include "stages/geometry/text_parse.h"
 
 namespace pb {
 namespace {
 
 bool IsBlank(std::string_view line) {
   return line.find_first_not_of(" \t\r\f\v") == std::string_view::npos;
-}
-
-// Splits on blanks into at most `max_words` words; returns the word count, or
-// max_words + 1 if there are more.
-size_t SplitWords(std::string_view line, std::string_view* words, size_t max_words) {
-  size_t count = 0;
-  size_t i = 0;
-  while (true) {
-    while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-    if (i == line.size()) return count;
-    const size_t start = i;
-    while (i < line.size() && line[i] != ' ' && line[i] != '\t' && line[i] != '\r') ++i;
-    if (count == max_words) return max_words + 1;
-    words[count++] = line.substr(start, i - start);
-  }
-}
-
-bool ParseDouble(std::string_view text, double* value) {
-  if (!text.empty() && text[0] == '+') text.remove_prefix(1);
-  const auto result = std::from_chars(text.data(), text.data() + text.size(), *value);
-  return result.ec == std::errc() && result.ptr == text.data() + text.size();
 }
 
 std::string Quote(std::string_view text) {
@@ -153,12 +132,7 @@ class PtxParser {
   Status ParseGridSide(std::string_view line, const char* what, uint64_t* value) {
     std::string_view words[1];
     bool ok = SplitWords(line, words, 1) == 1;
-    if (ok) {
-      const auto result =
-          std::from_chars(words[0].data(), words[0].data() + words[0].size(), *value);
-      ok = result.ec == std::errc() && result.ptr == words[0].data() + words[0].size() &&
-           *value > 0 && *value <= kMaxGridSide;
-    }
+    ok = ok && ParseUint(words[0], value) && *value > 0 && *value <= kMaxGridSide;
     if (!ok) {
       return Status::Invalid(Where() + ": expected the " + what +
                              " count (a positive integer), found " + Quote(line));

@@ -5,9 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cctype>
-#include <charconv>
 #include <cmath>
-#include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -16,6 +14,7 @@
 #include <vector>
 
 #include "stages/geometry/buffered_input.h"
+#include "stages/geometry/text_parse.h"
 
 namespace pb {
 namespace {
@@ -45,8 +44,7 @@ constexpr DefaultColumns kDefaults[] = {
     {9, "x y z r g b nx ny nz"},
 };
 
-bool IsSeparator(char c) { return c == ' ' || c == '\t' || c == '\r' || c == ','; }
-bool IsBlank(char c) { return c == ' ' || c == '\t' || c == '\r'; }
+bool IsSeparator(char c) { return IsBlankChar(c) || c == ','; }
 
 // Splits on whitespace, or on commas with optional whitespace around them.
 // False (with *empty_field set to the 1-based column) for "1,,2" or a leading
@@ -57,7 +55,7 @@ bool SplitValues(std::string_view line, std::vector<std::string_view>* values,
   size_t i = 0;
   bool after_comma = false;
   while (true) {
-    while (i < line.size() && IsBlank(line[i])) ++i;
+    while (i < line.size() && IsBlankChar(line[i])) ++i;
     if (i == line.size()) {
       if (after_comma) {
         *empty_field = values->size() + 1;
@@ -72,22 +70,10 @@ bool SplitValues(std::string_view line, std::vector<std::string_view>* values,
     const size_t start = i;
     while (i < line.size() && !IsSeparator(line[i])) ++i;
     values->push_back(line.substr(start, i - start));
-    while (i < line.size() && IsBlank(line[i])) ++i;
+    while (i < line.size() && IsBlankChar(line[i])) ++i;
     after_comma = i < line.size() && line[i] == ',';
     if (after_comma) ++i;
   }
-}
-
-bool ParseDouble(std::string_view text, double* value) {
-  if (!text.empty() && text[0] == '+') text.remove_prefix(1);
-  const auto result = std::from_chars(text.data(), text.data() + text.size(), *value);
-  return result.ec == std::errc() && result.ptr == text.data() + text.size();
-}
-
-std::string FormatDouble(double value) {
-  char buffer[32];
-  std::snprintf(buffer, sizeof buffer, "%.17g", value);
-  return buffer;
 }
 
 std::string Lowercase(std::string text) {
@@ -219,11 +205,7 @@ class XyzReader {
   Status StartPtsBlock(const std::vector<std::string_view>& values) {
     uint64_t count = 0;
     bool single_integer = values.size() == 1;
-    if (single_integer) {
-      const std::string_view text = values[0];
-      const auto parsed = std::from_chars(text.data(), text.data() + text.size(), count);
-      single_integer = parsed.ec == std::errc() && parsed.ptr == text.data() + text.size();
-    }
+    if (single_integer) single_integer = ParseUint(values[0], &count);
     if (!single_integer) {
       if (blocks_ == 0) {
         return LineError("expected the point count (a single integer) at the start of a PTS "

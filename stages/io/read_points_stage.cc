@@ -14,6 +14,7 @@
 #include "stages/geometry/xyz.h"
 #include "stages/io/io_stages.h"
 #include "stages/params.h"
+#include "stages/points/points_io.h"
 
 namespace pb {
 namespace {
@@ -163,18 +164,16 @@ Status Run(StageContext& ctx) {
     std::fprintf(stderr, "warning: %s: dropped %llu invalid points\n", path.c_str(),
                  static_cast<unsigned long long>(outcome.dropped_points));
 
-  {
-    PB_PHASE(ctx, "write");
-    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), points));
-  }
-  ctx.set_output_meta("points", {{"origin", points.origin},
-                                 {"points", points.size()},
-                                 {"has_normals", points.has_normals()},
-                                 {"has_colors", points.has_colors()},
-                                 {"has_intensities", points.has_intensities()},
-                                 {"stations", points.stations.size()},
-                                 {"source_format", outcome.format.empty() ? std::string(format->name)
-                                                                          : outcome.format}});
+  PB_RETURN_IF_ERROR(WriteOutputPoints(
+      ctx, points,
+      {{"origin", points.origin},
+       {"points", points.size()},
+       {"has_normals", points.has_normals()},
+       {"has_colors", points.has_colors()},
+       {"has_intensities", points.has_intensities()},
+       {"stations", points.stations.size()},
+       {"source_format", outcome.format.empty() ? std::string(format->name) : outcome.format}},
+      "write"));
   ctx.counter("points", static_cast<double>(points.size()));
   ctx.counter("dropped_points", static_cast<double>(outcome.dropped_points));
   ctx.counter("warnings", static_cast<double>(outcome.warnings.size()));

@@ -1,7 +1,7 @@
 // points.downsample: voxel-grid downsampling (stages/geometry/voxel_downsample.h).
-#include "stages/geometry/ply.h"
 #include "stages/geometry/voxel_downsample.h"
 #include "stages/params.h"
+#include "stages/points/points_io.h"
 #include "stages/points/points_stages.h"
 
 namespace pb {
@@ -24,15 +24,8 @@ constexpr const char* kSchema = R"({
 
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const double voxel_m, NumberParam(ctx, kId, "voxel", 0.01));
-  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
-  PointCloud input;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions options;
-    options.progress = [&ctx](double fraction) { ctx.progress(0.4 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(input_path, options));
-    input = std::move(ply.points);
-  }
+  PB_ASSIGN_OR_RETURN(const InputPoints in, ReadInputPoints(ctx, kId, 0.4));
+  const PointCloud& input = in.cloud;
   PointCloud output;
   {
     PB_PHASE(ctx, "compute");
@@ -43,15 +36,12 @@ Status Run(StageContext& ctx) {
   ctx.counter("points_in", static_cast<double>(input.size()));
   ctx.counter("points_out", static_cast<double>(output.size()));
   ctx.progress(0.8);
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), output));
-  }
-  ctx.set_output_meta("points", {{"origin", output.origin},
-                                 {"points", output.size()},
-                                 {"has_normals", output.has_normals()},
-                                 {"has_colors", output.has_colors()},
-                                 {"voxel_m", voxel_m}});
+  PB_RETURN_IF_ERROR(WriteOutputPoints(ctx, output,
+                                       {{"origin", output.origin},
+                                        {"points", output.size()},
+                                        {"has_normals", output.has_normals()},
+                                        {"has_colors", output.has_colors()},
+                                        {"voxel_m", voxel_m}}));
   ctx.progress(1.0);
   return Status::Ok();
 }

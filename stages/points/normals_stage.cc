@@ -1,10 +1,9 @@
 // points.normals: k-NN PCA normals with orientation (stages/geometry/normals.h).
-#include <cmath>
 #include <string>
 
 #include "stages/geometry/normals.h"
-#include "stages/geometry/ply.h"
 #include "stages/params.h"
+#include "stages/points/points_io.h"
 #include "stages/points/points_stages.h"
 
 namespace pb {
@@ -52,22 +51,11 @@ const char* OrientationName(NormalOrientation orientation) {
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const double k, NumberParam(ctx, kId, "k", 16));
-  if (k != std::floor(k) || k < 3 || k > 100) {
-    return Status::Invalid(std::string(kId) + ": parameter 'k' must be an integer in 3..100, got " +
-                           std::to_string(k));
-  }
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 16, 3, 100));
   PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation", "auto"));
   PB_ASSIGN_OR_RETURN(const NormalOrientation orientation, ParseOrientation(orientation_name));
-  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
-  PointCloud cloud;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions options;
-    options.progress = [&ctx](double fraction) { ctx.progress(0.3 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(input_path, options));
-    cloud = std::move(ply.points);
-  }
+  PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.3));
+  PointCloud& cloud = input.cloud;
   NormalReport report;
   {
     PB_PHASE(ctx, "compute");
@@ -76,20 +64,16 @@ Status Run(StageContext& ctx) {
     options.orientation = orientation;
     options.threads = ctx.threads();
     options.progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); };
-    PB_RETURN_IF_ERROR(EstimateNormals(cloud, options, &report).WithContext(input_path));
+    PB_RETURN_IF_ERROR(EstimateNormals(cloud, options, &report).WithContext(input.path));
   }
   ctx.counter("points", static_cast<double>(report.points));
   ctx.counter("flipped", static_cast<double>(report.flipped));
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), cloud));
-  }
-  nlohmann::json meta = ctx.input("points").meta;
-  meta["points"] = cloud.size();
-  meta["has_normals"] = true;
-  meta["normals_k"] = static_cast<int>(k);
-  meta["normals_orientation"] = OrientationName(report.orientation_used);
-  ctx.set_output_meta("points", std::move(meta));
+  const nlohmann::json meta =
+      InputPointsMetaWith(ctx, {{"points", cloud.size()},
+                                {"has_normals", true},
+                                {"normals_k", static_cast<int>(k)},
+                                {"normals_orientation", OrientationName(report.orientation_used)}});
+  PB_RETURN_IF_ERROR(WriteOutputPoints(ctx, cloud, meta));
   ctx.progress(1.0);
   return Status::Ok();
 }

@@ -1,10 +1,7 @@
 // points.outliers: statistical outlier removal (stages/geometry/outliers.h).
-#include <cmath>
-#include <string>
-
 #include "stages/geometry/outliers.h"
-#include "stages/geometry/ply.h"
 #include "stages/params.h"
+#include "stages/points/points_io.h"
 #include "stages/points/points_stages.h"
 
 namespace pb {
@@ -33,21 +30,10 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const double k, NumberParam(ctx, kId, "k", 16));
-  if (k != std::floor(k) || k < 1 || k > 1000) {
-    return Status::Invalid(std::string(kId) + ": parameter 'k' must be an integer in 1..1000, got " +
-                           std::to_string(k));
-  }
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 16, 1, 1000));
   PB_ASSIGN_OR_RETURN(const double std_ratio, NumberParam(ctx, kId, "std_ratio", 2.0));
-  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
-  PointCloud input;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions options;
-    options.progress = [&ctx](double fraction) { ctx.progress(0.3 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(input_path, options));
-    input = std::move(ply.points);
-  }
+  PB_ASSIGN_OR_RETURN(const InputPoints in, ReadInputPoints(ctx, kId, 0.3));
+  const PointCloud& input = in.cloud;
   PointCloud output;
   OutlierReport report;
   {
@@ -62,15 +48,11 @@ Status Run(StageContext& ctx) {
   ctx.counter("points_in", static_cast<double>(report.points_in));
   ctx.counter("points_out", static_cast<double>(report.points_out));
   ctx.counter("removed", static_cast<double>(report.removed));
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), output));
-  }
-  nlohmann::json meta = ctx.input("points").meta;
-  meta["points"] = output.size();
-  meta["outliers_removed"] = report.removed;
-  meta["outliers_threshold_m"] = report.threshold_m;
-  ctx.set_output_meta("points", std::move(meta));
+  const nlohmann::json meta =
+      InputPointsMetaWith(ctx, {{"points", output.size()},
+                                {"outliers_removed", report.removed},
+                                {"outliers_threshold_m", report.threshold_m}});
+  PB_RETURN_IF_ERROR(WriteOutputPoints(ctx, output, meta));
   ctx.progress(1.0);
   return Status::Ok();
 }

@@ -2,7 +2,6 @@
 // child processes): files go to a temporary directory.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <unistd.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -16,89 +15,12 @@
 #include "stages/geometry/table.h"
 #include "stages/io/io_stages.h"
 #include "stages/points/points_stages.h"
+#include "stages/stage_test_util.h"
 
 namespace pb {
 namespace {
 
 using ::testing::HasSubstr;
-
-class FakeRegistry : public StageRegistry {
- public:
-  Status Register(StageType type) override {
-    if (types_.count(type.id)) return Status::Invalid("duplicate " + type.id);
-    const std::string id = type.id;
-    types_.emplace(id, std::move(type));
-    return Status::Ok();
-  }
-  const StageType* Find(std::string_view id) const override {
-    auto it = types_.find(std::string(id));
-    return it == types_.end() ? nullptr : &it->second;
-  }
-  std::vector<const StageType*> All() const override {
-    std::vector<const StageType*> all;
-    for (const auto& [id, type] : types_) all.push_back(&type);
-    return all;
-  }
-
- private:
-  std::map<std::string, StageType> types_;
-};
-
-class FakeContext : public StageContext {
- public:
-  FakeContext(std::filesystem::path dir, nlohmann::json params)
-      : dir_(std::move(dir)), params_(std::move(params)) {}
-
-  void AddInput(const std::string& port, const std::string& type, const std::string& file,
-                nlohmann::json meta = nlohmann::json::object()) {
-    ArtifactView view;
-    view.type = type;
-    view.meta = std::move(meta);
-    view.files[std::filesystem::path(file).filename().string()] = file;
-    inputs_[port] = view;
-  }
-
-  const nlohmann::json& params() const override { return params_; }
-  bool has_input(std::string_view port) const override { return inputs_.count(std::string(port)) > 0; }
-  const ArtifactView& input(std::string_view port) const override { return inputs_.at(std::string(port)); }
-  std::string output_path(std::string_view port, std::string_view file_name) override {
-    const std::filesystem::path dir = dir_ / "out" / std::string(port);
-    std::filesystem::create_directories(dir);
-    outputs_[std::string(port)] = (dir / std::string(file_name)).string();
-    return outputs_[std::string(port)];
-  }
-  void set_output_meta(std::string_view port, nlohmann::json meta) override {
-    meta_[std::string(port)] = std::move(meta);
-  }
-  void progress(double fraction) override {
-    EXPECT_GE(fraction, last_progress_);
-    EXPECT_LE(fraction, 1.0);
-    last_progress_ = fraction;
-  }
-  void counter(std::string_view name, double value) override { counters_[std::string(name)] = value; }
-  void begin_phase(std::string_view name) override {
-    open_phases_.push_back(std::string(name));
-    phases_.insert(std::string(name));
-  }
-  void end_phase(std::string_view name) override {
-    ASSERT_FALSE(open_phases_.empty());
-    EXPECT_EQ(open_phases_.back(), name);
-    open_phases_.pop_back();
-  }
-  int threads() const override { return 1; }
-
-  std::map<std::string, std::string> outputs_;
-  std::map<std::string, nlohmann::json> meta_;
-  std::map<std::string, double> counters_;
-  std::set<std::string> phases_;
-  std::vector<std::string> open_phases_;
-  double last_progress_ = 0;
-
- private:
-  std::filesystem::path dir_;
-  nlohmann::json params_;
-  std::map<std::string, ArtifactView> inputs_;
-};
 
 std::string SharedData() {
   const char* source = std::getenv("PB_SOURCE_DIR");
@@ -110,27 +32,12 @@ std::string SharedData() {
   return "";
 }
 
-class PointsStagesTest : public ::testing::Test {
+class PointsStagesTest : public StageTest {
  protected:
   void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("pb_stages_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::create_directories(dir_);
+    StageTest::SetUp();
     RegisterBuiltinStages(registry_);
   }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  Status Run(const std::string& id, FakeContext& ctx) {
-    const StageType* type = registry_.Find(id);
-    if (!type) return Status::NotFound(id);
-    const Status status = type->run(ctx);
-    EXPECT_TRUE(ctx.open_phases_.empty());
-    return status;
-  }
-
-  std::filesystem::path dir_;
-  FakeRegistry registry_;
 };
 
 TEST_F(PointsStagesTest, RegistersWellFormedTypes) {

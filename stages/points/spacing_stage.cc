@@ -1,11 +1,8 @@
 // points.spacing: median nearest-neighbour distance (stages/geometry/spacing.h),
 // recorded in the artifact's meta for later stages' thresholds.
-#include <cmath>
-#include <string>
-
-#include "stages/geometry/ply.h"
 #include "stages/geometry/spacing.h"
 #include "stages/params.h"
+#include "stages/points/points_io.h"
 #include "stages/points/points_stages.h"
 
 namespace pb {
@@ -27,20 +24,9 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const double sample, NumberParam(ctx, kId, "sample", 100000));
-  if (sample != std::floor(sample) || sample < 0) {
-    return Status::Invalid(std::string(kId) + ": parameter 'sample' must be an integer >= 0, got " +
-                           std::to_string(sample));
-  }
-  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
-  PointCloud cloud;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions options;
-    options.progress = [&ctx](double fraction) { ctx.progress(0.4 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(input_path, options));
-    cloud = std::move(ply.points);
-  }
+  PB_ASSIGN_OR_RETURN(const int64_t sample, IntegerParam(ctx, kId, "sample", 100000, 0));
+  PB_ASSIGN_OR_RETURN(const InputPoints input, ReadInputPoints(ctx, kId, 0.4));
+  const PointCloud& cloud = input.cloud;
   double spacing_m = 0;
   {
     PB_PHASE(ctx, "compute");
@@ -48,18 +34,13 @@ Status Run(StageContext& ctx) {
     options.sample = static_cast<size_t>(sample);
     options.threads = ctx.threads();
     Expected<double> spacing = MedianSpacing(cloud, options);
-    if (!spacing.ok()) return spacing.status().WithContext(input_path);
+    if (!spacing.ok()) return spacing.status().WithContext(input.path);
     spacing_m = *spacing;
   }
   ctx.progress(0.7);
   ctx.counter("spacing_mm", spacing_m * 1000.0);
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), cloud));
-  }
-  nlohmann::json meta = ctx.input("points").meta;
-  meta["spacing_m"] = spacing_m;
-  ctx.set_output_meta("points", std::move(meta));
+  PB_RETURN_IF_ERROR(
+      WriteOutputPoints(ctx, cloud, InputPointsMetaWith(ctx, {{"spacing_m", spacing_m}})));
   ctx.progress(1.0);
   return Status::Ok();
 }

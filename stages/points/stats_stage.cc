@@ -1,9 +1,8 @@
 // points.stats: a one-row table describing a point cloud.
 #include <cmath>
 
-#include "stages/geometry/ply.h"
 #include "stages/geometry/table.h"
-#include "stages/params.h"
+#include "stages/points/points_io.h"
 #include "stages/points/points_stages.h"
 
 namespace pb {
@@ -47,15 +46,8 @@ Table Describe(const PointCloud& points) {
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const std::string input_path, InputFilePath(ctx, kId, "points"));
-  PointCloud points;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions options;
-    options.progress = [&ctx](double fraction) { ctx.progress(0.8 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(input_path, options));
-    points = std::move(ply.points);
-  }
+  PB_ASSIGN_OR_RETURN(const InputPoints input, ReadInputPoints(ctx, kId, 0.8));
+  const PointCloud& points = input.cloud;
   Table table;
   {
     PB_PHASE(ctx, "compute");

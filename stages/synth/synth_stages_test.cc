@@ -2,7 +2,6 @@
 // temporary directory.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <stdlib.h>
 
 #include <filesystem>
 #include <fstream>
@@ -11,6 +10,7 @@
 
 #include "stages/geometry/ply.h"
 #include "stages/geometry/synth_scene.h"
+#include "stages/stage_test_util.h"
 #include "stages/synth/synth_stages.h"
 
 namespace pb {
@@ -18,75 +18,12 @@ namespace {
 
 using ::testing::HasSubstr;
 
-class SynthRegistry : public StageRegistry {
- public:
-  Status Register(StageType type) override {
-    const std::string id = type.id;
-    if (!types_.emplace(id, std::move(type)).second) return Status::Invalid("duplicate " + id);
-    return Status::Ok();
-  }
-  const StageType* Find(std::string_view id) const override {
-    auto it = types_.find(std::string(id));
-    return it == types_.end() ? nullptr : &it->second;
-  }
-  std::vector<const StageType*> All() const override {
-    std::vector<const StageType*> all;
-    for (const auto& [id, type] : types_) all.push_back(&type);
-    return all;
-  }
-
- private:
-  std::map<std::string, StageType> types_;
-};
-
-class SynthContext : public StageContext {
- public:
-  SynthContext(std::filesystem::path dir, nlohmann::json params) : dir_(std::move(dir)), params_(std::move(params)) {}
-  const nlohmann::json& params() const override { return params_; }
-  bool has_input(std::string_view) const override { return false; }
-  const ArtifactView& input(std::string_view) const override { return none_; }
-  std::string output_path(std::string_view port, std::string_view file_name) override {
-    const std::filesystem::path dir = dir_ / std::string(port);
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / std::string(file_name)).string();
-    outputs_[std::string(port) + "/" + std::string(file_name)] = path;
-    return path;
-  }
-  void set_output_meta(std::string_view port, nlohmann::json meta) override { meta_[std::string(port)] = meta; }
-  void progress(double fraction) override {
-    EXPECT_GE(fraction, last_progress_);
-    EXPECT_LE(fraction, 1.0);
-    last_progress_ = fraction;
-  }
-  void counter(std::string_view name, double value) override { counters_[std::string(name)] = value; }
-  void begin_phase(std::string_view name) override { phases_.insert(std::string(name)); }
-  void end_phase(std::string_view) override {}
-  int threads() const override { return 2; }
-
-  std::map<std::string, std::string> outputs_;
-  std::map<std::string, nlohmann::json> meta_;
-  std::map<std::string, double> counters_;
-  std::set<std::string> phases_;
-  double last_progress_ = 0;
-
- private:
-  std::filesystem::path dir_;
-  nlohmann::json params_;
-  ArtifactView none_;
-};
-
-class SynthStagesTest : public ::testing::Test {
+class SynthStagesTest : public StageTest {
  protected:
   void SetUp() override {
-    char pattern[] = "/tmp/pb_synth_stage_XXXXXX";
-    ASSERT_NE(mkdtemp(pattern), nullptr);
-    dir_ = pattern;
+    StageTest::SetUp();
     RegisterSynthStages(registry_);
   }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  std::filesystem::path dir_;
-  SynthRegistry registry_;
 };
 
 TEST_F(SynthStagesTest, RegistersSynthScan) {
@@ -112,9 +49,10 @@ TEST_F(SynthStagesTest, RegistersSynthScan) {
 }
 
 TEST_F(SynthStagesTest, ScansARoomWithTruth) {
-  SynthContext ctx(dir_, {{"preset", "room"}, {"points", 100000}, {"seed", 5}, {"stations", 2},
-                          {"truth_cell_mm", 25}});
-  const Status status = registry_.Find("synth.scan")->run(ctx);
+  FakeContext ctx(dir_, {{"preset", "room"}, {"points", 100000}, {"seed", 5}, {"stations", 2},
+                         {"truth_cell_mm", 25}},
+                  /*threads=*/2);
+  const Status status = Run("synth.scan", ctx);
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(ctx.phases_, (std::set<std::string>{"scan", "truth", "io"}));
   EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
@@ -122,7 +60,7 @@ TEST_F(SynthStagesTest, ScansARoomWithTruth) {
   EXPECT_EQ(ctx.counters_["stations"], 2);
   EXPECT_GT(ctx.counters_["truth_faces"], 100000);
 
-  auto points = ReadPlyPoints(ctx.outputs_["points/points.ply"]);
+  auto points = ReadPlyPoints(ctx.files_["points/points.ply"]);
   ASSERT_TRUE(points.ok()) << points.status().message();
   EXPECT_EQ(static_cast<double>(points->points.size()), ctx.counters_["points"]);
   EXPECT_TRUE(points->points.has_colors());
@@ -131,13 +69,13 @@ TEST_F(SynthStagesTest, ScansARoomWithTruth) {
   EXPECT_GT(ctx.meta_["points"]["spacing_m"].get<double>(), 0.002);
   EXPECT_LT(ctx.meta_["points"]["spacing_m"].get<double>(), 0.05);
 
-  auto mesh = ReadPlyMesh(ctx.outputs_["truth/mesh.ply"]);
+  auto mesh = ReadPlyMesh(ctx.files_["truth/mesh.ply"]);
   ASSERT_TRUE(mesh.ok()) << mesh.status().message();
   EXPECT_EQ(static_cast<double>(mesh->mesh.face_count()), ctx.counters_["truth_faces"]);
   EXPECT_TRUE(mesh->mesh.has_colors());
   EXPECT_TRUE(mesh->mesh.has_normals());
   EXPECT_EQ(ctx.meta_["truth"]["kind"], "synthetic_truth");
-  auto scene = ReadSynthScene(ctx.outputs_["truth/scene.json"]);
+  auto scene = ReadSynthScene(ctx.files_["truth/scene.json"]);
   ASSERT_TRUE(scene.ok()) << scene.status().message();
   EXPECT_EQ(scene->preset, "room");
   EXPECT_EQ(scene->seed, 5u);
@@ -153,11 +91,11 @@ TEST_F(SynthStagesTest, ScansARoomWithTruth) {
 
 TEST_F(SynthStagesTest, SameParametersSameBytes) {
   const nlohmann::json params = {{"preset", "vault"}, {"points", 20000}, {"truth_cell_mm", 50}};
-  SynthContext a(dir_ / "a", params), b(dir_ / "b", params);
-  ASSERT_TRUE(registry_.Find("synth.scan")->run(a).ok());
-  ASSERT_TRUE(registry_.Find("synth.scan")->run(b).ok());
+  FakeContext a(dir_ / "a", params, /*threads=*/2), b(dir_ / "b", params, /*threads=*/2);
+  ASSERT_TRUE(Run("synth.scan", a).ok());
+  ASSERT_TRUE(Run("synth.scan", b).ok());
   for (const char* file : {"points/points.ply", "truth/mesh.ply", "truth/scene.json"}) {
-    std::ifstream fa(a.outputs_[file], std::ios::binary), fb(b.outputs_[file], std::ios::binary);
+    std::ifstream fa(a.files_[file], std::ios::binary), fb(b.files_[file], std::ios::binary);
     const std::string ca((std::istreambuf_iterator<char>(fa)), {}), cb((std::istreambuf_iterator<char>(fb)), {});
     EXPECT_FALSE(ca.empty()) << file;
     EXPECT_EQ(ca, cb) << file;
@@ -165,12 +103,13 @@ TEST_F(SynthStagesTest, SameParametersSameBytes) {
 }
 
 TEST_F(SynthStagesTest, RejectsBadParameters) {
-  SynthContext tower(dir_, {{"preset", "tower"}, {"points", 5000}, {"size_m", {6, 4, 6}}});
-  EXPECT_THAT(registry_.Find("synth.scan")->run(tower).message(), HasSubstr("must be equal"));
-  SynthContext few(dir_, {{"points", 10}});
-  EXPECT_THAT(registry_.Find("synth.scan")->run(few).message(), HasSubstr("points >= 1000"));
-  SynthContext size(dir_, {{"points", 5000}, {"size_m", {6, 4}}});
-  EXPECT_THAT(registry_.Find("synth.scan")->run(size).message(), HasSubstr("'size_m' must be [width, depth, height]"));
+  FakeContext tower(dir_, {{"preset", "tower"}, {"points", 5000}, {"size_m", {6, 4, 6}}});
+  EXPECT_THAT(Run("synth.scan", tower).message(), HasSubstr("must be equal"));
+  FakeContext few(dir_, {{"points", 10}});
+  EXPECT_THAT(Run("synth.scan", few).message(), HasSubstr("points >= 1000"));
+  FakeContext size(dir_, {{"points", 5000}, {"size_m", {6, 4}}});
+  EXPECT_THAT(Run("synth.scan", size).message(),
+              HasSubstr("'size_m' must be [width, depth, height]"));
 }
 
 }  // namespace

@@ -5,40 +5,27 @@
 // memfd, as /proc/self/fd/N, because the reader takes a path. Besides
 // sanitizer findings, an accepted file must give consistent arrays, and a
 // mesh's triangle indices must refer to existing vertices.
-#include <sys/mman.h>
-#include <unistd.h>
-
 #include <cstddef>
 #include <cstdint>
-#include <string>
 
 #include "stages/geometry/ply.h"
+#include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  const int fd = ::memfd_create("ply_fuzz", MFD_CLOEXEC);
-  if (fd < 0) return 0;
-  size_t written = 0;
-  while (written < size) {
-    const ssize_t n = ::write(fd, data + written, size - written);
-    if (n <= 0) break;
-    written += static_cast<size_t>(n);
-  }
-  if (written == size) {
-    const std::string path = "/proc/self/fd/" + std::to_string(fd);
-    pb::PlyReadOptions options;
-    options.drop_invalid_points = (size & 1) != 0;  // exercise both NaN paths
-    auto points = pb::ReadPlyPoints(path, options);
-    if (points.ok() && !pb::Validate(points->points).ok()) __builtin_trap();
-    auto mesh = pb::ReadPlyMesh(path, options);
-    if (mesh.ok()) {
-      if (!pb::Validate(mesh->mesh).ok()) __builtin_trap();
-      const size_t vertices = mesh->mesh.positions.size() / 3;
-      if (mesh->mesh.indices.size() % 3 != 0) __builtin_trap();
-      for (uint32_t index : mesh->mesh.indices) {
-        if (index >= vertices) __builtin_trap();
-      }
+  const pb::fuzz::FuzzInput input("ply_fuzz", data, size);
+  if (!input.ok()) return 0;
+  pb::PlyReadOptions options;
+  options.drop_invalid_points = (size & 1) != 0;  // exercise both NaN paths
+  auto points = pb::ReadPlyPoints(input.path(), options);
+  if (points.ok() && !pb::Validate(points->points).ok()) __builtin_trap();
+  auto mesh = pb::ReadPlyMesh(input.path(), options);
+  if (mesh.ok()) {
+    if (!pb::Validate(mesh->mesh).ok()) __builtin_trap();
+    const size_t vertices = mesh->mesh.positions.size() / 3;
+    if (mesh->mesh.indices.size() % 3 != 0) __builtin_trap();
+    for (uint32_t index : mesh->mesh.indices) {
+      if (index >= vertices) __builtin_trap();
     }
   }
-  ::close(fd);
   return 0;
 }

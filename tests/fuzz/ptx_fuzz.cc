@@ -4,37 +4,25 @@
 // over through a memfd, as /proc/self/fd/N, because the reader takes a path.
 // Besides sanitizer findings, an accepted file must give a consistent cloud:
 // attribute arrays of the right length and station ids inside `stations`.
-#include <sys/mman.h>
-#include <unistd.h>
-
 #include <cstddef>
 #include <cstdint>
-#include <string>
 
 #include "stages/geometry/ptx.h"
+#include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {
-  const int fd = ::memfd_create("ptx_fuzz", MFD_CLOEXEC);
-  if (fd < 0) return 0;
-  size_t written = 0;
-  while (written < size) {
-    const ssize_t n = ::write(fd, data + written, size - written);
-    if (n <= 0) break;
-    written += static_cast<size_t>(n);
-  }
-  if (written == size) {
-    pb::ScanReadOptions options;
-    options.drop_invalid_points = (size & 1) != 0;  // exercise both NaN paths
-    auto result = pb::ReadPtx("/proc/self/fd/" + std::to_string(fd), options);
-    if (result.ok()) {
-      const pb::PointCloud& cloud = result->points;
-      if (!pb::Validate(cloud).ok()) __builtin_trap();
-      if (cloud.station_ids.size() != cloud.size()) __builtin_trap();
-      for (uint16_t id : cloud.station_ids) {
-        if (id >= cloud.stations.size()) __builtin_trap();
-      }
+  const pb::fuzz::FuzzInput input("ptx_fuzz", data, size);
+  if (!input.ok()) return 0;
+  pb::ScanReadOptions options;
+  options.drop_invalid_points = (size & 1) != 0;  // exercise both NaN paths
+  auto result = pb::ReadPtx(input.path(), options);
+  if (result.ok()) {
+    const pb::PointCloud& cloud = result->points;
+    if (!pb::Validate(cloud).ok()) __builtin_trap();
+    if (cloud.station_ids.size() != cloud.size()) __builtin_trap();
+    for (uint16_t id : cloud.station_ids) {
+      if (id >= cloud.stations.size()) __builtin_trap();
     }
   }
-  ::close(fd);
   return 0;
 }

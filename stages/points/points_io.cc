@@ -1,0 +1,40 @@
+#include "stages/points/points_io.h"
+
+#include <utility>
+
+#include "stages/geometry/ply.h"
+#include "stages/params.h"
+
+namespace pb {
+
+Expected<InputPoints> ReadInputPoints(StageContext& ctx, std::string_view stage_id,
+                                      double progress_end) {
+  InputPoints input;
+  PB_ASSIGN_OR_RETURN(input.path, InputFilePath(ctx, stage_id, "points"));
+  PB_PHASE(ctx, "io");
+  PlyReadOptions options;
+  options.progress = [&ctx, progress_end](double fraction) {
+    ctx.progress(progress_end * fraction);
+  };
+  PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(input.path, options));
+  input.cloud = std::move(ply.points);
+  return input;
+}
+
+nlohmann::json InputPointsMetaWith(const StageContext& ctx, const nlohmann::json& changes) {
+  nlohmann::json meta = ctx.input("points").meta;
+  meta.update(changes);
+  return meta;
+}
+
+Status WriteOutputPoints(StageContext& ctx, const PointCloud& cloud, nlohmann::json meta,
+                         std::string_view phase) {
+  {
+    PB_PHASE(ctx, phase);
+    PB_RETURN_IF_ERROR(WritePlyPoints(ctx.output_path("points", "points.ply"), cloud));
+  }
+  ctx.set_output_meta("points", std::move(meta));
+  return Status::Ok();
+}
+
+}  // namespace pb

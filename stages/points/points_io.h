@@ -1,0 +1,37 @@
+// The `points` artifact as stage adapters read and write it: one binary PLY
+// file, points.ply (stages/geometry/ply.h), positions in meters relative to the
+// cloud's origin, plus the artifact's JSON meta (origin, point count, spacing_m
+// and whatever earlier stages added).
+#pragma once
+
+#include <string>
+#include <string_view>
+
+#include "engine/base/status.h"
+#include "engine/stage.h"
+#include "stages/geometry/point_cloud.h"
+
+namespace pb {
+
+struct InputPoints {
+  std::string path;  // the input file, for error context
+  PointCloud cloud;
+};
+
+// Reads the cloud of input port "points" inside an "io" phase, reporting the
+// read as stage progress 0..`progress_end`. Errors name `stage_id` when the
+// input is missing, else the file and place.
+Expected<InputPoints> ReadInputPoints(StageContext& ctx, std::string_view stage_id,
+                                      double progress_end);
+
+// The meta of input "points" with the top-level keys of `changes` set over
+// it: what a stage that transforms points passes on (origin, spacing_m and
+// what earlier stages recorded survive unless changed).
+nlohmann::json InputPointsMetaWith(const StageContext& ctx, const nlohmann::json& changes);
+
+// Writes `cloud` as output "points" (points.ply) inside phase `phase`, then
+// sets that output's meta.
+Status WriteOutputPoints(StageContext& ctx, const PointCloud& cloud, nlohmann::json meta,
+                         std::string_view phase = "io");
+
+}  // namespace pb
