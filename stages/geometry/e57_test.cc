@@ -1,5 +1,6 @@
 #include "stages/geometry/e57.h"
 
+#include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -25,16 +26,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-std::string SharedData() {
-  const char* source = std::getenv("PB_SOURCE_DIR");
-  if (source) {
-    const std::filesystem::path candidate =
-        std::filesystem::path(source) / ".." / "shared" / "data";
-    if (std::filesystem::exists(candidate)) return candidate.string();
-  }
-  if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
-  return "";
-}
+std::string SharedData() { return pb::testing::SharedDataDir(); }
 
 // ---------------------------------------------------------------------------
 // A minimal E57 writer for hand-made test files: header, one CompressedVector

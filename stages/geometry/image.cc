@@ -1,3 +1,4 @@
+#include "stages/geometry/text_parse.h"
 #include "stages/geometry/image.h"
 
 #include <png.h>
@@ -122,14 +123,6 @@ class File {
   FILE* file_;
 };
 
-std::string LowerExtension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string extension = path.substr(dot);
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return extension;
-}
 
 // ---------------------------------------------------------------------------
 // OpenEXR.

@@ -23,8 +23,8 @@ namespace {
 
 // Points per leaf at most (leaves hold between half that and that). Small
 // leaves cost nodes; large ones cost distance evaluations. 16 measured best
-// for k = 16 on scan-like clouds, with the double and with the vectorized
-// leaf loop (8 and 32 were 10-15% slower).
+// for k = 16 on scan-like clouds, also with the vectorized leaf loop (8 and
+// 32 were 8-20% slower).
 constexpr size_t kLeafSize = 16;
 static_assert(kLeafSize <= 64, "leaf masks are 64-bit");
 // Subtrees with more points than this build their children in parallel.
@@ -44,7 +44,7 @@ size_t TreeDepth(size_t n) {
   return depth;
 }
 
-
+// A point during the build: nth_element moves whole entries.
 struct Entry {
   float x, y, z;
   uint32_t index;
@@ -94,8 +94,9 @@ Expected<KnnIndex> KnnIndex::Build(std::span<const float> xyz) {
       if (hi[a] - lo[a] > hi[axis] - lo[axis]) axis = a;
     }
     const size_t mid = begin + (end - begin) / 2;
-    std::nth_element(e + begin, e + mid, e + end,
-                     [axis](const Entry& a, const Entry& b) { return (&a.x)[axis] < (&b.x)[axis]; });
+    std::nth_element(e + begin, e + mid, e + end, [axis](const Entry& a, const Entry& b) {
+      return (&a.x)[axis] < (&b.x)[axis];
+    });
     // Left holds coordinates <= split, right >= split.
     index.split_[node] = (&e[mid].x)[axis];
     index.axis_[node] = static_cast<uint8_t>(axis);
@@ -183,7 +184,7 @@ int KnnIndex::Search(const float position[3], int k, int64_t exclude_slot,
     while (inside != 0) {
       const int j = std::countr_zero(inside);
       inside &= inside - 1;
-      if (d2[j] > worst) continue;
+      if (d2[j] > worst) continue;  // worst shrank since the mask
       insert(d2[j], points[begin + j], static_cast<uint32_t>(begin + j));
     }
   };

@@ -100,7 +100,8 @@ TEST(KnnTest, SlotsLocateThePoints) {
     EXPECT_FALSE(seen[i]) << "point " << i << " in two slots";
     seen[i] = true;
     EXPECT_EQ(index->SlotOf(i), slot);
-    EXPECT_EQ(index->PositionAtSlot(slot), (std::array<float, 3>{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}));
+    EXPECT_EQ(index->PositionAtSlot(slot),
+              (std::array<float, 3>{xyz[3 * i], xyz[3 * i + 1], xyz[3 * i + 2]}));
     const int count = index->QueryPoint(i, 16, out);
     ASSERT_EQ(count, 16);
     for (int j = 0; j < count; ++j) EXPECT_EQ(index->PointAtSlot(out[j].slot), out[j].index);

@@ -62,4 +62,12 @@ Status EstimateNormals(PointCloud& cloud, const NormalOptions& options, NormalRe
 // eigenvector of the smallest eigenvalue in `vector`, and that eigenvalue.
 double SmallestEigenvector(const double a[9], double vector[3]);
 
+// The same unit eigenvector for a symmetric positive semi-definite `a` (a
+// covariance), 4x faster: closed-form eigenvalues and a cross product, the
+// same direction as SmallestEigenvector to well below float resolution when
+// the two smallest eigenvalues differ by at least 1/1000 of the spread;
+// otherwise (and for a zero matrix) it is SmallestEigenvector. The sign is
+// arbitrary.
+void PlaneNormal(const double a[9], double vector[3]);
+
 }  // namespace pb

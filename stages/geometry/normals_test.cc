@@ -60,6 +60,43 @@ TEST(NormalsTest, SmallestEigenvector) {
   EXPECT_NEAR(std::fabs(v[0] * w[0] + v[1] * w[1] + v[2] * w[2]), 1.0, 1e-12);
 }
 
+// The closed form agrees with Jacobi on covariances of surfaces, lines
+// (where it falls back to Jacobi) and blobs, and is Jacobi's axis for zero.
+TEST(NormalsTest, PlaneNormalMatchesJacobi) {
+  std::mt19937 rng(7);
+  std::normal_distribution<double> gauss(0.0, 1.0);
+  for (int trial = 0; trial < 2000; ++trial) {
+    // Spreads along three random orthogonal-ish axes: a surface (0), a line
+    // (1), an isotropic blob (2) or a single repeated point (3).
+    const int kind = trial % 4;
+    const double sigma[4][3] = {
+        {4e-3, 3e-3, 1e-5}, {4e-3, 1e-6, 1e-6}, {1e-3, 1e-3, 1e-3}, {0, 0, 0}};
+    double cov[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+    const double tilt[3] = {gauss(rng), gauss(rng), gauss(rng)};
+    for (int j = 0; j < 16; ++j) {
+      const double local[3] = {sigma[kind][0] * gauss(rng), sigma[kind][1] * gauss(rng),
+                               sigma[kind][2] * gauss(rng)};
+      const double p[3] = {local[0] + 0.3 * tilt[0] * local[2], local[1] + 0.4 * tilt[1] * local[0],
+                           local[2] + 0.5 * tilt[2] * local[1]};
+      for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c) cov[3 * r + c] += p[r] * p[c];
+      }
+    }
+    double jacobi[3], fast[3];
+    SmallestEigenvector(cov, jacobi);
+    PlaneNormal(cov, fast);
+    SCOPED_TRACE("trial " + std::to_string(trial));
+    EXPECT_NEAR(fast[0] * fast[0] + fast[1] * fast[1] + fast[2] * fast[2], 1.0, 1e-14);
+    if (kind == 3) {
+      EXPECT_EQ(std::vector<double>(fast, fast + 3), std::vector<double>(jacobi, jacobi + 3));
+    } else {
+      // 1 - |cos| < 1e-14: within 1.5e-7 rad, float resolution.
+      const double cosine = jacobi[0] * fast[0] + jacobi[1] * fast[1] + jacobi[2] * fast[2];
+      EXPECT_NEAR(std::fabs(cosine), 1.0, 1e-14);
+    }
+  }
+}
+
 TEST(NormalsTest, NoisyPlaneWithinTwoDegrees) {
   // Plane through the origin with normal (1, 2, 3)/|.|, 2 mm grid, 0.05 mm noise.
   const double normal[3] = {1 / std::sqrt(14.0), 2 / std::sqrt(14.0), 3 / std::sqrt(14.0)};

@@ -1,5 +1,6 @@
 #include "stages/geometry/pcd.h"
 
+#include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -45,14 +46,7 @@ class PcdTest : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
-std::string SharedData() {
-  if (const char* source = std::getenv("PB_SOURCE_DIR")) {
-    const auto candidate = std::filesystem::path(source) / ".." / "shared" / "data";
-    if (std::filesystem::exists(candidate)) return candidate.string();
-  }
-  if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
-  return "";
-}
+std::string SharedData() { return pb::testing::SharedDataDir(); }
 
 template <typename T>
 void Append(std::string* out, T value) {

@@ -1,5 +1,6 @@
 #include "stages/geometry/ply.h"
 
+#include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -41,15 +42,7 @@ class PlyTest : public ::testing::Test {
   std::filesystem::path dir_;
 };
 
-std::string SharedData() {
-  const char* source = std::getenv("PB_SOURCE_DIR");
-  if (source) {
-    const std::filesystem::path candidate = std::filesystem::path(source) / ".." / "shared" / "data";
-    if (std::filesystem::exists(candidate)) return candidate.string();
-  }
-  if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
-  return "";
-}
+std::string SharedData() { return pb::testing::SharedDataDir(); }
 
 template <typename T>
 void AppendRaw(std::string* out, T value, bool big_endian) {

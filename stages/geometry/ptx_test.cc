@@ -1,5 +1,6 @@
 #include "stages/geometry/ptx.h"
 
+#include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -42,13 +43,10 @@ class PtxTest : public ::testing::Test {
 };
 
 std::string SharedPtx(const std::string& name) {
-  const char* source = std::getenv("PB_SOURCE_DIR");
-  if (source) {
-    const auto candidate = std::filesystem::path(source) / ".." / "shared" / "data" / "ptx" / name;
-    if (std::filesystem::exists(candidate)) return candidate.string();
-  }
-  const auto fallback = std::filesystem::path("/work/shared/data/ptx") / name;
-  return std::filesystem::exists(fallback) ? fallback.string() : "";
+  const std::string data = pb::testing::SharedDataDir();
+  if (data.empty()) return "";
+  const auto path = std::filesystem::path(data) / "ptx" / name;
+  return std::filesystem::exists(path) ? path.string() : "";
 }
 
 // Absolute coordinate `axis` of point `i`.

@@ -1,5 +1,7 @@
 #include "stages/geometry/text_parse.h"
 
+#include <cctype>
+
 #include <charconv>
 #include <cstdio>
 #include <system_error>
@@ -54,6 +56,15 @@ std::string FormatDouble(double value) {
   char buffer[32];
   std::snprintf(buffer, sizeof buffer, "%.17g", value);
   return buffer;
+}
+
+std::string LowerExtension(std::string_view path) {
+  const size_t slash = path.find_last_of('/');
+  const size_t dot = path.find_last_of('.');
+  if (dot == std::string_view::npos || (slash != std::string_view::npos && dot < slash)) return "";
+  std::string extension(path.substr(dot));
+  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return extension;
 }
 
 }  // namespace pb

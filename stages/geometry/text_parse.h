@@ -49,6 +49,10 @@ bool ParseUint(std::string_view text, uint64_t* value);
 // "nan", "inf" and "-inf" for the non-finite values.
 std::string FormatDouble(double value);
 
+// The extension of a file name, lower case, with its dot ("scan.E57" ->
+// ".e57"); empty when the last path component has none.
+std::string LowerExtension(std::string_view path);
+
 }  // namespace pb
 
 #endif  // PB_STAGES_GEOMETRY_TEXT_PARSE_H_

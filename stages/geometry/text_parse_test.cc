@@ -103,5 +103,12 @@ TEST(TextParseTest, FormatDoubleRoundTrips) {
   }
 }
 
+TEST(TextParseTest, LowerExtensionOfTheLastComponentOnly) {
+  EXPECT_EQ(LowerExtension("scans/Room.E57"), ".e57");
+  EXPECT_EQ(LowerExtension("a.b/scan"), "");
+  EXPECT_EQ(LowerExtension("archive.tar.GZ"), ".gz");
+  EXPECT_EQ(LowerExtension("noext"), "");
+}
+
 }  // namespace
 }  // namespace pb

@@ -5,6 +5,7 @@
 
 #include <cstdio>
 
+#include "stages/geometry/text_parse.h"
 #include "stages/geometry/e57.h"
 #include "stages/geometry/las.h"
 #include "stages/geometry/pcd.h"
@@ -73,14 +74,6 @@ std::string SupportedFormats() {
   return list;
 }
 
-std::string LowerExtension(const std::string& path) {
-  const size_t slash = path.find_last_of('/');
-  const size_t dot = path.find_last_of('.');
-  if (dot == std::string::npos || (slash != std::string::npos && dot < slash)) return "";
-  std::string extension = path.substr(dot);
-  for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return extension;
-}
 
 Expected<const ScanFormat*> ChooseFormat(const std::string& path, const std::string& name) {
   if (name != "auto") {

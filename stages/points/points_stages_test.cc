@@ -1,5 +1,6 @@
 // Runs the io and points stages through a fake StageContext (no engine, no
 // child processes): files go to a temporary directory.
+#include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -22,15 +23,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-std::string SharedData() {
-  const char* source = std::getenv("PB_SOURCE_DIR");
-  if (source) {
-    const std::filesystem::path candidate = std::filesystem::path(source) / ".." / "shared" / "data";
-    if (std::filesystem::exists(candidate)) return candidate.string();
-  }
-  if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
-  return "";
-}
+std::string SharedData() { return pb::testing::SharedDataDir(); }
 
 class PointsStagesTest : public StageTest {
  protected:
