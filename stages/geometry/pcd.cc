@@ -292,8 +292,8 @@ class PcdReader {
       field.name = names[k];
       uint64_t size = 0;
       if (!ParseUint(sizes[k], &size) || (size != 1 && size != 2 && size != 4 && size != 8)) {
-        return HeaderError(size_line, "field '" + field.name + "': SIZE must be 1, 2, 4 or 8, got '" +
-                                          sizes[k] + "'");
+        return HeaderError(size_line, "field '" + field.name +
+                                          "': SIZE must be 1, 2, 4 or 8, got '" + sizes[k] + "'");
       }
       field.size = size;
       if (types[k] != "F" && types[k] != "I" && types[k] != "U") {
@@ -385,9 +385,9 @@ class PcdReader {
                  2 * (x * z - w * y),     2 * (y * z + w * x),     1 - 2 * (x * x + y * y)};
     rotate_ = header_.have_viewpoint && !(w == 1 || w == -1);
     translate_ = header_.have_viewpoint && (v[0] != 0 || v[1] != 0 || v[2] != 0);
-    bool coordinates_f4 = true;
-    for (Role role : {kX, kY, kZ}) coordinates_f4 &= header_.fields[of[role]].size == 4;
-    recenter_ = !coordinates_f4 || translate_;
+    coordinates_f4_ = true;
+    for (Role role : {kX, kY, kZ}) coordinates_f4_ &= header_.fields[of[role]].size == 4;
+    recenter_ = !coordinates_f4_ || translate_;
 
     // Reserve, but never more than the bytes left in the file could hold, so a
     // corrupt POINTS fails as truncation instead of exhausting memory.
@@ -409,32 +409,12 @@ class PcdReader {
   Status AddPoint(const PointValues& values, uint64_t index, const std::string& place) {
     double p[3] = {values.xyz[0], values.xyz[1], values.xyz[2]};
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) {
-      const bool no_return = organized_ && (std::isnan(p[0]) || std::isnan(p[1]) || std::isnan(p[2]));
-      if (!no_return && !options_.drop_invalid_points) {
-        return Status::Corrupt(path_ + place + ": point " + std::to_string(index) +
-                               " has a non-finite coordinate (" + FormatDouble(p[0]) + " " +
-                               FormatDouble(p[1]) + " " + FormatDouble(p[2]) +
-                               "); drop such points with drop_invalid_points");
-      }
-      ++result_.dropped_points;
-      return Status::Ok();
+      return DropOrFail(p, index, place);
     }
     PointCloud& cloud = result_.points;
-    if (rotate_) Rotate(p);
-    if (recenter_) {
-      // Store relative to a provisional origin (the first point rounded to
-      // 1 m) and move to the bounding-box center in Finish().
-      for (int axis = 0; axis < 3; ++axis) p[axis] += header_.viewpoint[axis];
-      if (!have_provisional_origin_) {
-        for (int axis = 0; axis < 3; ++axis) provisional_origin_[axis] = std::round(p[axis]);
-        have_provisional_origin_ = true;
-      }
-      for (int axis = 0; axis < 3; ++axis) {
-        cloud.positions.push_back(static_cast<float>(p[axis] - provisional_origin_[axis]));
-      }
-    } else {
-      for (int axis = 0; axis < 3; ++axis) cloud.positions.push_back(static_cast<float>(p[axis]));
-    }
+    float out[3];
+    ToOutputFrame(p, out);
+    cloud.positions.insert(cloud.positions.end(), out, out + 3);
     if (has_normals_) {
       double n[3] = {values.normal[0], values.normal[1], values.normal[2]};
       if (rotate_) Rotate(n);
@@ -447,12 +427,49 @@ class PcdReader {
     } else if (has_channels_) {
       for (int c = 0; c < 3; ++c) cloud.colors.push_back(ChannelToByte(values.channel[c]));
     }
-    if (has_intensity_) {
-      // Non-finite (also after narrowing to float) intensities carry no signal.
-      const float intensity = static_cast<float>(values.intensity);
-      cloud.intensities.push_back(std::isfinite(intensity) ? intensity : 0.f);
-    }
+    if (has_intensity_) cloud.intensities.push_back(IntensityToFloat(values.intensity));
     return Status::Ok();
+  }
+
+  // A point with a non-finite coordinate `p` (as read): dropped and counted
+  // when it is an organized cloud's "no return" or drop_invalid_points is set,
+  // else an error.
+  Status DropOrFail(const double* p, uint64_t index, const std::string& place) {
+    const bool no_return = organized_ && (std::isnan(p[0]) || std::isnan(p[1]) || std::isnan(p[2]));
+    if (!no_return && !options_.drop_invalid_points) {
+      return Status::Corrupt(path_ + place + ": point " + std::to_string(index) +
+                             " has a non-finite coordinate (" + FormatDouble(p[0]) + " " +
+                             FormatDouble(p[1]) + " " + FormatDouble(p[2]) +
+                             "); drop such points with drop_invalid_points");
+    }
+    ++result_.dropped_points;
+    return Status::Ok();
+  }
+
+  // Non-finite (also after narrowing to float) intensities carry no signal.
+  static float IntensityToFloat(double value) {
+    const float intensity = static_cast<float>(value);
+    return std::isfinite(intensity) ? intensity : 0.f;
+  }
+
+  // A valid point as read (meters, sensor frame) to the output floats: the
+  // VIEWPOINT rotation, then, when re-centering, the translation and the
+  // provisional origin (the first valid point rounded to 1 m; Finish() moves
+  // to the bounding-box center).
+  void ToOutputFrame(double* p, float* out) {
+    if (rotate_) Rotate(p);
+    if (recenter_) {
+      for (int axis = 0; axis < 3; ++axis) p[axis] += header_.viewpoint[axis];
+      if (!have_provisional_origin_) {
+        for (int axis = 0; axis < 3; ++axis) provisional_origin_[axis] = std::round(p[axis]);
+        have_provisional_origin_ = true;
+      }
+      for (int axis = 0; axis < 3; ++axis) {
+        out[axis] = static_cast<float>(p[axis] - provisional_origin_[axis]);
+      }
+    } else {
+      for (int axis = 0; axis < 3; ++axis) out[axis] = static_cast<float>(p[axis]);
+    }
   }
 
   void Rotate(double* v) const {
@@ -656,35 +673,177 @@ class PcdReader {
                      std::to_string(compressed) + " compressed bytes cannot expand to " +
                      std::to_string(uncompressed));
     }
-    // The recognized fields' raw bytes, each a contiguous run in the block.
-    struct Kept {
-      const Field* field;
-      uint64_t start;  // offset in the uncompressed block
-      std::vector<uint8_t> bytes;
-    };
-    std::vector<Kept> kept;
-    uint64_t start = 0;
-    for (const Field& field : header_.fields) {
-      if (field.role != kSkip) kept.push_back({&field, start, std::vector<uint8_t>(header_.points * field.size)});
-      start += header_.points * field.bytes();
-    }
-    auto sink = [&](uint64_t offset, const uint8_t* data, size_t n) {
-      for (Kept& k : kept) {
-        const uint64_t lo = std::max(offset, k.start);
-        const uint64_t hi = std::min<uint64_t>(offset + n, k.start + k.bytes.size());
-        if (lo < hi) std::memcpy(k.bytes.data() + (lo - k.start), data + (lo - offset), hi - lo);
+    // The block holds the fields one after another; each recognized value
+    // goes straight to its place in the output arrays as the stream yields it.
+    PointCloud& cloud = result_.points;
+    const size_t points = static_cast<size_t>(header_.points);
+    cloud.positions.resize(3 * points);  // reserved by Prepare(): POINTS fits the file
+    if (has_normals_) cloud.normals.resize(3 * points);
+    if (has_packed_rgb_ || has_channels_) cloud.colors.resize(3 * points);
+    if (has_intensity_) cloud.intensities.resize(points);
+    size_t field = 0;     // the field being streamed
+    uint64_t within = 0;  // bytes of it seen so far
+    uint8_t partial[8];   // a value cut in two by the stream's chunks
+    size_t partial_bytes = 0;
+    auto sink = [&](uint64_t, const uint8_t* data, size_t n) {
+      while (n > 0) {
+        const Field& f = header_.fields[field];
+        const uint64_t segment = header_.points * f.bytes();
+        if (within == segment) {
+          ++field;
+          within = 0;
+          continue;
+        }
+        const size_t take = static_cast<size_t>(std::min<uint64_t>(n, segment - within));
+        if (Kept(f.role)) {
+          uint64_t index = within / f.size;
+          const uint8_t* bytes = data;
+          size_t left = take;
+          if (partial_bytes > 0) {
+            const size_t k = std::min(left, f.size - partial_bytes);
+            std::memcpy(partial + partial_bytes, bytes, k);
+            partial_bytes += k;
+            bytes += k;
+            left -= k;
+            if (partial_bytes == f.size) {
+              StoreStreamed(f, index++, partial);
+              partial_bytes = 0;
+            }
+          }
+          for (; left >= f.size; left -= f.size, bytes += f.size) {
+            StoreStreamed(f, index++, bytes);
+          }
+          std::memcpy(partial + partial_bytes, bytes, left);
+          partial_bytes += left;
+        }
+        within += take;
+        data += take;
+        n -= take;
       }
     };
     PB_RETURN_IF_ERROR(DecodeLzf(compressed, uncompressed, sink));
-    for (uint64_t i = 0; i < header_.points; ++i) {
-      PointValues values;
-      for (const Kept& k : kept) {
-        DecodeField(*k.field, k.bytes.data() + i * k.field->size, &values);
-      }
-      PB_RETURN_IF_ERROR(AddPoint(values, i, ""));
-    }
+    PB_RETURN_IF_ERROR(CompactStreamed());
     WarnAboutTrailingBytes();
     return in_.error();
+  }
+
+  // Whether values of `role` reach the output (a lone normal_x, or r g b next
+  // to rgb, do not).
+  bool Kept(Role role) const {
+    switch (role) {
+      case kX: case kY: case kZ: return true;
+      case kNx: case kNy: case kNz: return has_normals_;
+      case kRgb: return has_packed_rgb_;
+      case kR: case kG: case kB: return has_channels_;
+      case kIntensity: return has_intensity_;
+      case kSkip: return false;
+    }
+    return false;
+  }
+
+  // Puts value `index` of a binary_compressed field into the output arrays.
+  // Coordinates: F4 ones (all three) are kept as read, exactly; otherwise they
+  // are stored relative to a per-axis streaming origin (see CompactStreamed).
+  void StoreStreamed(const Field& field, uint64_t index, const uint8_t* bytes) {
+    PointCloud& cloud = result_.points;
+    const size_t i = static_cast<size_t>(index);
+    switch (field.role) {
+      case kX: case kY: case kZ: {
+        const int axis = field.role - kX;
+        double value = DecodeValue(bytes, field.type, field.size);
+        if (!coordinates_f4_ && std::isfinite(value)) {
+          // Without rotation the translation can be added now, as AddPoint does.
+          if (!rotate_) value += header_.viewpoint[axis];
+          if (!have_stream_origin_[axis]) {
+            stream_origin_[axis] = std::round(value);
+            have_stream_origin_[axis] = true;
+          }
+          value -= stream_origin_[axis];
+        }
+        cloud.positions[3 * i + axis] = static_cast<float>(value);
+        break;
+      }
+      case kNx: case kNy: case kNz:
+        cloud.normals[3 * i + (field.role - kNx)] =
+            static_cast<float>(DecodeValue(bytes, field.type, field.size));
+        break;
+      case kRgb: {
+        const uint32_t rgb = LoadU32(bytes);
+        cloud.colors[3 * i] = static_cast<uint8_t>(rgb >> 16);
+        cloud.colors[3 * i + 1] = static_cast<uint8_t>(rgb >> 8);
+        cloud.colors[3 * i + 2] = static_cast<uint8_t>(rgb);
+        break;
+      }
+      case kR: case kG: case kB:
+        cloud.colors[3 * i + (field.role - kR)] =
+            ChannelToByte(DecodeValue(bytes, field.type, field.size));
+        break;
+      case kIntensity:
+        cloud.intensities[i] = IntensityToFloat(DecodeValue(bytes, field.type, field.size));
+        break;
+      case kSkip:
+        break;
+    }
+  }
+
+  // After the block: drops invalid points (organized "no return", or with
+  // drop_invalid_points; else the first one is an error, as in the other
+  // bodies) by moving the valid ones down in place, and applies the
+  // VIEWPOINT pose and provisional origin as AddPoint does.
+  Status CompactStreamed() {
+    PointCloud& cloud = result_.points;
+    const size_t points = cloud.size();
+    // Without rotation, streamed non-F4 coordinates are already relative to
+    // the streaming origin, which becomes the provisional origin.
+    const bool in_place = !coordinates_f4_ && !rotate_;
+    if (in_place) {
+      provisional_origin_ = stream_origin_;
+      have_provisional_origin_ = true;
+    }
+    size_t kept = 0;
+    for (size_t i = 0; i < points; ++i) {
+      const float* f = &cloud.positions[3 * i];
+      if (!std::isfinite(f[0]) || !std::isfinite(f[1]) || !std::isfinite(f[2])) {
+        // The values as read (up to float rounding for F8 coordinates).
+        double p[3];
+        for (int axis = 0; axis < 3; ++axis) {
+          p[axis] = coordinates_f4_ ? f[axis]
+                                    : stream_origin_[axis] + f[axis] -
+                                          (rotate_ ? 0 : header_.viewpoint[axis]);
+        }
+        PB_RETURN_IF_ERROR(DropOrFail(p, i, ""));
+        continue;
+      }
+      float out[3];
+      if (in_place) {
+        std::copy(f, f + 3, out);
+      } else {
+        double p[3];
+        for (int axis = 0; axis < 3; ++axis) {
+          p[axis] = (coordinates_f4_ ? 0.0 : stream_origin_[axis]) + f[axis];
+        }
+        ToOutputFrame(p, out);
+      }
+      std::copy(out, out + 3, &cloud.positions[3 * kept]);
+      if (has_normals_) {
+        double n[3];
+        for (int axis = 0; axis < 3; ++axis) n[axis] = cloud.normals[3 * i + axis];
+        if (rotate_) Rotate(n);
+        for (int axis = 0; axis < 3; ++axis) {
+          cloud.normals[3 * kept + axis] = static_cast<float>(n[axis]);
+        }
+      }
+      if (cloud.has_colors()) {
+        std::copy_n(&cloud.colors[3 * i], 3, &cloud.colors[3 * kept]);
+      }
+      if (has_intensity_) cloud.intensities[kept] = cloud.intensities[i];
+      ++kept;
+    }
+    cloud.positions.resize(3 * kept);
+    if (has_normals_) cloud.normals.resize(3 * kept);
+    if (cloud.has_colors()) cloud.colors.resize(3 * kept);
+    if (has_intensity_) cloud.intensities.resize(kept);
+    return Status::Ok();
   }
 
   // Streams one LZF block of `compressed` bytes from the input, checking that
@@ -788,10 +947,14 @@ class PcdReader {
   Header header_;
   bool has_normals_ = false, has_packed_rgb_ = false, has_channels_ = false,
        has_intensity_ = false, organized_ = false;
-  bool rotate_ = false, translate_ = false, recenter_ = false;
+  bool coordinates_f4_ = true, rotate_ = false, translate_ = false, recenter_ = false;
   std::array<double, 9> rotation_{};
   bool have_provisional_origin_ = false;
   std::array<double, 3> provisional_origin_{};
+  // binary_compressed with non-F4 coordinates: per axis, the first finite
+  // value (plus the translation when there is no rotation) rounded to 1 m.
+  std::array<bool, 3> have_stream_origin_{};
+  std::array<double, 3> stream_origin_{};
   ScanReadResult result_;
 };
 

@@ -3,10 +3,13 @@
 #include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
+#include <malloc.h>
 #include <stdlib.h>
 #include <unistd.h>
 
+#include <bit>
 #include <cmath>
+#include <cstdio>
 #include <cstdint>
 #include <cstdlib>
 #include <cstring>
@@ -236,6 +239,116 @@ TEST_F(PcdTest, BinaryCompressedLongRunsUseExtendedBackReferences) {
   EXPECT_EQ(read->points.positions[3 * 299 + 0], 0.0f);
 }
 
+// The same cloud as binary (point records) and as binary_compressed (fields
+// one after another), with fields of 1, 2, 4 and 8 bytes so that values
+// straddle the decoder's output chunks, a skipped field with COUNT 3, and
+// each recognized field decoded straight into its output array.
+std::string MixedCloud(int n, bool compressed) {
+  const std::string header =
+      "FIELDS x label y z rgb normal_x normal_y normal_z fpfh intensity\n"
+      "SIZE 4 2 4 4 4 4 4 4 8 1\nTYPE F U F F U F F F F U\nCOUNT 1 1 1 1 1 1 1 1 3 1\n"
+      "WIDTH " + std::to_string(n) + "\nHEIGHT 1\nPOINTS " + std::to_string(n) +
+      "\nDATA " + (compressed ? "binary_compressed\n" : "binary\n");
+  auto value = [](int i, int field) -> double {
+    switch (field) {
+      case 0: return 0.001 * (i % 7919) - 3;
+      case 1: return i % 65536;
+      case 2: return 0.25 * (i % 331);
+      case 3: return -0.5 * (i % 17);
+      case 4: return (i * 2654435761u) & 0xffffffu;
+      case 5: return (i % 3) == 0;
+      case 6: return (i % 3) == 1;
+      case 7: return (i % 3) == 2;
+      case 8: return 1e300 * (i % 5);
+      default: return i % 256;
+    }
+  };
+  auto append = [&](std::string* out, int i, int field) {
+    const double v = value(i, field);
+    if (field == 1) Append(out, static_cast<uint16_t>(v));
+    else if (field == 4) Append(out, static_cast<uint32_t>(v));
+    else if (field == 8) for (int k = 0; k < 3; ++k) Append(out, v);
+    else if (field == 9) Append(out, static_cast<uint8_t>(v));
+    else Append(out, static_cast<float>(v));
+  };
+  std::string body;
+  if (compressed) {
+    for (int field = 0; field < 10; ++field) {
+      for (int i = 0; i < n; ++i) append(&body, i, field);
+    }
+    return header + CompressedBody(body);
+  }
+  for (int i = 0; i < n; ++i) {
+    for (int field = 0; field < 10; ++field) append(&body, i, field);
+  }
+  return header + body;
+}
+
+TEST_F(PcdTest, BinaryCompressedStreamsFieldsIntoTheSameCloudAsBinary) {
+  const int n = 30011;  // > 64 KiB per field
+  const auto binary = ReadPcd(Write(MixedCloud(n, false), "binary.pcd"), {});
+  const auto compressed = ReadPcd(Write(MixedCloud(n, true), "compressed.pcd"), {});
+  ASSERT_TRUE(binary.ok()) << binary.status().message();
+  ASSERT_TRUE(compressed.ok()) << compressed.status().message();
+  ASSERT_EQ(compressed->points.size(), static_cast<size_t>(n));
+  EXPECT_EQ(compressed->points.positions, binary->points.positions);
+  EXPECT_EQ(compressed->points.normals, binary->points.normals);
+  EXPECT_EQ(compressed->points.colors, binary->points.colors);
+  EXPECT_EQ(compressed->points.intensities, binary->points.intensities);
+  // Spot checks against the values written.
+  const int i = 12345;
+  EXPECT_EQ(compressed->points.positions[3 * i], static_cast<float>(0.001 * (i % 7919) - 3));
+  EXPECT_EQ(compressed->points.positions[3 * i + 1], 0.25f * (i % 331));
+  EXPECT_EQ(compressed->points.positions[3 * i + 2], -0.5f * (i % 17));
+  const uint32_t rgb = (i * 2654435761u) & 0xffffffu;
+  EXPECT_EQ(compressed->points.colors[3 * i], rgb >> 16);
+  EXPECT_EQ(compressed->points.colors[3 * i + 2], rgb & 255);
+  EXPECT_EQ(compressed->points.normals[3 * i], 1.0f);  // i % 3 == 0: normal (1, 0, 0)
+  EXPECT_EQ(compressed->points.normals[3 * i + 2], 0.0f);
+  EXPECT_EQ(compressed->points.intensities[i], static_cast<float>((i % 256) / 255.0));
+}
+
+TEST_F(PcdTest, BinaryCompressedDoubleCoordinatesWithNoReturnsAndTranslation) {
+  // 2 x 2 organized, F8; point 0 is "no return" (x y z NaN), point 2 has only
+  // z NaN. VIEWPOINT translates by whole and half meters.
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double xs[] = {nan, 652341.125, 652343.0, 652343.0};
+  const double ys[] = {nan, 5412345.5, 5412347.0, 5412347.0};
+  const double zs[] = {nan, 312.25, nan, 313.0};
+  std::string soa;
+  for (const double* axis : {xs, ys, zs}) {
+    for (int i = 0; i < 4; ++i) Append(&soa, axis[i]);
+  }
+  const std::string header =
+      "FIELDS x y z\nSIZE 8 8 8\nTYPE F F F\nWIDTH 2\nHEIGHT 2\n"
+      "VIEWPOINT 10 -0.5 0 1 0 0 0\nPOINTS 4\nDATA binary_compressed\n";
+  const auto read = ReadPcd(Write(header + CompressedBody(soa)), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  EXPECT_EQ(read->dropped_points, 2u);
+  EXPECT_EQ(cloud.origin, (std::array<double, 3>{652352, 5412346, 313}));
+  EXPECT_EQ(cloud.positions, (std::vector<float>{-0.875f, -1, -0.75f, 1, 0.5f, 0}));
+  EXPECT_EQ(cloud.stations, (std::vector<std::array<double, 3>>{{10, -0.5, 0}}));
+}
+
+TEST_F(PcdTest, BinaryCompressedUnorganizedNanIsAnErrorUnlessDropped) {
+  std::string soa;
+  for (float v : {0.f, std::numeric_limits<float>::infinity(), 2.f, 0.f, 1.f, 2.f, 0.f, 1.f,
+                  std::numeric_limits<float>::quiet_NaN()}) {
+    Append(&soa, v);
+  }
+  const std::string file = "FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                           "WIDTH 3\nHEIGHT 1\nPOINTS 3\nDATA binary_compressed\n" +
+                           CompressedBody(soa);
+  ExpectError(file, "scan.pcd: point 1 has a non-finite coordinate (inf 1 1)");
+  ScanReadOptions options;
+  options.drop_invalid_points = true;
+  const auto read = ReadPcd(Write(file), options);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->dropped_points, 2u);
+  EXPECT_EQ(read->points.positions, (std::vector<float>{0, 0, 0}));
+}
+
 TEST_F(PcdTest, IdentityViewpointMakesNoStationWhateverTheQuaternionScale) {
   // qw = -2: the identity once normalized; the points stay bit for bit.
   const auto read = ReadPcd(Write("FIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nWIDTH 1\nHEIGHT 1\n"
@@ -419,6 +532,98 @@ TEST_F(PcdTest, ErrorCorruptLzfStreams) {
                                         "DATA binary_compressed\n" +
                   block(2, 1200, std::string("\x00\x00", 2)),
               "2 compressed bytes cannot expand to 1200");
+}
+
+// ---------------------------------------------------------------------------
+// Peak memory (run with --gtest_also_run_disabled_tests; Linux only; writes
+// up to ~300 MB into the temp dir).
+
+// A /proc/self/status value in kB ("VmRSS", "VmHWM"), -1 if absent.
+int64_t ProcStatusKb(const std::string& key) {
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  while (std::getline(status, line)) {
+    if (line.rfind(key + ":", 0) == 0) {
+      return std::strtoll(line.c_str() + key.size() + 1, nullptr, 10);
+    }
+  }
+  return -1;
+}
+
+// 5 million points x y z rgb normal_x normal_y normal_z (all 4 bytes), in
+// `data` = ascii, binary or binary_compressed, written to `path`.
+void WriteLargeCloud(const std::string& path, const std::string& data, int n) {
+  auto value = [](int i, int field) -> float {
+    const uint32_t hash = static_cast<uint32_t>(i) * 2654435761u;
+    switch (field) {
+      case 0: return 0.01f * static_cast<float>(i % 1000);
+      case 1: return 0.01f * static_cast<float>(i / 1000 % 1000);
+      case 2: return 0.001f * static_cast<float>(hash >> 22);
+      case 3: return std::bit_cast<float>(hash >> 8);  // packed 0x00RRGGBB
+      case 4: return 0.6f;
+      case 5: return (hash & 1) ? 0.8f : -0.8f;
+      default: return 0;
+    }
+  };
+  std::ofstream out(path, std::ios::binary);
+  out << "FIELDS x y z rgb normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4 4\n"
+         "TYPE F F F U F F F\nWIDTH "
+      << n << "\nHEIGHT 1\nPOINTS " << n << "\nDATA " << data << "\n";
+  if (data == "binary_compressed") {
+    std::string soa;
+    soa.reserve(size_t{28} * n);
+    for (int field = 0; field < 7; ++field) {
+      for (int i = 0; i < n; ++i) Append(&soa, value(i, field));
+    }
+    out << CompressedBody(soa);
+    return;
+  }
+  std::string chunk;
+  for (int i = 0; i < n; ++i) {
+    if (data == "binary") {
+      for (int field = 0; field < 7; ++field) Append(&chunk, value(i, field));
+    } else {
+      char line[160];
+      std::snprintf(line, sizeof line, "%.9g %.9g %.9g %u %.9g %.9g %.9g\n", value(i, 0),
+                    value(i, 1), value(i, 2), std::bit_cast<uint32_t>(value(i, 3)), value(i, 4),
+                    value(i, 5), value(i, 6));
+      chunk += line;
+    }
+    if (chunk.size() > (1 << 20)) {
+      out << chunk;
+      chunk.clear();
+    }
+  }
+  out << chunk;
+}
+
+TEST_F(PcdTest, DISABLED_PeakMemoryStaysNearTheDecodedCloud) {
+  constexpr int kPoints = 5'000'000;
+  for (const std::string data : {"binary_compressed", "binary", "ascii"}) {
+    const std::string path = (dir_ / ("large_" + data + ".pcd")).string();
+    WriteLargeCloud(path, data, kPoints);
+    // Return freed heap pages (so the read cannot reuse resident memory
+    // unseen), then reset VmHWM to the current RSS (Linux >= 4.0).
+    ::malloc_trim(0);
+    std::ofstream("/proc/self/clear_refs") << "5";
+    const int64_t before_kb = ProcStatusKb("VmRSS");
+    if (before_kb < 0 || ProcStatusKb("VmHWM") > before_kb + 1024) {
+      GTEST_SKIP() << "cannot reset the peak RSS (/proc/self/clear_refs)";
+    }
+    const auto read = ReadPcd(path, {});
+    const int64_t peak_kb = ProcStatusKb("VmHWM");
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    ASSERT_EQ(read->points.size(), static_cast<size_t>(kPoints));
+    const double cloud_bytes = 4.0 * read->points.positions.size() +
+                               4.0 * read->points.normals.size() + read->points.colors.size();
+    const double ratio = 1024.0 * static_cast<double>(peak_kb - before_kb) / cloud_bytes;
+    std::printf("pcd %s: decoded cloud %.1f MB; peak RSS %.1f MB = %.1f MB before the read "
+                "+ %.1f MB: ratio %.3f (whole process %.3f)\n",
+                data.c_str(), cloud_bytes / 1e6, peak_kb * 1024 / 1e6, before_kb * 1024 / 1e6,
+                (peak_kb - before_kb) * 1024 / 1e6, ratio, peak_kb * 1024 / cloud_bytes);
+    EXPECT_LE(ratio, 1.3) << data;
+    std::filesystem::remove(path);
+  }
 }
 
 // ---------------------------------------------------------------------------
