@@ -1,6 +1,8 @@
 #include "stages/builtin.h"
 
 #include "stages/io/io_stages.h"
+#include "stages/mesh/mesh_stages.h"
+#include "stages/metrics/metrics_stages.h"
 #include "stages/points/points_stages.h"
 #include "stages/synth/synth_stages.h"
 
@@ -10,6 +12,8 @@ void RegisterBuiltinStages(StageRegistry& registry) {
   RegisterIoStages(registry);
   RegisterPointsStages(registry);
   RegisterSynthStages(registry);
+  RegisterMeshStages(registry);
+  RegisterMetricsStages(registry);
 }
 
 }  // namespace pb

@@ -30,6 +30,15 @@ void FakeContext::AddInput(const std::string& port, const std::string& type,
   inputs_[port] = view;
 }
 
+void FakeContext::AddInput(const std::string& port, const std::string& type,
+                           std::map<std::string, std::string> files, nlohmann::json meta) {
+  ArtifactView view;
+  view.type = type;
+  view.meta = std::move(meta);
+  view.files = std::move(files);
+  inputs_[port] = view;
+}
+
 std::string FakeContext::output_path(std::string_view port, std::string_view file_name) {
   const std::filesystem::path dir = dir_ / "out" / std::string(port);
   std::filesystem::create_directories(dir);

@@ -37,6 +37,10 @@ class FakeContext : public StageContext {
   // Connects input `port` to the one-file artifact `file` of type `type`.
   void AddInput(const std::string& port, const std::string& type, const std::string& file,
                 nlohmann::json meta = nlohmann::json::object());
+  // A multi-file input (e.g. synth.scan's truth: mesh.ply + scene.json).
+  void AddInput(const std::string& port, const std::string& type,
+                std::map<std::string, std::string> files,
+                nlohmann::json meta = nlohmann::json::object());
 
   const nlohmann::json& params() const override { return params_; }
   bool has_input(std::string_view port) const override {

@@ -1,0 +1,86 @@
+// Mesh decimation by quadric edge collapse (Garland & Heckbert, "Surface
+// Simplification Using Quadric Error Metrics", SIGGRAPH 1997), restricted to
+// collapses that keep a 2-manifold mesh manifold.
+//
+// Input and output are triangle meshes (stages/geometry/mesh.h); the output
+// has the same origin and the same set of attributes as the input.
+//
+//  * Cost: each vertex carries the sum of the area-weighted plane quadrics of
+//    its faces; an edge's cost is the error of the merged quadric at the
+//    optimal point (3x3 solve; when singular or far from the edge, the best
+//    of the midpoint and the two endpoints, the midpoint winning ties), plus
+//    1e-6 * length^4 so that on flat regions, where every error is zero,
+//    short edges go first and triangles stay well shaped.
+//  * Boundaries: every boundary edge (one face) adds a plane through the edge,
+//    perpendicular to its face, weighted by `boundary_weight` times the edge
+//    length squared, so boundary vertices stay on the boundary line and
+//    corners stay put.
+//  * Manifoldness: a collapse is rejected when it fails the link condition
+//    (the common neighbors of the two endpoints must be exactly the opposite
+//    vertices of the edge's faces, and no edge may be in both links: this
+//    keeps a tetrahedron and a lone triangle as they are; an interior edge
+//    joining two boundary vertices is rejected, as it would pinch the
+//    boundary), when it would turn any surviving face by more than
+//    acos(min_normal_dot) against its current or its original normal, or
+//    when it would make a face degenerate (twice its area under 1e-6 times
+//    its longest edge squared). Edges of more than two faces (non-manifold
+//    input) are never collapsed.
+//  * Attributes: normals, colors, uvs and tangents of the kept vertex are
+//    interpolated between the edge's endpoints at the parameter of the new
+//    position projected on the edge (clamped to [0,1]); normals and tangent
+//    xyz are renormalized, tangent w is taken from the nearer endpoint. UVs
+//    are interpolated as they are: across a texture seam they smear, so
+//    decimate before unwrapping.
+//  * Determinism: single-threaded; the heap orders by cost, then by the
+//    edge's (smaller, larger) vertex index, so equal inputs give identical
+//    outputs.
+//
+// Memory: about 150 bytes per input face besides the input (quadrics,
+// adjacency, heap). Measured: 4.8e6 -> 2.5e5 faces in 8.5 s (synth room) and
+// 5.2e6 -> 2.5e5 in 17 s (icosphere, poor vertex locality), one core.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+
+#include "engine/base/status.h"
+#include "stages/geometry/mesh.h"
+
+namespace pb {
+
+struct DecimateOptions {
+  // Stop when the face count is at most this. Reached unless the remaining
+  // collapses are all rejected (the report then shows more faces out).
+  size_t target_faces = 0;
+  // Weight of the boundary constraint planes relative to the face planes
+  // (both scale with length squared, so this is unitless). 0 frees the
+  // boundary.
+  double boundary_weight = 1000.0;
+  // Reject a collapse that makes a face's unit normal have a dot product
+  // below this with its normal before the collapse or in the input.
+  double min_normal_dot = 0.2;
+  // Called with the fraction of the work done, in [0,1], every few thousand
+  // collapses.
+  std::function<void(double fraction)> progress;
+};
+
+struct DecimateReport {
+  uint64_t faces_in = 0;
+  uint64_t faces_out = 0;
+  uint64_t vertices_in = 0;
+  uint64_t vertices_out = 0;  // referenced vertices only: unused ones are dropped
+  uint64_t collapses = 0;
+  uint64_t rejected_link = 0;        // link condition or non-manifold edge
+  uint64_t rejected_flip = 0;        // a face normal would turn too far
+  uint64_t rejected_degenerate = 0;  // a face would get (near) zero area
+};
+
+// Decimates `mesh` to about `options.target_faces` triangles. Status::Invalid
+// if the mesh fails Validate(), has a non-finite coordinate or a face with a
+// repeated vertex index, or the options are out of range.
+// `report` may be null.
+Expected<Mesh> DecimateMesh(const Mesh& mesh, const DecimateOptions& options,
+                            DecimateReport* report);
+
+}  // namespace pb

@@ -1,0 +1,429 @@
+#include "stages/geometry/mesh_decimate.h"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <functional>
+#include <map>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "stages/geometry/synth_scene.h"
+
+namespace pb {
+namespace {
+
+// A (n+1) x (n+1) vertex grid on [0,1]^2 at z = 0, 2 n^2 faces facing +z,
+// colored red by y.
+Mesh Grid(int n) {
+  Mesh mesh;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      mesh.positions.insert(mesh.positions.end(),
+                            {static_cast<float>(i) / n, static_cast<float>(j) / n, 0.0f});
+      mesh.colors.insert(mesh.colors.end(), {static_cast<uint8_t>(255 * j / n), 0, 0});
+    }
+  }
+  auto id = [n](int i, int j) { return static_cast<uint32_t>(j * (n + 1) + i); };
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      mesh.indices.insert(mesh.indices.end(), {id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      mesh.indices.insert(mesh.indices.end(), {id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  }
+  return mesh;
+}
+
+// Unit icosphere: icosahedron subdivided `levels` times (20 * 4^levels
+// faces), outward-facing, with normals and a red channel by height z.
+Mesh Icosphere(int levels) {
+  const double t = (1 + std::sqrt(5.0)) / 2;
+  std::vector<std::array<double, 3>> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                          {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                          {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<uint32_t> f = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
+                             4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
+                             6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
+  auto normalize = [](std::array<double, 3> p) {
+    const double l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    return std::array<double, 3>{p[0] / l, p[1] / l, p[2] / l};
+  };
+  for (auto& p : v) p = normalize(p);
+  for (int level = 0; level < levels; ++level) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
+    auto mid = [&](uint32_t a, uint32_t b) {
+      const auto key = std::minmax(a, b);
+      auto it = midpoints.find(key);
+      if (it != midpoints.end()) return it->second;
+      v.push_back(normalize({v[a][0] + v[b][0], v[a][1] + v[b][1], v[a][2] + v[b][2]}));
+      const uint32_t id = static_cast<uint32_t>(v.size() - 1);
+      midpoints.emplace(key, id);
+      return id;
+    };
+    std::vector<uint32_t> next;
+    next.reserve(4 * f.size());
+    for (size_t i = 0; i < f.size(); i += 3) {
+      const uint32_t a = f[i], b = f[i + 1], c = f[i + 2];
+      const uint32_t ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
+      next.insert(next.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
+    }
+    f = std::move(next);
+  }
+  Mesh mesh;
+  for (const auto& p : v) {
+    for (int k = 0; k < 3; ++k) {
+      mesh.positions.push_back(static_cast<float>(p[k]));
+      mesh.normals.push_back(static_cast<float>(p[k]));
+    }
+    mesh.colors.insert(mesh.colors.end(),
+                       {static_cast<uint8_t>(std::lround(127.5 * (p[2] + 1))), 100, 0});
+  }
+  mesh.indices = std::move(f);
+  return mesh;
+}
+
+struct Topology {
+  size_t boundary_edges = 0;
+  size_t nonmanifold_edges = 0;     // in more than two faces
+  size_t nonmanifold_vertices = 0;  // faces around the vertex form several fans
+  size_t duplicate_faces = 0;
+  std::vector<std::pair<uint32_t, uint32_t>> boundary;
+};
+
+Topology Check(const Mesh& mesh) {
+  Topology topo;
+  std::map<std::pair<uint32_t, uint32_t>, int> edges;
+  std::vector<std::vector<std::pair<uint32_t, uint32_t>>> links(mesh.vertex_count());
+  std::set<std::array<uint32_t, 3>> faces;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    std::array<uint32_t, 3> sorted = {t[0], t[1], t[2]};
+    std::sort(sorted.begin(), sorted.end());
+    if (!faces.insert(sorted).second) ++topo.duplicate_faces;
+    for (int k = 0; k < 3; ++k) {
+      ++edges[std::minmax(t[k], t[(k + 1) % 3])];
+      links[t[k]].push_back({t[(k + 1) % 3], t[(k + 2) % 3]});
+    }
+  }
+  for (const auto& [edge, count] : edges) {
+    if (count > 2) ++topo.nonmanifold_edges;
+    if (count == 1) {
+      ++topo.boundary_edges;
+      topo.boundary.push_back(edge);
+    }
+  }
+  // One fan: the link edges of the vertex form one connected graph.
+  for (const auto& link : links) {
+    if (link.empty()) continue;
+    std::map<uint32_t, uint32_t> parent;
+    std::function<uint32_t(uint32_t)> find = [&](uint32_t x) {
+      if (!parent.count(x)) parent[x] = x;
+      return parent[x] == x ? x : parent[x] = find(parent[x]);
+    };
+    for (const auto& [a, b] : link) parent[find(a)] = find(b);
+    std::set<uint32_t> roots;
+    for (const auto& [a, b] : link) roots.insert(find(a));
+    if (roots.size() != 1) ++topo.nonmanifold_vertices;
+  }
+  return topo;
+}
+
+std::array<double, 3> FaceNormal(const Mesh& m, size_t f) {
+  const float* p[3];
+  for (int k = 0; k < 3; ++k) p[k] = &m.positions[3 * m.indices[3 * f + k]];
+  const double e0[3] = {p[1][0] - p[0][0], p[1][1] - p[0][1], p[1][2] - p[0][2]};
+  const double e1[3] = {p[2][0] - p[0][0], p[2][1] - p[0][1], p[2][2] - p[0][2]};
+  std::array<double, 3> n = {e0[1] * e1[2] - e0[2] * e1[1], e0[2] * e1[0] - e0[0] * e1[2],
+                             e0[0] * e1[1] - e0[1] * e1[0]};
+  const double l = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  for (double& x : n) x /= l;
+  return n;
+}
+
+Mesh Decimate(const Mesh& mesh, size_t target, DecimateReport* report) {
+  DecimateOptions options;
+  options.target_faces = target;
+  auto out = DecimateMesh(mesh, options, report);
+  EXPECT_TRUE(out.ok()) << out.status().message();
+  return out.ok() ? *out : Mesh();
+}
+
+TEST(MeshDecimate, SphereStaysClosedManifoldAndOriented) {
+  const Mesh sphere = Icosphere(5);  // 20480 faces
+  ASSERT_EQ(sphere.face_count(), 20480u);
+  for (size_t target : {10000u, 2000u, 500u}) {
+    SCOPED_TRACE(target);
+    DecimateReport report;
+    const Mesh out = Decimate(sphere, target, &report);
+    EXPECT_EQ(report.faces_in, 20480u);
+    EXPECT_EQ(report.faces_out, out.face_count());
+    EXPECT_LE(out.face_count(), target);
+    EXPECT_GE(out.face_count(), target * 0.95);
+    // Closed: V - E + F = 2 with every edge in two faces.
+    const Topology topo = Check(out);
+    EXPECT_EQ(topo.boundary_edges, 0u);
+    EXPECT_EQ(topo.nonmanifold_edges, 0u);
+    EXPECT_EQ(topo.nonmanifold_vertices, 0u);
+    EXPECT_EQ(topo.duplicate_faces, 0u);
+    EXPECT_EQ(out.vertex_count() + out.face_count() - out.face_count() * 3 / 2, 2u);
+    EXPECT_EQ(out.normals.size(), out.positions.size());
+    EXPECT_EQ(out.colors.size(), out.positions.size());
+    for (size_t f = 0; f < out.face_count(); ++f) {
+      const auto n = FaceNormal(out, f);
+      const float* p = &out.positions[3 * out.indices[3 * f]];
+      ASSERT_GT(n[0] * p[0] + n[1] * p[1] + n[2] * p[2], 0.5) << "face " << f;
+    }
+    // Vertices stay near the unit sphere.
+    for (size_t v = 0; v < out.vertex_count(); ++v) {
+      const float* p = &out.positions[3 * v];
+      ASSERT_NEAR(std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]), 1.0, 0.03) << v;
+    }
+  }
+}
+
+TEST(MeshDecimate, SphereKeepsColorsByHeight) {
+  const Mesh sphere = Icosphere(5);
+  const Mesh out = Decimate(sphere, 1000, nullptr);
+  // Mean red per height band of 0.25: input red = 127.5 (z + 1).
+  auto means = [](const Mesh& m) {
+    std::array<double, 8> sum{}, count{};
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+      const int band = std::min(7, static_cast<int>((m.positions[3 * v + 2] + 1) * 4));
+      sum[band] += m.colors[3 * v];
+      count[band] += 1;
+    }
+    for (int b = 0; b < 8; ++b) sum[b] /= count[b];
+    return sum;
+  };
+  const auto in = means(sphere), got = means(out);
+  for (int b = 0; b < 8; ++b) EXPECT_NEAR(got[b], in[b], 6.0) << "band " << b;
+  for (size_t v = 0; v < out.vertex_count(); ++v) ASSERT_EQ(out.colors[3 * v + 1], 100) << v;
+  // Normals stay unit and radial.
+  for (size_t v = 0; v < out.vertex_count(); ++v) {
+    const float* n = &out.normals[3 * v];
+    const float* p = &out.positions[3 * v];
+    ASSERT_NEAR(n[0] * n[0] + n[1] * n[1] + n[2] * n[2], 1.0, 1e-4);
+    ASSERT_GT(n[0] * p[0] + n[1] * p[1] + n[2] * p[2], 0.95);
+  }
+}
+
+TEST(MeshDecimate, GridKeepsBoundaryAndCorners) {
+  const Mesh grid = Grid(64);  // 8192 faces
+  for (size_t target : {4000u, 1000u, 200u}) {
+    SCOPED_TRACE(target);
+    DecimateReport report;
+    const Mesh out = Decimate(grid, target, &report);
+    EXPECT_LE(out.face_count(), target);
+    EXPECT_GE(out.face_count(), target * 0.95);
+    const Topology topo = Check(out);
+    EXPECT_EQ(topo.nonmanifold_edges, 0u);
+    EXPECT_EQ(topo.nonmanifold_vertices, 0u);
+    EXPECT_EQ(topo.duplicate_faces, 0u);
+    double length = 0;
+    auto on_border = [](const float* p) {
+      return std::abs(p[0]) < 1e-5 || std::abs(p[0] - 1) < 1e-5 || std::abs(p[1]) < 1e-5 ||
+             std::abs(p[1] - 1) < 1e-5;
+    };
+    for (const auto& [a, b] : topo.boundary) {
+      const float* pa = &out.positions[3 * a];
+      const float* pb = &out.positions[3 * b];
+      ASSERT_TRUE(on_border(pa) && on_border(pb)) << a << " " << b;
+      length += std::hypot(pa[0] - pb[0], pa[1] - pb[1]);
+    }
+    EXPECT_NEAR(length, 4.0, 1e-4);
+    std::set<std::pair<float, float>> corners;
+    for (size_t v = 0; v < out.vertex_count(); ++v) {
+      const float* p = &out.positions[3 * v];
+      ASSERT_EQ(p[2], 0.0f);
+      if ((p[0] == 0 || p[0] == 1) && (p[1] == 0 || p[1] == 1)) corners.insert({p[0], p[1]});
+    }
+    EXPECT_EQ(corners.size(), 4u);
+    for (size_t f = 0; f < out.face_count(); ++f) ASSERT_GT(FaceNormal(out, f)[2], 0.99) << f;
+  }
+}
+
+TEST(MeshDecimate, GridInterpolatesUvsAndTangents) {
+  Mesh grid = Grid(16);
+  for (size_t v = 0; v < grid.vertex_count(); ++v) {
+    grid.uvs.insert(grid.uvs.end(), {grid.positions[3 * v], grid.positions[3 * v + 1]});
+    grid.tangents.insert(grid.tangents.end(), {1, 0, 0, -1});
+    grid.normals.insert(grid.normals.end(), {0, 0, 1});
+  }
+  const Mesh out = Decimate(grid, 100, nullptr);
+  ASSERT_EQ(out.uvs.size(), 2 * out.vertex_count());
+  ASSERT_EQ(out.tangents.size(), 4 * out.vertex_count());
+  // uv = xy is linear along every edge, so interpolation keeps it exact.
+  for (size_t v = 0; v < out.vertex_count(); ++v) {
+    ASSERT_NEAR(out.uvs[2 * v], out.positions[3 * v], 1e-5) << v;
+    ASSERT_NEAR(out.uvs[2 * v + 1], out.positions[3 * v + 1], 1e-5) << v;
+    ASSERT_EQ(out.tangents[4 * v], 1.0f);
+    ASSERT_EQ(out.tangents[4 * v + 3], -1.0f);
+    ASSERT_EQ(out.normals[3 * v + 2], 1.0f);
+  }
+}
+
+TEST(MeshDecimate, TetrahedronAndLoneTriangleStay) {
+  Mesh tetra;
+  tetra.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
+  tetra.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
+  DecimateReport report;
+  const Mesh out = Decimate(tetra, 0, &report);
+  EXPECT_EQ(out.indices, tetra.indices);
+  EXPECT_EQ(report.collapses, 0u);
+  EXPECT_GT(report.rejected_link, 0u);
+
+  Mesh triangle;
+  triangle.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  triangle.indices = {0, 1, 2};
+  EXPECT_EQ(Decimate(triangle, 0, nullptr).indices, triangle.indices);
+}
+
+TEST(MeshDecimate, LooseTrianglesAreLeftAlone) {
+  Mesh soup;
+  for (uint32_t i = 0; i < 3000; ++i) {
+    const float x = static_cast<float>(i);
+    soup.positions.insert(soup.positions.end(), {x, 0, 0, x + 0.5f, 0, 0, x, 0.5f, 0});
+    soup.indices.insert(soup.indices.end(), {3 * i, 3 * i + 1, 3 * i + 2});
+  }
+  DecimateReport report;
+  const Mesh out = Decimate(soup, 0, &report);
+  EXPECT_EQ(out.indices, soup.indices);
+  EXPECT_EQ(report.collapses, 0u);
+  EXPECT_EQ(report.rejected_link, 9000u);
+}
+
+TEST(MeshDecimate, Deterministic) {
+  const Mesh sphere = Icosphere(4);
+  DecimateReport r1, r2;
+  const Mesh a = Decimate(sphere, 700, &r1);
+  const Mesh b = Decimate(sphere, 700, &r2);
+  EXPECT_EQ(a.positions, b.positions);
+  EXPECT_EQ(a.indices, b.indices);
+  EXPECT_EQ(a.colors, b.colors);
+  EXPECT_EQ(r1.collapses, r2.collapses);
+  EXPECT_EQ(r1.rejected_link, r2.rejected_link);
+}
+
+TEST(MeshDecimate, TargetAboveInputCopiesMesh) {
+  const Mesh grid = Grid(4);
+  DecimateReport report;
+  const Mesh out = Decimate(grid, 1000, &report);
+  EXPECT_EQ(out.indices, grid.indices);
+  EXPECT_EQ(out.positions, grid.positions);
+  EXPECT_EQ(report.collapses, 0u);
+}
+
+TEST(MeshDecimate, RejectsBadInput) {
+  Mesh mesh = Grid(1);
+  mesh.indices[1] = mesh.indices[0];
+  DecimateOptions options;
+  auto out = DecimateMesh(mesh, options, nullptr);
+  ASSERT_FALSE(out.ok());
+  EXPECT_EQ(out.status().code(), Status::Code::kInvalid);
+  EXPECT_NE(out.status().message().find("mesh face 0 repeats vertex 0"), std::string::npos)
+      << out.status().message();
+  mesh.indices[1] = 99;
+  EXPECT_FALSE(DecimateMesh(mesh, options, nullptr).ok());
+  mesh = Grid(1);
+  mesh.positions[4] = NAN;
+  auto nan = DecimateMesh(mesh, options, nullptr);
+  ASSERT_FALSE(nan.ok());
+  EXPECT_NE(nan.status().message().find("mesh vertex 1 has a non-finite coordinate"),
+            std::string::npos)
+      << nan.status().message();
+  options.min_normal_dot = 2;
+  EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
+}
+
+TEST(MeshDecimate, SynthTruthMeshByTen) {
+  auto scene = MakeSynthScene("room", 1, {});
+  ASSERT_TRUE(scene.ok()) << scene.status().message();
+  const Mesh truth = SynthTruthMesh(*scene, 0.05);
+  const Topology in = Check(truth);
+  const size_t target = truth.face_count() / 10;
+  DecimateReport report;
+  const auto start = std::chrono::steady_clock::now();
+  const Mesh out = Decimate(truth, target, &report);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  EXPECT_LE(out.face_count(), target);
+  EXPECT_GE(out.face_count(), target * 0.95);
+  const Topology topo = Check(out);
+  EXPECT_EQ(topo.nonmanifold_edges, in.nonmanifold_edges);
+  EXPECT_EQ(topo.nonmanifold_vertices, in.nonmanifold_vertices);
+  EXPECT_EQ(topo.duplicate_faces, 0u);
+  EXPECT_EQ(out.origin, truth.origin);
+  EXPECT_EQ(out.colors.size(), out.positions.size());
+  // Faces still face into the room: against the true normal at the centroid.
+  size_t facing_away = 0;
+  for (size_t f = 0; f < out.face_count(); ++f) {
+    Vec3 centroid = out.origin;
+    for (int k = 0; k < 3; ++k) {
+      for (int c = 0; c < 3; ++c)
+        centroid[c] += out.positions[3 * out.indices[3 * f + k] + c] / 3.0;
+    }
+    const Vec3 truth_normal = SampleSurface(*scene, centroid).normal;
+    const auto n = FaceNormal(out, f);
+    if (n[0] * truth_normal[0] + n[1] * truth_normal[1] + n[2] * truth_normal[2] < 0) ++facing_away;
+  }
+  EXPECT_EQ(facing_away, 0u);
+  std::printf(
+      "synth truth %zu -> %zu faces in %.3f s (in: %zu boundary, %zu non-manifold edges, %zu "
+      "non-manifold vertices); rejected link %llu flip %llu degenerate %llu\n",
+      truth.face_count(), out.face_count(), seconds, in.boundary_edges, in.nonmanifold_edges,
+      in.nonmanifold_vertices, static_cast<unsigned long long>(report.rejected_link),
+      static_cast<unsigned long long>(report.rejected_flip),
+      static_cast<unsigned long long>(report.rejected_degenerate));
+}
+
+// Measurements, not checks: ~5·10^6 faces -> 2.5·10^5. Time and peak RSS of
+// the decimation alone (the peak is reset after generating the input, where
+// the kernel allows it).
+void MeasureLarge(const char* name, const Mesh& mesh) {
+  if (FILE* clear = std::fopen("/proc/self/clear_refs", "w")) {
+    std::fputs("5", clear);
+    std::fclose(clear);
+  }
+  const auto start = std::chrono::steady_clock::now();
+  DecimateReport report;
+  const Mesh out = Decimate(mesh, 250000, &report);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  std::ifstream status("/proc/self/status");
+  std::string line;
+  double peak_mib = 0;
+  while (std::getline(status, line)) {
+    if (line.rfind("VmHWM:", 0) == 0) peak_mib = std::stod(line.substr(6)) / 1024.0;
+  }
+  std::printf(
+      "%s: %zu -> %zu faces in %.2f s, peak RSS %.0f MiB (collapses %llu, rejected "
+      "link %llu flip %llu degenerate %llu)\n",
+      name, mesh.face_count(), out.face_count(), seconds, peak_mib,
+      static_cast<unsigned long long>(report.collapses),
+      static_cast<unsigned long long>(report.rejected_link),
+      static_cast<unsigned long long>(report.rejected_flip),
+      static_cast<unsigned long long>(report.rejected_degenerate));
+  const Topology topo = Check(out);
+  EXPECT_EQ(topo.nonmanifold_edges, 0u);
+  EXPECT_EQ(topo.nonmanifold_vertices, 0u);
+}
+
+TEST(MeshDecimate, DISABLED_LargeSphereTiming) {
+  MeasureLarge("icosphere", Icosphere(9));  // 5,242,880 faces
+}
+
+TEST(MeshDecimate, DISABLED_LargeSynthTiming) {
+  auto scene = MakeSynthScene("room", 1, {});
+  ASSERT_TRUE(scene.ok()) << scene.status().message();
+  MeasureLarge("synth room, 7 mm cells", SynthTruthMesh(*scene, 0.007));
+}
+
+}  // namespace
+}  // namespace pb

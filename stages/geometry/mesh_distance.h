@@ -1,0 +1,96 @@
+// Geometric accuracy of a mesh against ground truth, measured both ways:
+//   mesh -> truth: points sampled uniformly by area on the evaluated mesh,
+//                  each one's distance to the truth (finds surface that is
+//                  wrong or should not be there);
+//   truth -> mesh: points sampled on the truth mesh, each one's distance to
+//                  the evaluated mesh (finds truth that is missing: holes).
+// One direction alone hides the other's failures (a mesh covering half of the
+// room scores ~0 mesh -> truth). Distances are unsigned, in meters, in
+// absolute coordinates (each mesh's origin is applied).
+//
+// Closest points use a bounding-volume hierarchy over the triangles and the
+// exact point-triangle distance of ClosestPointOnTriangle.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "engine/base/status.h"
+#include "stages/geometry/mesh.h"
+#include "stages/geometry/synth_scene.h"
+
+namespace pb {
+
+// The point of triangle (a, b, c) closest to p (Ericson, "Real-Time Collision
+// Detection", 2005, section 5.1.5 ClosestPtPointTriangle). Works for
+// degenerate triangles (segments, points).
+Vec3 ClosestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const Vec3& c);
+
+// Nearest-triangle queries against a fixed mesh (its faces; vertices not in a
+// face are ignored). Thread-safe for concurrent queries once built.
+class TriangleBvh {
+ public:
+  explicit TriangleBvh(const Mesh& mesh);
+  bool empty() const { return triangles_.empty(); }
+  // Distance in meters from `point` (absolute coordinates) to the nearest
+  // triangle; +infinity for an empty mesh.
+  double Distance(const Vec3& point) const;
+
+ private:
+  struct Node {
+    std::array<double, 3> min, max;
+    uint32_t first;  // leaf: first triangle; inner: left child (right = first + 1)
+    uint32_t count;  // triangles in a leaf; 0 for an inner node
+  };
+  void Build();
+
+  std::array<double, 3> origin_{};
+  std::vector<std::array<Vec3, 3>> triangles_;  // corners relative to origin_
+  std::vector<Node> nodes_;
+};
+
+// `count` points (absolute coordinates) distributed uniformly by area over
+// the faces of `mesh`, from a fixed pseudo-random sequence seeded by `seed`
+// (same inputs, same points). Empty if the mesh has no area.
+std::vector<Vec3> SampleMeshSurface(const Mesh& mesh, size_t count, uint64_t seed);
+
+struct DistanceStats {
+  size_t samples = 0;
+  double mean_m = 0;
+  double rms_m = 0;
+  double p95_m = 0;  // 95th percentile (nearest rank)
+  double max_m = 0;  // Hausdorff distance of the direction
+};
+DistanceStats ComputeDistanceStats(std::vector<double> distances_m);
+
+struct MeshDistanceOptions {
+  size_t samples = 200000;  // per direction
+  uint64_t seed = 1;
+  // Called with the fraction done in [0, 1].
+  std::function<void(double fraction)> progress;
+};
+
+struct MeshDistanceResult {
+  DistanceStats mesh_to_truth;
+  DistanceStats truth_to_mesh;
+  // Symmetric: Hausdorff = max of both directions; mean = mean of both means;
+  // RMS and 95th percentile over the pooled samples of both directions.
+  DistanceStats symmetric;
+  bool analytic_mesh_to_truth = false;  // the scene's exact distance was used
+};
+
+// Measures `mesh` against `truth_mesh` both ways. With `scene`, mesh -> truth
+// uses |SampleSurface(scene, p).distance_m|, the exact distance to the
+// analytic (displaced) surface, instead of the tessellated truth mesh, whose
+// aliasing of fine relief would otherwise be counted as error; truth -> mesh
+// always samples `truth_mesh`. Runs queries with TBB (callers bound threads
+// with a task_arena). Status::Invalid if either mesh has no faces of positive
+// area or fails Validate.
+Expected<MeshDistanceResult> MeasureMeshDistance(const Mesh& mesh, const Mesh& truth_mesh,
+                                                 const SynthScene* scene,
+                                                 const MeshDistanceOptions& options);
+
+}  // namespace pb

@@ -1,0 +1,149 @@
+// Runs the mesh stages through a fake StageContext (no engine, no child
+// processes): files go to a temporary directory.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <string>
+
+#include "stages/builtin.h"
+#include "stages/geometry/ply.h"
+#include "stages/stage_test_util.h"
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+class MeshStagesTest : public StageTest {
+ protected:
+  void SetUp() override {
+    StageTest::SetUp();
+    RegisterBuiltinStages(registry_);
+  }
+
+  // A 20 x 20 quad grid on z = 0 (800 faces) with colors, written as `name`.
+  std::string WriteGrid(const std::string& name) {
+    Mesh mesh;
+    mesh.origin = {1000.0, 2000.0, 30.0};
+    const int n = 20;
+    for (int j = 0; j <= n; ++j) {
+      for (int i = 0; i <= n; ++i) {
+        mesh.positions.insert(mesh.positions.end(),
+                              {static_cast<float>(i) / n, static_cast<float>(j) / n, 0.0f});
+        mesh.colors.insert(mesh.colors.end(), {static_cast<uint8_t>(10 * j), 50, 200});
+      }
+    }
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+        mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+      }
+    }
+    const std::filesystem::path dir = dir_ / "input";
+    std::filesystem::create_directories(dir);
+    const std::string path = (dir / name).string();
+    EXPECT_TRUE(WritePlyMesh(path, mesh).ok());
+    return path;
+  }
+};
+
+TEST_F(MeshStagesTest, DecimateIsWellFormed) {
+  const StageType* type = registry_.Find("mesh.decimate");
+  ASSERT_NE(type, nullptr);
+  EXPECT_EQ(type->version, 1);
+  const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
+  EXPECT_EQ(schema["type"], "object");
+  EXPECT_EQ(schema["additionalProperties"], false);
+  for (const auto& [name, property] : schema["properties"].items()) {
+    EXPECT_TRUE(property.contains("description")) << name;
+  }
+  EXPECT_EQ(schema["properties"]["target_faces"]["type"], "integer");
+  EXPECT_EQ(schema["properties"]["boundary_weight"]["default"], 1000);
+  EXPECT_EQ(schema["properties"]["min_normal_dot"]["default"], 0.2);
+  EXPECT_EQ(schema["oneOf"].size(), 2u);
+  ASSERT_EQ(type->inputs.size(), 1u);
+  EXPECT_EQ(type->inputs[0].name, "mesh");
+  EXPECT_EQ(type->inputs[0].type, "mesh");
+  ASSERT_EQ(type->outputs.size(), 1u);
+  EXPECT_EQ(type->outputs[0].name, "mesh");
+  EXPECT_EQ(type->outputs[0].type, "mesh");
+}
+
+TEST_F(MeshStagesTest, DecimateToTargetFaces) {
+  FakeContext ctx(dir_ / "run", {{"target_faces", 200}});
+  ctx.AddInput("mesh", "mesh", WriteGrid("mesh.ply"), {{"source", "test"}});
+  const Status status = Run("mesh.decimate", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["faces_in"], 800);
+  EXPECT_LE(ctx.counters_["faces_out"], 200);
+  EXPECT_GE(ctx.counters_["faces_out"], 190);
+  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io", "compute"}));
+  EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
+  auto out = ReadPlyMesh(ctx.outputs_["mesh"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  EXPECT_EQ(std::filesystem::path(ctx.outputs_["mesh"]).filename(), "mesh.ply");
+  EXPECT_EQ(out->mesh.origin, (std::array<double, 3>{1000.0, 2000.0, 30.0}));
+  EXPECT_EQ(static_cast<double>(out->mesh.face_count()), ctx.counters_["faces_out"]);
+  EXPECT_TRUE(out->mesh.has_colors());
+  EXPECT_EQ(ctx.meta_["mesh"]["faces"], out->mesh.face_count());
+  EXPECT_EQ(ctx.meta_["mesh"]["source"], "test");  // input meta passed on
+}
+
+TEST_F(MeshStagesTest, DecimateByRatioFromAnyFileName) {
+  FakeContext ctx(dir_ / "run", {{"ratio", 0.5}});
+  ctx.AddInput("mesh", "mesh", WriteGrid("grid.ply"));
+  const Status status = Run("mesh.decimate", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["faces_in"], 800);
+  EXPECT_LE(ctx.counters_["faces_out"], 400);
+  EXPECT_GE(ctx.counters_["faces_out"], 380);
+}
+
+TEST_F(MeshStagesTest, DecimateReadsMeshPlyOfMultiFileInput) {
+  // Like synth.scan's truth (mesh.ply + scene.json), plus a file that sorts
+  // before mesh.ply: the stage must pick mesh.ply by name.
+  const std::string json = (dir_ / "input" / "aux.json").string();
+  const std::string mesh = WriteGrid("mesh.ply");
+  std::ofstream(json) << "{}";
+  FakeContext ctx(dir_ / "run", {{"target_faces", 100}});
+  ctx.AddInput("mesh", "mesh",
+               std::map<std::string, std::string>{
+                   {"aux.json", json}, {"mesh.ply", mesh}, {"scene.json", json}});
+  const Status status = Run("mesh.decimate", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["faces_in"], 800);
+  EXPECT_LE(ctx.counters_["faces_out"], 100);
+  EXPECT_GE(ctx.counters_["faces_out"], 95);
+}
+
+TEST_F(MeshStagesTest, DecimateNeedsExactlyOneBudget) {
+  const std::string input = WriteGrid("mesh.ply");
+  FakeContext both(dir_ / "a", {{"ratio", 0.5}, {"target_faces", 10}});
+  both.AddInput("mesh", "mesh", input);
+  const Status both_status = Run("mesh.decimate", both);
+  EXPECT_EQ(both_status.code(), Status::Code::kInvalid);
+  EXPECT_THAT(both_status.message(),
+              HasSubstr("mesh.decimate: give exactly one of 'target_faces' and 'ratio'"));
+  FakeContext neither(dir_ / "b", nlohmann::json::object());
+  neither.AddInput("mesh", "mesh", input);
+  EXPECT_EQ(Run("mesh.decimate", neither).code(), Status::Code::kInvalid);
+  FakeContext bad_ratio(dir_ / "c", {{"ratio", 1.5}});
+  bad_ratio.AddInput("mesh", "mesh", input);
+  EXPECT_THAT(Run("mesh.decimate", bad_ratio).message(), HasSubstr("'ratio' must be in (0, 1]"));
+  EXPECT_TRUE(bad_ratio.outputs_.empty());
+}
+
+TEST_F(MeshStagesTest, DecimateReportsUnreadableInput) {
+  FakeContext ctx(dir_ / "run", {{"target_faces", 10}});
+  ctx.AddInput("mesh", "mesh", (dir_ / "missing" / "mesh.ply").string());
+  const Status status = Run("mesh.decimate", ctx);
+  EXPECT_FALSE(status.ok());
+  EXPECT_THAT(status.message(), HasSubstr("mesh.ply"));
+}
+
+}  // namespace
+}  // namespace pb

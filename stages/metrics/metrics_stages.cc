@@ -1,0 +1,14 @@
+#include "stages/metrics/metrics_stages.h"
+
+#include <cassert>
+
+#include "stages/metrics/geometry_stage.h"
+
+namespace pb {
+
+void RegisterMetricsStages(StageRegistry& registry) {
+  [[maybe_unused]] const Status status = registry.Register(GeometryMetricsStage());
+  assert(status.ok());
+}
+
+}  // namespace pb
