@@ -132,10 +132,11 @@ void Compact(const std::vector<uint32_t>& new_index, size_t width, std::vector<T
 Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanReport* report) {
   PB_RETURN_IF_ERROR(Validate(input));
   if (!(options.min_area_m2 >= 0) || options.min_component_faces < 0 ||
-      !(options.min_component_fraction >= 0 && options.min_component_fraction <= 1)) {
+      !(options.min_component_fraction >= 0 && options.min_component_fraction <= 1) ||
+      !(options.min_component_area_m2 >= 0)) {
     return Status::Invalid(
         "mesh clean: need min_area_m2 >= 0, min_component_faces >= 0 and "
-        "min_component_fraction in [0, 1]");
+        "min_component_fraction in [0, 1], min_component_area_m2 >= 0");
   }
   CleanReport local;
   CleanReport& r = report != nullptr ? *report : local;
@@ -226,14 +227,19 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
       }
     }
     std::vector<uint32_t> size(n, 0);
-    for (size_t f = 0; f < n; ++f) ++size[components.Find(f)];
+    std::vector<double> area(n, 0.0);
+    for (size_t f = 0; f < n; ++f) {
+      const uint32_t root = components.Find(f);
+      ++size[root];
+      area[root] += FaceArea(mesh, &idx[3 * f]);
+    }
     const uint32_t largest = n == 0 ? 0 : *std::max_element(size.begin(), size.end());
     const double min_faces = std::max(static_cast<double>(options.min_component_faces),
                                       options.min_component_fraction * largest);
     std::vector<bool> keep(n);
     for (size_t f = 0; f < n; ++f) {
       const uint32_t root = components.Find(f);
-      keep[f] = !(size[root] < min_faces);
+      keep[f] = !(size[root] < min_faces && area[root] < options.min_component_area_m2);
       if (!keep[f]) {
         ++r.small_component_faces;
         if (root == f) ++r.small_components;

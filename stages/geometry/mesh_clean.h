@@ -11,7 +11,9 @@
 //      each such edge keeps its two largest faces;
 //   4. small connected components (faces connected through shared edges):
 //      fewer than min_component_faces faces, or fewer than
-//      min_component_fraction times the largest component's face count;
+//      min_component_fraction times the largest component's face count, AND
+//      an area below min_component_area_m2 (a decimated planar wall can be a
+//      2-face component; noise specks are both few-faced and tiny);
 //   5. non-manifold vertices: a vertex whose faces form several fans (groups
 //      connected through edges at that vertex) is split into one vertex per
 //      fan; the new vertices copy every attribute of the original;
@@ -31,6 +33,7 @@ struct CleanOptions {
   double min_area_m2 = 1e-10;         // faces below this area are degenerate
   int64_t min_component_faces = 50;   // components with fewer faces are removed
   double min_component_fraction = 0;  // ... or fewer than this x the largest one
+  double min_component_area_m2 = 0.01;  // ... and smaller than this area
 };
 
 // What CleanMesh removed or added; face counts per step.

@@ -129,13 +129,34 @@ TEST(MeshCleanTest, RemovesSmallComponentsByCount) {
   Mesh mesh = Grid(10, 10);       // 200 faces
   Append(&mesh, Grid(1, 1, 20));  // 2 faces
   Append(&mesh, Grid(5, 5, 30));  // 50 faces: kept (not fewer than 50)
+  CleanOptions options;
+  options.min_component_area_m2 = 1e9;  // count alone decides here
   CleanReport report;
-  Expected<Mesh> out = CleanMesh(mesh, CleanOptions{}, &report);
+  Expected<Mesh> out = CleanMesh(mesh, options, &report);
   ASSERT_TRUE(out.ok()) << out.status().message();
   EXPECT_EQ(report.small_components, 1u);
   EXPECT_EQ(report.small_component_faces, 2u);
   EXPECT_EQ(report.unreferenced_vertices, 4u);
   EXPECT_EQ(out->face_count(), 250u);
+}
+
+// A decimated flat wall can be a 2-face component: few faces alone do not make
+// a speck, small area must too.
+TEST(MeshCleanTest, FewFacedButLargeComponentsAreKept) {
+  Mesh mesh = Grid(10, 10);       // 200 faces, 100 m^2
+  Append(&mesh, Grid(1, 1, 20));  // 2 faces, 1 m^2: a wall, kept
+  Mesh speck = Grid(1, 1, 40);    // 2 faces, 1 mm^2: removed
+  for (size_t v = 0; v < speck.vertex_count(); ++v) {
+    speck.positions[3 * v] = 40 + (speck.positions[3 * v] - 40) * 1e-3f;
+    speck.positions[3 * v + 1] *= 1e-3f;
+  }
+  Append(&mesh, speck);
+  CleanReport report;
+  Expected<Mesh> out = CleanMesh(mesh, CleanOptions{}, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  EXPECT_EQ(report.small_components, 1u);
+  EXPECT_EQ(report.small_component_faces, 2u);
+  EXPECT_EQ(out->face_count(), 202u);
 }
 
 TEST(MeshCleanTest, RemovesSmallComponentsByFraction) {
@@ -144,6 +165,7 @@ TEST(MeshCleanTest, RemovesSmallComponentsByFraction) {
   Append(&mesh, Grid(5, 2, 30));  // 20 faces: kept
   CleanOptions options = NoComponentFilter();
   options.min_component_fraction = 0.1;
+  options.min_component_area_m2 = 1e9;
   CleanReport report;
   Expected<Mesh> out = CleanMesh(mesh, options, &report);
   ASSERT_TRUE(out.ok()) << out.status().message();

@@ -34,6 +34,12 @@ constexpr const char* kSchema = R"({
       "maximum": 1,
       "default": 0,
       "description": "Also remove components with fewer faces than this fraction of the largest component's; 0 disables."
+    },
+    "min_component_area_m2": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.01,
+      "description": "A component is removed only if it is also smaller than this area (square meters): a decimated flat wall may have 2 faces, a noise speck is tiny."
     }
   }
 })";
@@ -45,6 +51,8 @@ Status Run(StageContext& ctx) {
                       IntegerParam(ctx, kId, "min_component_faces", 50, 0));
   PB_ASSIGN_OR_RETURN(options.min_component_fraction,
                       NumberParam(ctx, kId, "min_component_fraction", 0));
+  PB_ASSIGN_OR_RETURN(options.min_component_area_m2,
+                      NumberParam(ctx, kId, "min_component_area_m2", 0.01));
   if (!ctx.has_input("mesh"))
     return Status::Invalid(std::string(kId) + ": input 'mesh' is missing");
   const ArtifactView& input = ctx.input("mesh");
@@ -98,15 +106,16 @@ Status Run(StageContext& ctx) {
 StageType CleanStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;  // 2: small components must also be small in area
   type.summary = "Mesh repair: degenerate/duplicate faces, specks, non-manifold edges and vertices";
   type.doc =
       "Makes a reconstructed mesh 2-manifold, in this order: removes faces with a repeated "
       "vertex or an area below `min_area_m2`; removes duplicate faces (same three vertices, "
       "either orientation; the first is kept); where an edge has more than two faces, keeps "
       "the two largest (faces are accepted by decreasing area, ties by index); removes "
-      "connected components smaller than `min_component_faces` or `min_component_fraction` "
-      "of the largest; splits every vertex whose faces form several fans into one vertex per "
+      "connected components with fewer faces than `min_component_faces` (or "
+      "`min_component_fraction` of the largest) that are also smaller than "
+      "`min_component_area_m2` (a decimated flat wall may be 2 faces); splits every vertex whose faces form several fans into one vertex per "
       "fan (attributes copied); drops unreferenced vertices. Face order is kept, so the "
       "result is deterministic.\n\n"
       "Counters: `faces_in`, `vertices_in`, `degenerate_faces`, `duplicate_faces`, "
