@@ -1,5 +1,6 @@
 #include "stages/geometry/buffered_input.h"
 
+#include "stages/geometry/test_data.h"
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
@@ -17,23 +18,8 @@ namespace {
 
 constexpr size_t kMiB = BufferedInput::kBufferBytes;
 
-class BufferedInputTest : public ::testing::Test {
+class BufferedInputTest : public pb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "pb_buffered_input_test_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  std::string Write(const std::string& name, const std::string& bytes) {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << bytes;
-    return path;
-  }
-
-  std::filesystem::path dir_;
 };
 
 TEST_F(BufferedInputTest, LfCrlfAndLoneCr) {

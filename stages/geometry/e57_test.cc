@@ -231,15 +231,8 @@ std::vector<uint8_t> BuildE57(const std::vector<TestScan>& scans,
   return file;
 }
 
-class E57Test : public ::testing::Test {
+class E57Test : public pb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern = (std::filesystem::temp_directory_path() / "pb_e57_test_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
   std::string Write(const std::string& name, const std::vector<uint8_t>& bytes) const {
     const std::string path = (dir_ / name).string();
     std::ofstream(path, std::ios::binary)
@@ -257,7 +250,6 @@ class E57Test : public ::testing::Test {
     return read.ok() ? "" : read.status().message();
   }
 
-  std::filesystem::path dir_;
 };
 
 std::vector<uint8_t> ReadBytes(const std::string& path) {

@@ -1,5 +1,6 @@
 #include "stages/geometry/las.h"
 
+#include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -119,21 +120,8 @@ const std::vector<TestPoint> kPoints = {
     {652339.999, 5412349.5, 315.004, 1000, 0xFF00, 0x00FF, 0x4321},
 };
 
-class LasTest : public ::testing::Test {
+class LasTest : public pb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/pb_las_test_XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  std::string Write(const std::string& name, const std::string& contents) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
-
   std::string ErrorOf(const std::string& contents, const std::string& name = "bad.las") const {
     auto read = ReadLas(Write(name, contents), {});
     return read.ok() ? "" : read.status().message();
@@ -171,7 +159,6 @@ class LasTest : public ::testing::Test {
     EXPECT_TRUE(Validate(cloud).ok());
   }
 
-  std::filesystem::path dir_;
 };
 
 // --- Valid files --------------------------------------------------------------

@@ -24,16 +24,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-class PcdTest : public ::testing::Test {
+class PcdTest : public pb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "pb_pcd_test_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
   std::string Write(const std::string& contents, const std::string& name = "scan.pcd") const {
     const std::string path = (dir_ / name).string();
     std::ofstream(path, std::ios::binary) << contents;
@@ -46,7 +38,6 @@ class PcdTest : public ::testing::Test {
     EXPECT_THAT(read.status().message(), HasSubstr(fragment));
   }
 
-  std::filesystem::path dir_;
 };
 
 std::string SharedData() { return pb::testing::SharedDataDir(); }

@@ -23,23 +23,9 @@ namespace {
 
 using ::testing::HasSubstr;
 
-class PlyTest : public ::testing::Test {
+class PlyTest : public pb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("pb_ply_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
 
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-  std::string Write(const std::string& name, const std::string& contents) const {
-    std::ofstream(Path(name), std::ios::binary) << contents;
-    return Path(name);
-  }
-
-  std::filesystem::path dir_;
 };
 
 std::string SharedData() { return pb::testing::SharedDataDir(); }

@@ -17,21 +17,8 @@ namespace {
 using ::testing::ElementsAre;
 using ::testing::HasSubstr;
 
-class PtxTest : public ::testing::Test {
+class PtxTest : public pb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    char pattern[] = "/tmp/pb_ptx_test_XXXXXX";
-    ASSERT_NE(::mkdtemp(pattern), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  std::string Write(const std::string& name, const std::string& contents) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
-
   // Reads `contents` as a PTX file and returns the error message (empty if it
   // was accepted).
   std::string ErrorOf(const std::string& contents) const {
@@ -39,7 +26,6 @@ class PtxTest : public ::testing::Test {
     return read.ok() ? "" : read.status().message();
   }
 
-  std::filesystem::path dir_;
 };
 
 std::string SharedPtx(const std::string& name) {

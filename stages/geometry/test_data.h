@@ -1,8 +1,13 @@
-// For tests only: where the shared sample scans are.
+// For tests only: where the shared sample scans are, and a fixture with a
+// private temporary folder.
 #pragma once
+
+#include <gtest/gtest.h>
+#include <stdlib.h>
 
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <string>
 
 namespace pb::testing {
@@ -17,5 +22,25 @@ inline std::string SharedDataDir() {
   if (std::filesystem::exists("/work/shared/data")) return "/work/shared/data";
   return "";
 }
+
+// A test with its own empty folder `dir_`, removed afterwards.
+class TempDirTest : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    std::string pattern = (std::filesystem::temp_directory_path() / "pb_test_XXXXXX").string();
+    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
+    dir_ = pattern;
+  }
+  void TearDown() override { std::filesystem::remove_all(dir_); }
+
+  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
+  // Writes `bytes` to dir_/name and returns the path.
+  std::string Write(const std::string& name, const std::string& bytes) const {
+    std::ofstream(Path(name), std::ios::binary) << bytes;
+    return Path(name);
+  }
+
+  std::filesystem::path dir_;
+};
 
 }  // namespace pb::testing

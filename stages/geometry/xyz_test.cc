@@ -1,5 +1,6 @@
 #include "stages/geometry/xyz.h"
 
+#include "stages/geometry/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <stdlib.h>
@@ -15,21 +16,8 @@ namespace {
 
 using ::testing::HasSubstr;
 
-class XyzTest : public ::testing::Test {
+class XyzTest : public pb::testing::TempDirTest {
  protected:
-  void SetUp() override {
-    std::string pattern =
-        (std::filesystem::temp_directory_path() / "pb_xyz_test_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-
-  std::string Write(const std::string& name, const std::string& contents) const {
-    const std::string path = (dir_ / name).string();
-    std::ofstream(path, std::ios::binary) << contents;
-    return path;
-  }
   Expected<ScanReadResult> Read(const std::string& name, const std::string& contents,
                                 const std::string& columns = "") const {
     ScanReadOptions options;
@@ -43,7 +31,6 @@ class XyzTest : public ::testing::Test {
     EXPECT_THAT(read.status().message(), HasSubstr(fragment));
   }
 
-  std::filesystem::path dir_;
 };
 
 // Absolute coordinates of point i.
