@@ -4,14 +4,12 @@
 #include <gtest/gtest.h>
 #include <stdlib.h>
 
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 #include <vector>
 
-#include "stages/geometry/ply.h"
 
 namespace pb {
 namespace {
@@ -179,33 +177,6 @@ TEST_F(BufferedInputTest, OpenErrorsNameThePath) {
   BufferedInput directory;
   EXPECT_EQ(directory.Open(dir_.string(), "a PLY file", nullptr).message(),
             dir_.string() + ": is a directory, not a PLY file");
-}
-
-// Timing, not a check: run with --gtest_also_run_disabled_tests to compare
-// reader changes (10^7 points, binary little-endian PLY, ~230 MB).
-TEST(BufferedInputTiming, DISABLED_ReadBinaryPly10M) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "pb_buffered_input_timing.ply").string();
-  if (!std::filesystem::exists(path)) {
-    PointCloud cloud;
-    const size_t n = 10'000'000;
-    cloud.positions.resize(3 * n);
-    cloud.colors.resize(3 * n);
-    for (size_t i = 0; i < 3 * n; ++i) {
-      cloud.positions[i] = static_cast<float>(i % 1000) * 0.01f;
-      cloud.colors[i] = static_cast<uint8_t>(i);
-    }
-    ASSERT_TRUE(WritePlyPoints(path, cloud).ok());
-  }
-  for (int run = 0; run < 3; ++run) {
-    const auto start = std::chrono::steady_clock::now();
-    auto read = ReadPlyPoints(path);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ASSERT_TRUE(read.ok()) << read.status().message();
-    ASSERT_EQ(read->points.size(), 10'000'000u);
-    std::printf("ReadPlyPoints 1e7 points: %.3f s\n", seconds);
-  }
 }
 
 }  // namespace
