@@ -2,6 +2,7 @@
 
 #include <utility>
 
+#include "engine/base/env.h"
 #include "stages/geometry/ply.h"
 #include "stages/params.h"
 
@@ -25,6 +26,16 @@ nlohmann::json InputPointsMetaWith(const StageContext& ctx, const nlohmann::json
   nlohmann::json meta = ctx.input("points").meta;
   meta.update(changes);
   return meta;
+}
+
+Status CopyInputPoints(StageContext& ctx, const std::string& input_path, nlohmann::json meta) {
+  {
+    PB_PHASE(ctx, "io");
+    PB_RETURN_IF_ERROR(
+        Env::Default()->CopyFileAtomic(input_path, ctx.output_path("points", "points.ply")));
+  }
+  ctx.set_output_meta("points", std::move(meta));
+  return Status::Ok();
 }
 
 Status WriteOutputPoints(StageContext& ctx, const PointCloud& cloud, nlohmann::json meta,

@@ -29,6 +29,10 @@ Expected<InputPoints> ReadInputPoints(StageContext& ctx, std::string_view stage_
 // what earlier stages recorded survive unless changed).
 nlohmann::json InputPointsMetaWith(const StageContext& ctx, const nlohmann::json& changes);
 
+// Passes input "points" through unchanged as output "points" (a file copy,
+// no re-encoding) with `meta`: for stages that only measure.
+Status CopyInputPoints(StageContext& ctx, const std::string& input_path, nlohmann::json meta);
+
 // Writes `cloud` as output "points" (points.ply) inside phase `phase`, then
 // sets that output's meta.
 Status WriteOutputPoints(StageContext& ctx, const PointCloud& cloud, nlohmann::json meta,

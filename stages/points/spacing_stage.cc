@@ -40,7 +40,7 @@ Status Run(StageContext& ctx) {
   ctx.progress(0.7);
   ctx.counter("spacing_mm", spacing_m * 1000.0);
   PB_RETURN_IF_ERROR(
-      WriteOutputPoints(ctx, cloud, InputPointsMetaWith(ctx, {{"spacing_m", spacing_m}})));
+      CopyInputPoints(ctx, input.path, InputPointsMetaWith(ctx, {{"spacing_m", spacing_m}})));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -55,7 +55,7 @@ StageType SpacingStage() {
   type.doc =
       "Measures the point spacing: the median, over `sample` points (or all), of the exact "
       "distance from a point to its nearest other point (duplicates count as 0). The output "
-      "is the same points, rewritten unchanged, with `spacing_m` (meters) added to the meta; "
+      "is the same file, copied unchanged, with `spacing_m` (meters) added to the meta; "
       "later stages express distance thresholds in spacings.\n\n"
       "Counter: `spacing_mm`.";
   type.params_schema = kSchema;
