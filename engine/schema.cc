@@ -512,11 +512,11 @@ class MessageBuilder {
         }
         if (by_pattern) continue;
         out.push_back(
-            {loc.pointer + "/" + PointerToken(key), UnknownKeyMessage(key, allowed, patterns)});
+            {loc.pointer + "/" + PointerToken(key), UnknownKeyMessage(key, allowed, patterns), true});
       }
       if (!out.empty()) return out;
     }
-    out.push_back({loc.pointer + "/" + PointerToken(reported), UnknownKeyMessage(reported, {})});
+    out.push_back({loc.pointer + "/" + PointerToken(reported), UnknownKeyMessage(reported, {}), true});
     return out;
   }
 
@@ -629,7 +629,7 @@ void CheckPropertyNames(const Json& schema, const Json& instance, const std::str
       for (const auto& [key, value] : instance.items())
         if (!RegexSearch(pattern->get<std::string>(), key))
           out.push_back({pointer + "/" + PointerToken(key),
-                         "bad key '" + key + "': must match pattern " + pattern->get<std::string>()});
+                         "bad key '" + key + "': must match pattern " + pattern->get<std::string>(), true});
     }
   }
   const auto props = schema.find("properties");

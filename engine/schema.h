@@ -23,6 +23,9 @@ struct SchemaError {
   // "missing required key 'uses'", "must be >= 1, got 0",
   // "must be one of: auto, ply, got \"las\"".
   std::string message;
+  // The problem is the member's name itself (unknown key, a name that breaks
+  // propertyNames): point at the key, not its value.
+  bool about_key = false;
 };
 
 class JsonSchema {

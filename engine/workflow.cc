@@ -78,8 +78,7 @@ void ReportSchemaErrors(const YamlDocument& doc, const std::vector<SchemaError>&
                         const std::string& pointer_prefix, Errors& out) {
   for (const SchemaError& e : errors) {
     const std::string pointer = pointer_prefix + e.pointer;
-    const bool about_key = e.message.rfind("unknown key", 0) == 0 || e.message.rfind("bad key", 0) == 0;
-    out.Add(about_key ? doc.KeyPositionOf(pointer) : doc.PositionOf(pointer), e.message);
+    out.Add(e.about_key ? doc.KeyPositionOf(pointer) : doc.PositionOf(pointer), e.message);
   }
 }
 
@@ -375,9 +374,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     with = ApplyDefaults(param_schema, with);
     for (const SchemaError& e : registry.ParamsSchema(uses).Validate(with)) {
       const std::string pointer = sp + "/with" + e.pointer;
-      const bool about_key = e.message.rfind("unknown key", 0) == 0 || e.message.rfind("bad key", 0) == 0;
       SourcePos pos = pos_of(pointer);
-      if (about_key && pos.file.rfind("<command line>", 0) != 0) pos = doc.KeyPositionOf(pointer);
+      if (e.about_key && pos.file.rfind("<command line>", 0) != 0) pos = doc.KeyPositionOf(pointer);
       errors.Add(pos, "stage '" + id + "' (" + uses + "): " + e.message);
     }
     // Paths: absolute, relative to the file that named them.
