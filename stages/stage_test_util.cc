@@ -65,14 +65,6 @@ void FakeContext::end_phase(std::string_view name) {
   open_phases_.pop_back();
 }
 
-void StageTest::SetUp() {
-  char pattern[] = "/tmp/pb_stage_test_XXXXXX";
-  ASSERT_NE(mkdtemp(pattern), nullptr);
-  dir_ = pattern;
-}
-
-void StageTest::TearDown() { std::filesystem::remove_all(dir_); }
-
 Status StageTest::Run(const std::string& id, FakeContext& ctx) {
   const StageType* type = registry_.Find(id);
   if (!type) return Status::NotFound(id);

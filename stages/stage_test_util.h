@@ -13,6 +13,7 @@
 #include <string_view>
 #include <vector>
 
+#include "stages/geometry/test_data.h"
 #include "engine/stage.h"
 
 namespace pb {
@@ -78,15 +79,11 @@ class FakeContext : public StageContext {
 
 // A fresh temporary directory per test (removed afterwards) and a registry
 // that the derived fixture fills in SetUp.
-class StageTest : public ::testing::Test {
+class StageTest : public testing::TempDirTest {
  protected:
-  void SetUp() override;
-  void TearDown() override;
-
   // Runs stage `id` in `ctx`; every phase it opened must be closed.
   Status Run(const std::string& id, FakeContext& ctx);
 
-  std::filesystem::path dir_;
   FakeRegistry registry_;
 };
 
