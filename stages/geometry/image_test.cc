@@ -1,4 +1,5 @@
 #include "stages/geometry/image.h"
+#include "stages/geometry/test_data.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -12,19 +13,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-class ImageTest : public ::testing::Test {
- protected:
-  void SetUp() override {
-    dir_ = std::filesystem::temp_directory_path() /
-           ("pb_image_test_" + std::to_string(::getpid()) + "_" +
-            ::testing::UnitTest::GetInstance()->current_test_info()->name());
-    std::filesystem::create_directories(dir_);
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
-  std::string Path(const std::string& name) const { return (dir_ / name).string(); }
-
-  std::filesystem::path dir_;
-};
+class ImageTest : public pb::testing::TempDirTest {};
 
 TEST_F(ImageTest, Png8BitAllChannelCounts) {
   for (int channels = 1; channels <= 4; ++channels) {
