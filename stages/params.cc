@@ -77,13 +77,18 @@ Expected<int64_t> IntegerParam(const StageContext& ctx, std::string_view stage_i
   return static_cast<int64_t>(value);
 }
 
-Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id, std::string_view port) {
+Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id,
+                                    std::string_view port, std::string_view preferred_file) {
   if (!ctx.has_input(port)) {
     return Status::Invalid(std::string(stage_id) + ": input '" + std::string(port) + "' is not connected");
   }
   const ArtifactView& view = ctx.input(port);
   if (view.files.empty()) {
     return Status::Invalid(std::string(stage_id) + ": input '" + std::string(port) + "' has no file");
+  }
+  if (!preferred_file.empty()) {
+    auto named = view.files.find(std::string(preferred_file));
+    if (named != view.files.end()) return named->second;
   }
   return view.file();
 }

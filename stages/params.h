@@ -32,7 +32,10 @@ Expected<int64_t> IntegerParam(const StageContext& ctx, std::string_view stage_i
                                std::optional<int64_t> fallback, int64_t min,
                                std::optional<int64_t> max = std::nullopt);
 
-// The single file of input `port`, or Status::Invalid if it is missing.
-Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id, std::string_view port);
+// The file of input `port`: `preferred_file` when the artifact has one of that
+// name (synth.scan's truth is mesh.ply + scene.json), else its first file;
+// Status::Invalid if the input is missing or empty.
+Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id,
+                                    std::string_view port, std::string_view preferred_file = "");
 
 }  // namespace pb

@@ -53,11 +53,7 @@ Status Run(StageContext& ctx) {
                       NumberParam(ctx, kId, "min_component_fraction", 0));
   PB_ASSIGN_OR_RETURN(options.min_component_area_m2,
                       NumberParam(ctx, kId, "min_component_area_m2", 0.01));
-  if (!ctx.has_input("mesh"))
-    return Status::Invalid(std::string(kId) + ": input 'mesh' is missing");
-  const ArtifactView& input = ctx.input("mesh");
-  const std::string path =
-      input.files.count("mesh.ply") > 0 ? input.files.at("mesh.ply") : input.file();
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, "mesh", "mesh.ply"));
   Mesh mesh;
   {
     PB_PHASE(ctx, "io");

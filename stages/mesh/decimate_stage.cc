@@ -49,11 +49,7 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  if (!ctx.has_input("mesh")) return Status::Invalid(std::string(kId) + ": missing input 'mesh'");
-  const ArtifactView& input = ctx.input("mesh");
-  // synth.scan's `truth` is a mesh artifact with scene.json beside mesh.ply.
-  auto named = input.files.find("mesh.ply");
-  const std::string path = named != input.files.end() ? named->second : input.file();
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, "mesh", "mesh.ply"));
 
   const bool has_target =
       ctx.params().contains("target_faces") && !ctx.params()["target_faces"].is_null();
@@ -101,7 +97,8 @@ Status Run(StageContext& ctx) {
     PB_PHASE(ctx, "io");
     PB_RETURN_IF_ERROR(WritePlyMesh(ctx.output_path("mesh", "mesh.ply"), output));
   }
-  nlohmann::json meta = input.meta.is_object() ? input.meta : nlohmann::json::object();
+  const nlohmann::json& input_meta = ctx.input("mesh").meta;
+  nlohmann::json meta = input_meta.is_object() ? input_meta : nlohmann::json::object();
   meta.update({{"origin", output.origin},
                {"vertices", output.vertex_count()},
                {"faces", output.face_count()},

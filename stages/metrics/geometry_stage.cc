@@ -39,12 +39,7 @@ constexpr const char* kSchema = R"({
 
 Expected<Mesh> ReadMeshInput(StageContext& ctx, const char* port, double progress_begin,
                              double progress_end) {
-  if (!ctx.has_input(port)) {
-    return Status::Invalid(std::string(kId) + ": input '" + port + "' is missing");
-  }
-  const ArtifactView& input = ctx.input(port);
-  const std::string path =
-      input.files.count("mesh.ply") > 0 ? input.files.at("mesh.ply") : input.file();
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, port, "mesh.ply"));
   PlyReadOptions options;
   options.progress = [&](double f) {
     ctx.progress(progress_begin + (progress_end - progress_begin) * f);
