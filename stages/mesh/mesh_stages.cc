@@ -7,7 +7,7 @@
 namespace pb {
 
 void RegisterMeshStages(StageRegistry& registry) {
-  for (StageType type : {DecimateStage(), CleanStage()}) {
+  for (StageType type : {PoissonStage(), DecimateStage(), CleanStage()}) {
     [[maybe_unused]] const Status status = registry.Register(std::move(type));
     assert(status.ok());
   }
