@@ -1,6 +1,8 @@
 // mesh.poisson: screened Poisson reconstruction from oriented points
 // (stages/geometry/poisson.h), optionally trimmed by density.
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <string>
 #include <utility>
@@ -117,6 +119,25 @@ Status Run(StageContext& ctx) {
     std::fprintf(stderr, "%s: target_faces %lld -> depth %d (predicted %.0f faces)\n", kId,
                  static_cast<long long>(target), choice.depth, choice.predicted_faces);
     ctx.progress(0.2);
+  }
+
+  // The finest cell against the scan's spacing: finer cells resolve noise,
+  // not surface (closed bubbles, non-manifold edges).
+  const std::array<double, 3> extent = BoundsOf(cloud.positions).extent_m();
+  const double cell_m =
+      std::max({extent[0], extent[1], extent[2]}) * options.scale / std::ldexp(1.0, options.depth);
+  poisson_meta["cell_m"] = cell_m;
+  const nlohmann::json& points_meta = ctx.input("points").meta;
+  if (points_meta.is_object() && points_meta.contains("spacing_m") &&
+      points_meta["spacing_m"].is_number()) {
+    const double spacing = points_meta["spacing_m"].get<double>();
+    if (cell_m < spacing) {
+      std::fprintf(stderr,
+                   "%s: depth %d makes %.1f mm cells, finer than the points' spacing %.1f mm: "
+                   "expect small closed bubbles and non-manifold edges (mesh.clean removes "
+                   "them); a lower depth fits this scan better\n",
+                   kId, options.depth, cell_m * 1e3, spacing * 1e3);
+    }
   }
 
   PoissonOutput out;
