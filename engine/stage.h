@@ -29,8 +29,10 @@ namespace pb {
 //   image  -> image.png (8/16-bit) or image.exr (float)
 //   frames -> frame_NNN.png, one per viewpoint
 //   table  -> table.json
+//   model  -> an exported model: model.glb, or model.obj + model.mtl + PNGs
 //   any    -> accepted by inputs that take every type (tests, exports)
-inline constexpr const char* kArtifactTypes[] = {"points", "mesh", "image", "frames", "table", "any"};
+inline constexpr const char* kArtifactTypes[] = {"points", "mesh",  "image", "frames",
+                                                 "table",  "model", "any"};
 
 struct PortSpec {
   std::string name;

@@ -1,10 +1,12 @@
 #include "stages/builtin.h"
 
+#include "stages/export/export_stages.h"
 #include "stages/io/io_stages.h"
 #include "stages/mesh/mesh_stages.h"
 #include "stages/metrics/metrics_stages.h"
 #include "stages/points/points_stages.h"
 #include "stages/synth/synth_stages.h"
+#include "stages/uv/uv_stages.h"
 
 namespace pb {
 
@@ -14,6 +16,8 @@ void RegisterBuiltinStages(StageRegistry& registry) {
   RegisterSynthStages(registry);
   RegisterMeshStages(registry);
   RegisterMetricsStages(registry);
+  RegisterUvStages(registry);
+  RegisterExportStages(registry);
 }
 
 }  // namespace pb

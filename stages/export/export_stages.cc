@@ -1,0 +1,7 @@
+#include "stages/export/export_stages.h"
+
+namespace pb {
+
+void RegisterExportStages(StageRegistry& registry) { (void)registry; }
+
+}  // namespace pb

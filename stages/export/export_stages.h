@@ -1,0 +1,9 @@
+#pragma once
+
+#include "engine/stage.h"
+
+namespace pb {
+
+void RegisterExportStages(StageRegistry& registry);
+
+}  // namespace pb
