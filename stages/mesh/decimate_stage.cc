@@ -1,6 +1,7 @@
 // mesh.decimate: quadric edge collapse to a face budget
 // (stages/geometry/mesh_decimate.h).
 #include <cmath>
+#include <cstdio>
 #include <string>
 #include <utility>
 
@@ -82,6 +83,12 @@ Status Run(StageContext& ctx) {
   }
   if (has_ratio) target = std::llround(ratio * static_cast<double>(mesh.face_count()));
   options.target_faces = static_cast<size_t>(target);
+  if (mesh.face_count() <= options.target_faces) {
+    // Said in the log: a budget above the input is met by doing nothing, which
+    // in a workflow usually means the mesh before was smaller than planned.
+    std::fprintf(stderr, "%s: the input has %zu faces, within the budget of %zu: unchanged\n", kId,
+                 mesh.face_count(), options.target_faces);
+  }
   options.progress = [&ctx](double fraction) { ctx.progress(0.2 + 0.7 * fraction); };
   DecimateReport report;
   Mesh output;
