@@ -104,6 +104,33 @@ bool PngWriteAll(png_structp png, png_infop info, FILE* file, const Image* image
   return true;
 }
 
+// In-memory PNG writing: libpng calls these instead of fwrite/fflush.
+extern "C" void PngAppendToVector(png_structp png, png_bytep data, png_size_t length) {
+  auto* out = static_cast<std::vector<uint8_t>*>(png_get_io_ptr(png));
+  out->insert(out->end(), data, data + length);
+}
+
+extern "C" void PngFlushNothing(png_structp) {}
+
+bool PngWriteAllToVector(png_structp png, png_infop info, std::vector<uint8_t>* out,
+                         const Image* image, png_bytepp rows) {
+  if (setjmp(png_jmpbuf(png))) return false;
+  static const int kColorTypes[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
+                                    PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
+  png_set_write_fn(png, out, PngAppendToVector, PngFlushNothing);
+  png_set_IHDR(png, info, static_cast<png_uint_32>(image->width),
+               static_cast<png_uint_32>(image->height),
+               image->type == Image::PixelType::kU16 ? 16 : 8, kColorTypes[image->channels - 1],
+               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  png_write_info(png, info);
+  if (image->type == Image::PixelType::kU16 && std::endian::native == std::endian::little) {
+    png_set_swap(png);
+  }
+  png_write_image(png, rows);
+  png_write_end(png, info);
+  return true;
+}
+
 class File {
  public:
   File(const std::string& path, const char* mode) : file_(std::fopen(path.c_str(), mode)) {}
@@ -228,6 +255,37 @@ Status WritePng(const std::string& path, const Image& image) {
   }
   if (file.Close() != 0) return Status::Errno(path, "close");
   return Status::Ok();
+}
+
+Expected<std::vector<uint8_t>> EncodePng(const Image& image) {
+  if (image.type == Image::PixelType::kF32) {
+    return Status::Invalid("encoding PNG: PNG holds 8/16-bit samples, not float");
+  }
+  if (image.channels < 1 || image.channels > 4 || image.width <= 0 || image.height <= 0 ||
+      image.data.size() != image.sample_count() * image.bytes_per_sample()) {
+    return Status::Invalid("encoding PNG: malformed image (" + std::to_string(image.width) + "x" +
+                           std::to_string(image.height) + "x" + std::to_string(image.channels) +
+                           ", " + std::to_string(image.data.size()) + " bytes)");
+  }
+  std::vector<uint8_t> bytes;
+  PngErrorState error;
+  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, PngOnError, PngOnWarning);
+  if (!png) return Status::Internal("encoding PNG: png_create_write_struct failed");
+  png_infop info = png_create_info_struct(png);
+  struct Cleanup {
+    png_structp* png;
+    png_infop* info;
+    ~Cleanup() { png_destroy_write_struct(png, info); }
+  } cleanup{&png, &info};
+  if (!info) return Status::Internal("encoding PNG: png_create_info_struct failed");
+  const size_t row_bytes = size_t(image.width) * size_t(image.channels) * image.bytes_per_sample();
+  std::vector<png_bytep> rows(image.height);
+  png_bytep base = const_cast<png_bytep>(image.data.data());
+  for (int y = 0; y < image.height; ++y) rows[y] = base + y * row_bytes;
+  if (!PngWriteAllToVector(png, info, &bytes, &image, rows.data())) {
+    return Status::Internal(std::string("encoding PNG: ") + error.message);
+  }
+  return bytes;
 }
 
 Expected<Image> ReadExr(const std::string& path) {

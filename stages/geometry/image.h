@@ -62,6 +62,9 @@ struct Image {
 // files give kU16, all others kU8. Writing takes kU8 or kU16.
 Expected<Image> ReadPng(const std::string& path);
 Status WritePng(const std::string& path, const Image& image);
+// The bytes of the PNG file WritePng would write (e.g. to embed in a .glb).
+// Status::Invalid for kF32 or a malformed image.
+Expected<std::vector<uint8_t>> EncodePng(const Image& image);
 
 // OpenEXR: reads the data window of a scanline or tiled file (channels
 // R,G,B[,A] or Y[,A], any stored pixel type) as kF32. Writing takes kF32,
