@@ -2,8 +2,8 @@
 // the mesh.poisson stage does around it.
 //
 // The solver is Open3D 0.16's (Kazhdan's PoissonRecon inside), chosen over
-// PCL's pcl::Poisson with the evidence in docs/poisson.md: about twice as
-// fast, per-vertex colors and densities, 57 Debian packages instead of 432.
+// PCL's pcl::Poisson with the evidence in docs/poisson.md: 1.2-3.2x faster,
+// per-vertex colors and densities, 57 Debian packages instead of 432.
 // libOpen3D pulls ~100 shared libraries that take ~40 ms to load, so it is
 // not linked into pointbake: poisson_open3d.cc builds the module
 // `pointbake-poisson-open3d.so`, which ReconstructPoisson loads with dlopen
@@ -36,7 +36,8 @@ struct PoissonOutput {
   // Positions relative to the cloud's origin (same origin), unit normals
   // interpolated from the points' normals, colors interpolated from the
   // points' colors when the cloud has colors. Triangles wind counter-
-  // clockwise seen from the side the point normals face.
+  // clockwise seen from the side the point normals face. Vertices sorted by
+  // position, faces by their corners: the order does not depend on threads.
   Mesh mesh;
   // Per vertex: PoissonRecon's density estimate, the octree depth at which
   // the samples around the vertex support it; low where Poisson invented
@@ -55,8 +56,8 @@ inline constexpr int kPoissonMinDepth = 3;
 inline constexpr int kPoissonMaxDepth = 14;
 Expected<PoissonOutput> ReconstructPoisson(const PointCloud& cloud, const PoissonOptions& options);
 
-// Where the module was found (after a successful load) or would be looked
-// for, for messages and `pointbake stages mesh.poisson`.
+// The paths tried for the module, in order: $PB_POISSON_MODULE, beside the
+// running executable, the build directory this library was compiled for.
 std::vector<std::string> PoissonModuleCandidates();
 
 // Density-quantile trimming: drops every vertex whose density is below the
