@@ -1,0 +1,437 @@
+#include "stages/geometry/uv_atlas.h"
+
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <string>
+
+#include "stages/geometry/image.h"
+#include "stages/geometry/ply.h"
+#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/uv_pack.h"
+
+namespace pb {
+namespace {
+
+// An open cylinder around z (outward normals, colors by row), `segments`
+// around and `rows` up.
+Mesh MakeCylinder(double radius, double height, int segments, int rows) {
+  Mesh mesh;
+  mesh.origin = {100.0, -50.0, 2.0};
+  for (int j = 0; j <= rows; ++j) {
+    for (int i = 0; i < segments; ++i) {
+      const double a = 2 * M_PI * i / segments;
+      mesh.positions.insert(mesh.positions.end(),
+                            {float(radius * std::cos(a)), float(radius * std::sin(a)),
+                             float(height * j / rows)});
+      mesh.normals.insert(mesh.normals.end(), {float(std::cos(a)), float(std::sin(a)), 0.0f});
+      mesh.colors.insert(mesh.colors.end(), {uint8_t(j * 7), uint8_t(i * 3), 99});
+      mesh.tangents.insert(mesh.tangents.end(), {float(-std::sin(a)), float(std::cos(a)), 0, 1});
+    }
+  }
+  for (int j = 0; j < rows; ++j) {
+    for (int i = 0; i < segments; ++i) {
+      const uint32_t a = j * segments + i, b = j * segments + (i + 1) % segments;
+      const uint32_t c = b + segments, d = a + segments;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  return mesh;
+}
+
+// A ramp winding twice around z (r in [1, 2], rising 0.3 m a turn): its
+// normals are all within 10 degrees of +z, so one planar chart would lie on
+// top of itself.
+Mesh MakeSpiralRamp() {
+  Mesh mesh;
+  const int steps = 200;
+  for (int i = 0; i <= steps; ++i) {
+    const double a = 4 * M_PI * i / steps, z = 0.3 * a / (2 * M_PI);
+    for (double r : {1.0, 2.0}) {
+      mesh.positions.insert(mesh.positions.end(),
+                            {float(r * std::cos(a)), float(r * std::sin(a)), float(z)});
+    }
+  }
+  for (int i = 0; i < steps; ++i) {
+    const uint32_t in0 = 2 * i, out0 = 2 * i + 1, in1 = 2 * i + 2, out1 = 2 * i + 3;
+    mesh.indices.insert(mesh.indices.end(), {in0, out0, out1, in0, out1, in1});
+  }
+  return mesh;
+}
+
+Mesh RoomWalls() { return SynthTruthMesh(*MakeSynthScene("room", 1), 0.05); }
+
+// Every atlas property the unwrappers promise, at `options`.
+void ExpectValidAtlas(const Mesh& in, const Mesh& out, const UnwrapOptions& options) {
+  ASSERT_TRUE(Validate(out).ok());
+  ASSERT_EQ(out.face_count(), in.face_count());
+  ASSERT_EQ(out.uvs.size(), 2 * out.vertex_count());
+  // Faces keep their order and winding: the same positions, corner by corner.
+  for (size_t i = 0; i < out.indices.size(); ++i) {
+    for (int d = 0; d < 3; ++d) {
+      ASSERT_EQ(out.positions[3 * size_t(out.indices[i]) + d],
+                in.positions[3 * size_t(in.indices[i]) + d])
+          << "corner " << i;
+    }
+  }
+  MeasureOptions measure;
+  measure.check_overlaps = true;
+  measure.gap_probe_texels = 2.0 * options.gutter_texels + 2;
+  const AtlasReport r = MeasureAtlas(out, options.size_texels, measure);
+  EXPECT_EQ(r.faces_outside, 0u);
+  EXPECT_EQ(r.faces_not_ccw, 0u);
+  EXPECT_EQ(r.overlapping_faces, 0u);
+  EXPECT_EQ(r.overlapping_chart_pairs, 0u);
+  if (r.charts > 1) {
+    EXPECT_GE(r.min_chart_gap_texels, options.gutter_texels - 1e-3);
+  }
+  EXPECT_GE(r.min_border_gap_texels, options.gutter_texels - 1e-3);
+  EXPECT_GT(r.coverage, 0.0);
+  EXPECT_LE(r.coverage, 1.0);
+}
+
+TEST(UvAtlasTest, PlaneIsOneUndistortedChart) {
+  Mesh plane;
+  const int n = 30;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      plane.positions.insert(plane.positions.end(), {float(i) / n * 2, float(j) / n, 0.5f});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      plane.indices.insert(plane.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  UnwrapOptions options;
+  options.size_texels = 1024;
+  AtlasReport report;
+  auto out = UnwrapCharts(plane, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(plane, *out, options);
+  EXPECT_EQ(report.charts, 1u);
+  EXPECT_EQ(out->vertex_count(), plane.vertex_count());
+  EXPECT_NEAR(report.stretch_l2, 1.0, 1e-4);
+  EXPECT_NEAR(report.stretch_linf, 1.0, 1e-3);
+  EXPECT_EQ(report.seam_length_m, 0.0);
+  // A 2:1 rectangle fills half the atlas, less the gutter.
+  EXPECT_GT(report.coverage, 0.49);
+  EXPECT_NEAR(report.texels_per_meter, (1024 - 8) / 2.0, 3.0);
+}
+
+TEST(UvAtlasTest, CylinderHasBoundedStretch) {
+  const Mesh cylinder = MakeCylinder(0.5, 1.0, 96, 20);
+  UnwrapOptions options;
+  options.size_texels = 2048;
+  options.gutter_texels = 4;
+  AtlasReport report;
+  auto out = UnwrapCharts(cylinder, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(cylinder, *out, options);
+  EXPECT_GE(report.charts, 4u);
+  EXPECT_LE(report.charts, 8u);
+  EXPECT_LT(report.stretch_l2, 1.1);
+  EXPECT_GE(report.stretch_l2, 1.0);
+  EXPECT_LT(report.stretch_linf, 1.35);
+  // Each seam is a cut up the cylinder's height (with a jog or two).
+  EXPECT_GE(report.seam_length_m, report.charts * 1.0 - 1e-3);
+  EXPECT_LE(report.seam_length_m, report.charts * 1.05);
+  EXPECT_GT(report.coverage, 0.5);
+}
+
+TEST(UvAtlasTest, BlenderAngleAloneStretchesMore) {
+  // The stretch bound is what keeps the cylinder undistorted: with
+  // max_stretch out of the way, 66 degrees gives fewer, more stretched charts.
+  const Mesh cylinder = MakeCylinder(0.5, 1.0, 96, 20);
+  UnwrapOptions options;
+  options.size_texels = 2048;
+  options.max_stretch = 100;
+  AtlasReport report;
+  auto out = UnwrapCharts(cylinder, options, &report);
+  ASSERT_TRUE(out.ok());
+  ExpectValidAtlas(cylinder, *out, options);
+  EXPECT_LE(report.charts, 3u);
+  EXPECT_GT(report.stretch_linf, 1.8);
+}
+
+TEST(UvAtlasTest, BrickRoomIsValidWithBoundedStretch) {
+  const Mesh room = RoomWalls();
+  UnwrapOptions options;
+  options.size_texels = 4096;
+  AtlasReport report;
+  auto out = UnwrapCharts(room, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(room, *out, options);
+  EXPECT_LT(report.stretch_l2, 1.1);
+  EXPECT_LT(report.stretch_linf, 1.25 * 1.15);
+  EXPECT_GT(report.coverage, 0.3);
+  EXPECT_GT(report.seam_length_m, 0.0);
+}
+
+TEST(UvAtlasTest, SpiralThatWouldOverlapIsSplit) {
+  const Mesh ramp = MakeSpiralRamp();
+  UnwrapOptions options;
+  options.size_texels = 1024;
+  AtlasReport report;
+  auto out = UnwrapCharts(ramp, options, &report);
+  ASSERT_TRUE(out.ok());
+  ExpectValidAtlas(ramp, *out, options);
+  EXPECT_GE(report.charts, 2u);
+}
+
+TEST(UvAtlasTest, MeasureFindsOverlapsAndNarrowGaps) {
+  // Two triangles of different charts, overlapping; then 2 texels apart.
+  Mesh mesh;
+  mesh.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1, 1, 0, 1, 0, 1, 1};
+  mesh.indices = {0, 1, 2, 3, 4, 5};
+  mesh.uvs = {0.1f, 0.1f, 0.5f, 0.1f, 0.1f, 0.5f, 0.2f, 0.2f, 0.6f, 0.2f, 0.2f, 0.6f};
+  MeasureOptions measure;
+  measure.check_overlaps = true;
+  AtlasReport r = MeasureAtlas(mesh, 100, measure);
+  EXPECT_EQ(r.charts, 2u);
+  EXPECT_EQ(r.overlapping_faces, 1u);
+  EXPECT_EQ(r.overlapping_chart_pairs, 1u);
+  EXPECT_EQ(r.min_chart_gap_texels, 0.0);
+  mesh.uvs = {0.1f, 0.1f, 0.5f, 0.1f, 0.1f, 0.5f, 0.52f, 0.1f, 0.9f, 0.1f, 0.52f, 0.5f};
+  r = MeasureAtlas(mesh, 100, measure);
+  EXPECT_EQ(r.overlapping_faces, 0u);
+  // Closest: the first's corner (0.5, 0.1) and the second's (0.52, 0.1).
+  EXPECT_NEAR(r.min_chart_gap_texels, 2.0, 1e-3);
+  EXPECT_NEAR(r.min_border_gap_texels, 10.0, 1e-3);
+  // Mirrored: clockwise in UV.
+  mesh.uvs = {0.1f, 0.1f, 0.1f, 0.5f, 0.5f, 0.1f, 0.52f, 0.1f, 0.9f, 0.1f, 0.52f, 0.5f};
+  r = MeasureAtlas(mesh, 100, measure);
+  EXPECT_EQ(r.faces_not_ccw, 1u);
+}
+
+TEST(UvAtlasTest, SeamVerticesCarryTheirAttributes) {
+  const Mesh cylinder = MakeCylinder(0.5, 1.0, 48, 6);
+  UnwrapOptions options;
+  options.size_texels = 1024;
+  auto out = UnwrapCharts(cylinder, options, nullptr);
+  ASSERT_TRUE(out.ok());
+  EXPECT_GT(out->vertex_count(), cylinder.vertex_count());  // seams split vertices
+  ASSERT_EQ(out->normals.size(), 3 * out->vertex_count());
+  ASSERT_EQ(out->colors.size(), 3 * out->vertex_count());
+  ASSERT_EQ(out->tangents.size(), 4 * out->vertex_count());
+  EXPECT_EQ(out->origin, cylinder.origin);
+  for (size_t i = 0; i < out->indices.size(); ++i) {
+    const size_t o = out->indices[i], v = cylinder.indices[i];
+    for (int d = 0; d < 3; ++d) {
+      EXPECT_EQ(out->normals[3 * o + d], cylinder.normals[3 * v + d]);
+      EXPECT_EQ(out->colors[3 * o + d], cylinder.colors[3 * v + d]);
+    }
+    for (int d = 0; d < 4; ++d) EXPECT_EQ(out->tangents[4 * o + d], cylinder.tangents[4 * v + d]);
+  }
+}
+
+TEST(UvAtlasTest, DeterministicWhateverTheThreads) {
+  const Mesh room = RoomWalls();
+  UnwrapOptions options;
+  options.size_texels = 2048;
+  options.threads = 1;
+  auto one = UnwrapCharts(room, options, nullptr);
+  auto again = UnwrapCharts(room, options, nullptr);
+  options.threads = 2;
+  auto two = UnwrapCharts(room, options, nullptr);
+  ASSERT_TRUE(one.ok() && again.ok() && two.ok());
+  for (const Mesh* other : {&*again, &*two}) {
+    EXPECT_EQ(one->indices, other->indices);
+    EXPECT_EQ(one->positions, other->positions);
+    EXPECT_EQ(one->uvs, other->uvs);
+    EXPECT_EQ(one->colors, other->colors);
+  }
+}
+
+TEST(UvAtlasTest, PerTriangleBaseline) {
+  const Mesh cylinder = MakeCylinder(0.5, 1.0, 24, 5);
+  UnwrapOptions options;
+  options.method = UnwrapMethod::kPerTriangle;
+  options.size_texels = 512;
+  options.gutter_texels = 3;
+  AtlasReport report;
+  auto out = UnwrapMesh(cylinder, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(cylinder, *out, options);
+  EXPECT_EQ(report.charts, cylinder.face_count());
+  EXPECT_EQ(out->vertex_count(), 3 * cylinder.face_count());
+  EXPECT_GT(report.stretch_l2, 1.1);  // right isosceles triangles distort
+  // 240 faces on 512 texels: 16 cells a row of 31 texels, legs of 28.
+  EXPECT_NEAR(report.coverage, 240 * 0.5 * 28.0 * 28.0 / (512.0 * 512.0), 1e-4);
+
+  options.size_texels = 64;
+  auto too_small = UnwrapMesh(cylinder, options, nullptr);
+  ASSERT_FALSE(too_small.ok());
+  EXPECT_NE(too_small.status().message().find("raise `size`"), std::string::npos);
+}
+
+TEST(UvAtlasTest, NonManifoldEdgesBecomeSeams) {
+  // Three faces on one edge (a fin): each face is its own chart there.
+  Mesh mesh;
+  mesh.positions = {0, 0, 0, 1, 0, 0, 0.5f, 1, 0, 0.5f, -1, 0, 0.5f, 0, 1};
+  mesh.indices = {0, 1, 2, 1, 0, 3, 1, 0, 4};
+  UnwrapOptions options;
+  options.size_texels = 256;
+  AtlasReport report;
+  auto out = UnwrapCharts(mesh, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(mesh, *out, options);
+  EXPECT_EQ(report.charts, 3u);
+}
+
+TEST(UvAtlasTest, RejectsBadOptionsAndMeshes) {
+  const Mesh cylinder = MakeCylinder(0.5, 1.0, 12, 2);
+  UnwrapOptions options;
+  options.max_angle_deg = 95;
+  EXPECT_FALSE(UnwrapCharts(cylinder, options, nullptr).ok());
+  options = {};
+  options.gutter_texels = -1;
+  EXPECT_FALSE(UnwrapCharts(cylinder, options, nullptr).ok());
+  options = {};
+  options.size_texels = 4;
+  EXPECT_FALSE(UnwrapCharts(cylinder, options, nullptr).ok());
+  Mesh broken = cylinder;
+  broken.indices.push_back(9999);
+  broken.indices.push_back(0);
+  broken.indices.push_back(1);
+  EXPECT_FALSE(UnwrapCharts(broken, {}, nullptr).ok());
+  // Too many charts for the gutter: 20 separate triangles in 8 texels (each
+  // needs 2 x 2 with its gutter, 3 x 3 fit).
+  Mesh soup;
+  for (int i = 0; i < 20; ++i) {
+    const float x = float(i);
+    soup.positions.insert(soup.positions.end(), {x, 0, 0, x + 1, 0, 0, x, 1, 0});
+    soup.indices.insert(soup.indices.end(), {uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
+  }
+  options = {};
+  options.size_texels = 8;
+  options.gutter_texels = 1;
+  auto packed = UnwrapCharts(soup, options, nullptr);
+  ASSERT_FALSE(packed.ok());
+  EXPECT_NE(packed.status().message().find("do not fit"), std::string::npos);
+}
+
+TEST(UvPackTest, FillsTheAtlasWithTheGutter) {
+  std::vector<ChartExtent> charts;
+  for (int i = 0; i < 50; ++i) charts.push_back({1.0 + 0.1 * (i % 7), 0.5 + 0.05 * (i % 5)});
+  auto packed = PackCharts(charts, 1024, 4);
+  ASSERT_TRUE(packed.ok());
+  const double s = packed->texels_per_meter;
+  double area = 0;
+  for (size_t i = 0; i < charts.size(); ++i) {
+    const double x0 = double(packed->x_texels[i]), y0 = double(packed->y_texels[i]);
+    const double x1 = x0 + std::ceil(charts[i].width * s), y1 = y0 + std::ceil(charts[i].height * s);
+    EXPECT_GE(x0, 4);
+    EXPECT_GE(y0, 4);
+    EXPECT_LE(x1, 1020);
+    EXPECT_LE(y1, 1020);
+    area += (x1 - x0) * (y1 - y0);
+    for (size_t j = 0; j < i; ++j) {
+      const double u0 = double(packed->x_texels[j]), v0 = double(packed->y_texels[j]);
+      const double u1 = u0 + std::ceil(charts[j].width * s), v1 = v0 + std::ceil(charts[j].height * s);
+      const bool apart = x0 >= u1 + 4 || u0 >= x1 + 4 || y0 >= v1 + 4 || v0 >= y1 + 4;
+      EXPECT_TRUE(apart) << i << " vs " << j;
+    }
+  }
+  EXPECT_GT(area / (1024.0 * 1024.0), 0.6);
+}
+
+// --- Tools, not tests: run with --gtest_also_run_disabled_tests. ---
+
+// Each chart a flat color on white, `pixels` square.
+Image RenderAtlas(const Mesh& mesh, int pixels) {
+  Image image = Image::Make(pixels, pixels, 3, Image::PixelType::kU8);
+  std::fill(image.data.begin(), image.data.end(), uint8_t(255));
+  uint32_t charts = 0;
+  const std::vector<uint32_t> chart = ChartOfFaces(mesh, &charts);
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    uint32_t h = chart[f] * 2654435761u;
+    h ^= h >> 15;
+    const uint8_t color[3] = {uint8_t(40 + (h & 0x9f)), uint8_t(40 + ((h >> 8) & 0x9f)),
+                              uint8_t(40 + ((h >> 16) & 0x9f))};
+    double x[3], y[3];
+    for (int k = 0; k < 3; ++k) {
+      x[k] = mesh.uvs[2 * size_t(mesh.indices[3 * f + k])] * pixels;
+      y[k] = (1.0 - mesh.uvs[2 * size_t(mesh.indices[3 * f + k]) + 1]) * pixels;  // v up
+    }
+    const int x0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]}))));
+    const int x1 = std::min(pixels - 1, int(std::ceil(std::max({x[0], x[1], x[2]}))));
+    const int y0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]}))));
+    const int y1 = std::min(pixels - 1, int(std::ceil(std::max({y[0], y[1], y[2]}))));
+    for (int py = y0; py <= y1; ++py) {
+      for (int px = x0; px <= x1; ++px) {
+        // Conservative: any pixel the triangle touches (tiny faces stay visible).
+        bool inside = false;
+        for (double oy : {0.0, 0.5, 1.0}) {
+          for (double ox : {0.0, 0.5, 1.0}) {
+            const double cx = px + ox, cy = py + oy;
+            const double d0 = (x[1] - x[0]) * (cy - y[0]) - (y[1] - y[0]) * (cx - x[0]);
+            const double d1 = (x[2] - x[1]) * (cy - y[1]) - (y[2] - y[1]) * (cx - x[1]);
+            const double d2 = (x[0] - x[2]) * (cy - y[2]) - (y[0] - y[2]) * (cx - x[2]);
+            inside |= (d0 <= 0 && d1 <= 0 && d2 <= 0) || (d0 >= 0 && d1 >= 0 && d2 >= 0);
+          }
+        }
+        if (!inside) continue;
+        for (int c = 0; c < 3; ++c) image.at_u8(px, py, c) = color[c];
+      }
+    }
+  }
+  return image;
+}
+
+// PB_UV_MESH=path.ply [PB_UV_PNG=atlas.png] [PB_UV_SIZE=4096] [PB_UV_METHOD=
+// per_triangle]: unwraps, prints the time and the report, renders the atlas.
+// PB_UV_SYNTH_CELL=0.05 unwraps SynthTruthMesh(room, cell) instead.
+TEST(UvAtlasTool, DISABLED_UnwrapFile) {
+  const char* path = std::getenv("PB_UV_MESH");
+  const char* cell = std::getenv("PB_UV_SYNTH_CELL");
+  if (path == nullptr && cell == nullptr) GTEST_SKIP() << "set PB_UV_MESH or PB_UV_SYNTH_CELL";
+  Expected<PlyMesh> ply = PlyMesh{};
+  if (cell != nullptr) {
+    ply->mesh = SynthTruthMesh(*MakeSynthScene("room", 1), std::atof(cell));
+  } else {
+    ply = ReadPlyMesh(path, {});
+  }
+  ASSERT_TRUE(ply.ok()) << ply.status().message();
+  UnwrapOptions options;
+  if (const char* size = std::getenv("PB_UV_SIZE")) options.size_texels = std::atoi(size);
+  if (const char* method = std::getenv("PB_UV_METHOD")) {
+    if (std::string(method) == "per_triangle") options.method = UnwrapMethod::kPerTriangle;
+  }
+  if (const char* threads = std::getenv("PB_UV_THREADS")) options.threads = std::atoi(threads);
+  AtlasReport report;
+  const auto start = std::chrono::steady_clock::now();
+  auto out = UnwrapMesh(ply->mesh, options, &report);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  std::printf("faces %zu vertices %zu->%zu: %.3f s (incl. measuring), charts %llu, coverage %.4f, "
+              "stretch L2 %.4f Linf %.3f, seams %.1f m, outside %llu, not ccw %llu\n",
+              ply->mesh.face_count(), ply->mesh.vertex_count(), out->vertex_count(), seconds,
+              (unsigned long long)report.charts, report.coverage, report.stretch_l2,
+              report.stretch_linf, report.seam_length_m, (unsigned long long)report.faces_outside,
+              (unsigned long long)report.faces_not_ccw);
+  if (std::getenv("PB_UV_CHECK") != nullptr) {
+    MeasureOptions measure;
+    measure.check_overlaps = true;
+    const AtlasReport r = MeasureAtlas(*out, options.size_texels, measure);
+    std::printf("overlapping faces %llu, chart pairs %llu, min gap %.3f texels, border %.3f\n",
+                (unsigned long long)r.overlapping_faces,
+                (unsigned long long)r.overlapping_chart_pairs, r.min_chart_gap_texels,
+                r.min_border_gap_texels);
+  }
+  if (const char* png = std::getenv("PB_UV_PNG")) {
+    ASSERT_TRUE(WritePng(png, RenderAtlas(*out, 1024)).ok());
+  }
+  if (const char* ply_out = std::getenv("PB_UV_OUT")) {
+    ASSERT_TRUE(WritePlyMesh(ply_out, *out).ok());
+  }
+}
+
+}  // namespace
+}  // namespace pb

@@ -1,0 +1,55 @@
+// Chart segmentation and flattening for UV atlases (used by uv_atlas.cc;
+// the public API is uv_atlas.h). Algorithm and references there.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "stages/geometry/mesh.h"
+
+namespace pb {
+
+// One chart, flattened: its faces, its vertices and their 2-D coordinates in
+// meters after the minimal-rectangle rotation (min corner at the origin).
+struct FlatChart {
+  std::vector<uint32_t> faces;     // face ids, increasing
+  std::vector<uint32_t> vertices;  // original vertex ids, increasing
+  std::vector<uint32_t> corners;   // 3 per face of `faces`: index into `vertices`
+  std::vector<double> uv_m;        // 2 per vertex
+  double width_m = 0;              // extent along u (>= height_m)
+  double height_m = 0;
+};
+
+struct ChartOptions {
+  double max_angle_deg = 66;
+  double max_stretch = 1.25;
+};
+
+// The charts of `mesh` (valid, see Validate), in the order their seed faces
+// were reached (seeds in face order). Every face is in exactly one chart.
+// `seam_length_m` (may be null) receives the 3-D length of edges between
+// faces of different charts. Threads through TBB; the result does not
+// depend on the thread count.
+std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& options,
+                                      double* seam_length_m,
+                                      const std::function<void(double)>& progress);
+
+// Axis-aligned boxes {min_x, min_y, max_x, max_y}; calls visit(i, j), i < j,
+// once for every pair whose boxes intersect (closed). A uniform grid sized to
+// the boxes keeps the work near-linear for boxes of similar size. visit
+// returns false to stop early.
+using Box2 = std::array<double, 4>;
+void ForEachIntersectingBoxPair(const std::vector<Box2>& boxes,
+                                const std::function<bool(uint32_t, uint32_t)>& visit);
+
+// Whether the interiors of triangles a and b (3 points each, x y) overlap by
+// more than `tolerance` along every separating axis (SAT): triangles that
+// only touch along an edge or at a vertex do not overlap.
+bool TrianglesOverlap(const std::array<double, 6>& a, const std::array<double, 6>& b,
+                      double tolerance);
+// Euclidean distance between two triangles (0 if they intersect).
+double TriangleDistance(const std::array<double, 6>& a, const std::array<double, 6>& b);
+
+}  // namespace pb
