@@ -1,7 +1,81 @@
 #include "stages/export/export_stages.h"
 
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <string>
+
+#include "stages/geometry/image.h"
+#include "stages/geometry/text_parse.h"
+#include "stages/params.h"
+
 namespace pb {
 
-void RegisterExportStages(StageRegistry& registry) { (void)registry; }
+void RegisterExportStages(StageRegistry& registry) {
+  for (StageType type : {GltfExportStage(), ObjExportStage()}) {
+    [[maybe_unused]] const Status status = registry.Register(std::move(type));
+    assert(status.ok());
+  }
+}
+
+namespace {
+
+uint8_t ToByte(double value) { return static_cast<uint8_t>(std::lround(std::clamp(value, 0.0, 1.0) * 255.0)); }
+
+// An 8-bit image from a 16-bit or float one (see TexturePng).
+Image ToEightBit(const Image& image, bool normal_map) {
+  Image out = Image::Make(image.width, image.height, image.channels, Image::PixelType::kU8);
+  const size_t samples = image.sample_count();
+  for (size_t i = 0; i < samples; ++i) {
+    if (image.type == Image::PixelType::kU16) {
+      out.data[i] = static_cast<uint8_t>((uint32_t(image.u16()[i]) * 255 + 32767) / 65535);
+      continue;
+    }
+    const double value = image.f32()[i];
+    const bool alpha = (image.channels == 2 || image.channels == 4) && i % image.channels == size_t(image.channels - 1);
+    if (normal_map && !alpha) {
+      out.data[i] = ToByte((value + 1) / 2);
+    } else if (alpha) {
+      out.data[i] = ToByte(value);
+    } else {
+      const double v = std::clamp(value, 0.0, 1.0);
+      out.data[i] = ToByte(v <= 0.0031308 ? 12.92 * v : 1.055 * std::pow(v, 1 / 2.4) - 0.055);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_view stage_id,
+                                          std::string_view port, bool normal_map) {
+  if (!ctx.has_input(port)) return std::vector<uint8_t>{};
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, stage_id, port));
+  const std::string context = std::string(stage_id) + ": input '" + std::string(port) + "'";
+  const std::string extension = LowerExtension(path);
+  if (extension == ".png") {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return Status::Errno(path, "open").WithContext(context);
+    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+    // IHDR: signature (8), length (4), "IHDR" (4), width, height, bit depth.
+    if (bytes.size() < 33 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
+      return Status::Corrupt(context + ": " + path + " is not a PNG file");
+    }
+    if (bytes[24] == 8) return bytes;  // as baked, byte for byte
+    auto image = ReadPng(path);
+    if (!image.ok()) return image.status().WithContext(context);
+    if (image->type == Image::PixelType::kU8) return EncodePng(*image);  // low bit depths, palettes
+    return EncodePng(ToEightBit(*image, normal_map));
+  }
+  if (extension == ".exr") {
+    auto image = ReadExr(path);
+    if (!image.ok()) return image.status().WithContext(context);
+    return EncodePng(ToEightBit(*image, normal_map));
+  }
+  return Status::Unsupported(context + ": " + path + ": expected a .png or .exr image");
+}
 
 }  // namespace pb

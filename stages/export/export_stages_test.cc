@@ -1,0 +1,257 @@
+// Runs export.gltf and export.obj through a fake StageContext (no engine, no
+// child processes): files go to a temporary directory.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iterator>
+#include <set>
+#include <string>
+
+#include "stages/builtin.h"
+#include "stages/geometry/gltf.h"
+#include "stages/geometry/image.h"
+#include "stages/geometry/obj.h"
+#include "stages/geometry/ply.h"
+#include "stages/geometry/tangents.h"
+#include "stages/stage_test_util.h"
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+std::vector<uint8_t> FileBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::vector<uint8_t>((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+}
+
+class ExportStagesTest : public StageTest {
+ protected:
+  void SetUp() override {
+    StageTest::SetUp();
+    RegisterBuiltinStages(registry_);
+    std::filesystem::create_directories(dir_ / "input");
+  }
+
+  std::string Input(const std::string& name) const { return (dir_ / "input" / name).string(); }
+
+  // A 10 x 10 quad grid with colors (and uvs when asked), far from 0.
+  std::string WriteMesh(bool uvs) {
+    Mesh mesh;
+    mesh.origin = {350000.5, 5800000.25, 42.0};
+    const int n = 10;
+    for (int j = 0; j <= n; ++j) {
+      for (int i = 0; i <= n; ++i) {
+        mesh.positions.insert(mesh.positions.end(), {float(i) / n, float(j) / n, 0.0f});
+        mesh.colors.insert(mesh.colors.end(), {uint8_t(20 * i), uint8_t(20 * j), 200});
+        if (uvs) mesh.uvs.insert(mesh.uvs.end(), {float(i) / n, float(j) / n});
+      }
+    }
+    for (int j = 0; j < n; ++j) {
+      for (int i = 0; i < n; ++i) {
+        const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+        mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+      }
+    }
+    const std::string path = Input("mesh.ply");
+    EXPECT_TRUE(WritePlyMesh(path, mesh).ok());
+    return path;
+  }
+
+  std::string WriteImage(const std::string& name, Image::PixelType type) {
+    Image image = Image::Make(32, 16, 3, type);
+    for (int y = 0; y < 16; ++y) {
+      for (int x = 0; x < 32; ++x) {
+        for (int c = 0; c < 3; ++c) {
+          const double value = c == 2 ? 1.0 : (c == 0 ? x / 31.0 : y / 15.0);
+          if (type == Image::PixelType::kU8) image.at_u8(x, y, c) = uint8_t(std::lround(value * 255));
+          if (type == Image::PixelType::kU16) image.at_u16(x, y, c) = uint16_t(std::lround(value * 65535));
+          if (type == Image::PixelType::kF32) image.at_f32(x, y, c) = float(2 * value - 1);
+        }
+      }
+    }
+    const std::string path = Input(name);
+    EXPECT_TRUE(pb::WriteImage(path, image).ok());
+    return path;
+  }
+};
+
+TEST_F(ExportStagesTest, StagesAreWellFormed) {
+  for (const char* id : {"export.gltf", "export.obj"}) {
+    const StageType* type = registry_.Find(id);
+    ASSERT_NE(type, nullptr) << id;
+    const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
+    EXPECT_EQ(schema["additionalProperties"], false);
+    for (const auto& [name, property] : schema["properties"].items()) {
+      EXPECT_TRUE(property.contains("description")) << id << " " << name;
+      EXPECT_TRUE(property.contains("default")) << id << " " << name;
+    }
+    ASSERT_EQ(type->inputs.size(), 3u);
+    EXPECT_EQ(type->inputs[0].name, "mesh");
+    EXPECT_FALSE(type->inputs[0].optional);
+    EXPECT_EQ(type->inputs[1].name, "color");
+    EXPECT_EQ(type->inputs[1].type, "image");
+    EXPECT_TRUE(type->inputs[1].optional);
+    EXPECT_EQ(type->inputs[2].name, "normal");
+    EXPECT_TRUE(type->inputs[2].optional);
+    ASSERT_EQ(type->outputs.size(), 1u);
+    EXPECT_EQ(type->outputs[0].type, "model");
+    EXPECT_THAT(type->doc, HasSubstr("Counters: `faces`, `vertices`, `bytes`"));
+  }
+}
+
+TEST_F(ExportStagesTest, GltfEmbedsTexturesAndComputesTangents) {
+  FakeContext ctx(dir_ / "run", {{"name", "wall"}});
+  ctx.AddInput("mesh", "mesh", WriteMesh(true), {{"source", "test"}});
+  const std::string color = WriteImage("color.png", Image::PixelType::kU8);
+  const std::string normal = WriteImage("normal.png", Image::PixelType::kU8);
+  ctx.AddInput("color", "image", color);
+  ctx.AddInput("normal", "image", normal);
+  const Status status = Run("export.gltf", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(std::filesystem::path(ctx.outputs_["model"]).filename(), "model.glb");
+  EXPECT_EQ(ctx.counters_["faces"], 200);
+  EXPECT_EQ(ctx.counters_["vertices"], 121);
+  EXPECT_EQ(ctx.counters_["bytes"], std::filesystem::file_size(ctx.outputs_["model"]));
+  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io"}));
+  EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
+  const nlohmann::json& meta = ctx.meta_["model"];
+  EXPECT_EQ(meta["source"], "test");  // input meta passed on
+  EXPECT_EQ(meta["format"], "glb");
+  EXPECT_EQ(meta["tangents"], "computed");
+  EXPECT_EQ(meta["normals"], "computed");
+  EXPECT_EQ(meta["vertex_colors"], false);  // a color texture is given
+  EXPECT_EQ(meta["color_texture"], true);
+  EXPECT_EQ(meta["origin"][0], 350000.5);
+
+  auto model = ReadGlb(ctx.outputs_["model"]);
+  ASSERT_TRUE(model.ok()) << model.status().message();
+  EXPECT_EQ(model->name, "wall");
+  EXPECT_EQ(model->mesh.origin, (std::array<double, 3>{350000.5, 5800000.25, 42.0}));
+  EXPECT_EQ(model->base_color_png, FileBytes(color));  // passed through byte for byte
+  EXPECT_EQ(model->normal_png, FileBytes(normal));
+  ASSERT_EQ(model->mesh.tangents.size(), 4u * 121);
+  EXPECT_NEAR(model->mesh.tangents[0], 1, 1e-6);
+  EXPECT_EQ(model->mesh.tangents[3], 1.0f);
+}
+
+TEST_F(ExportStagesTest, GltfWithoutTexturesKeepsVertexColors) {
+  FakeContext ctx(dir_ / "run", nlohmann::json::object());
+  ctx.AddInput("mesh", "mesh", WriteMesh(false));
+  const Status status = Run("export.gltf", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.meta_["model"]["vertex_colors"], true);
+  EXPECT_EQ(ctx.meta_["model"]["tangents"], "none");
+  auto model = ReadGlb(ctx.outputs_["model"]);
+  ASSERT_TRUE(model.ok());
+  EXPECT_EQ(model->mesh.colors.size(), 3u * 121);
+  EXPECT_TRUE(model->mesh.uvs.empty());
+
+  FakeContext off(dir_ / "off", {{"vertex_colors", false}});
+  off.AddInput("mesh", "mesh", Input("mesh.ply"));
+  ASSERT_TRUE(Run("export.gltf", off).ok());
+  EXPECT_TRUE(ReadGlb(off.outputs_["model"])->mesh.colors.empty());
+}
+
+TEST_F(ExportStagesTest, ExrAndSixteenBitMapsAreConvertedToEightBitPng) {
+  FakeContext ctx(dir_ / "run", nlohmann::json::object());
+  ctx.AddInput("mesh", "mesh", WriteMesh(true));
+  ctx.AddInput("color", "image", WriteImage("color16.png", Image::PixelType::kU16));
+  ctx.AddInput("normal", "image", WriteImage("normal.exr", Image::PixelType::kF32));
+  const Status status = Run("export.gltf", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  auto model = ReadGlb(ctx.outputs_["model"]);
+  ASSERT_TRUE(model.ok());
+  const std::string normal_png = (dir_ / "normal_out.png").string();
+  std::ofstream(normal_png, std::ios::binary)
+      .write(reinterpret_cast<const char*>(model->normal_png.data()), model->normal_png.size());
+  auto normal = ReadPng(normal_png);
+  ASSERT_TRUE(normal.ok());
+  EXPECT_EQ(normal->type, Image::PixelType::kU8);
+  EXPECT_EQ(normal->at_u8(0, 0, 0), 0);      // -1 -> 0
+  EXPECT_EQ(normal->at_u8(31, 0, 0), 255);   // +1 -> 255
+  EXPECT_EQ(normal->at_u8(0, 0, 2), 255);    // z = +1
+  const std::string color_png = (dir_ / "color_out.png").string();
+  std::ofstream(color_png, std::ios::binary)
+      .write(reinterpret_cast<const char*>(model->base_color_png.data()), model->base_color_png.size());
+  auto color = ReadPng(color_png);
+  ASSERT_TRUE(color.ok());
+  EXPECT_EQ(color->type, Image::PixelType::kU8);
+  EXPECT_EQ(color->at_u8(31, 15, 0), 255);
+  EXPECT_EQ(color->at_u8(0, 0, 0), 0);
+}
+
+TEST_F(ExportStagesTest, TextureWithoutUvsIsAClearError) {
+  for (const char* id : {"export.gltf", "export.obj"}) {
+    FakeContext ctx(dir_ / id, nlohmann::json::object());
+    ctx.AddInput("mesh", "mesh", WriteMesh(false));
+    ctx.AddInput("normal", "image", WriteImage("normal.png", Image::PixelType::kU8));
+    const Status status = Run(id, ctx);
+    EXPECT_EQ(status.code(), Status::Code::kInvalid) << id;
+    EXPECT_THAT(status.message(), HasSubstr(id));
+    EXPECT_THAT(status.message(), HasSubstr("mesh.ply has none"));
+    EXPECT_THAT(status.message(), HasSubstr("uv.unwrap"));
+    EXPECT_FALSE(std::filesystem::exists(dir_ / id / "out"));  // nothing written
+  }
+}
+
+TEST_F(ExportStagesTest, BadTextureInputsAreClearErrors) {
+  FakeContext ctx(dir_ / "run", nlohmann::json::object());
+  ctx.AddInput("mesh", "mesh", WriteMesh(true));
+  std::ofstream(Input("color.png")) << "not a png";
+  ctx.AddInput("color", "image", Input("color.png"));
+  Status status = Run("export.gltf", ctx);
+  EXPECT_EQ(status.code(), Status::Code::kCorrupt);
+  EXPECT_THAT(status.message(), HasSubstr("export.gltf: input 'color'"));
+  EXPECT_THAT(status.message(), HasSubstr(Input("color.png")));
+
+  FakeContext tiff(dir_ / "tiff", nlohmann::json::object());
+  tiff.AddInput("mesh", "mesh", Input("mesh.ply"));
+  std::ofstream(Input("color.tif")) << "II*";
+  tiff.AddInput("color", "image", Input("color.tif"));
+  status = Run("export.obj", tiff);
+  EXPECT_EQ(status.code(), Status::Code::kUnsupported);
+  EXPECT_THAT(status.message(), HasSubstr("expected a .png or .exr"));
+}
+
+TEST_F(ExportStagesTest, ObjWritesModelMaterialAndTextures) {
+  FakeContext ctx(dir_ / "run", nlohmann::json::object());
+  ctx.AddInput("mesh", "mesh", WriteMesh(true), {{"source", "test"}});
+  const std::string color = WriteImage("color.png", Image::PixelType::kU8);
+  ctx.AddInput("color", "image", color);
+  ctx.AddInput("normal", "image", WriteImage("normal.png", Image::PixelType::kU8));
+  const Status status = Run("export.obj", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  std::set<std::string> files;
+  uint64_t bytes = 0;
+  const auto out_dir = std::filesystem::path(ctx.outputs_["model"]).parent_path();
+  for (const auto& entry : std::filesystem::directory_iterator(out_dir)) {
+    files.insert(entry.path().filename().string());
+    bytes += entry.file_size();
+  }
+  EXPECT_EQ(files, (std::set<std::string>{"model.obj", "model.mtl", "color.png", "normal.png"}));
+  EXPECT_EQ(ctx.counters_["bytes"], bytes);
+  EXPECT_EQ(ctx.counters_["faces"], 200);
+  EXPECT_EQ(ctx.counters_["vertices"], 121);
+  EXPECT_EQ(ctx.meta_["model"]["format"], "obj");
+  EXPECT_EQ(ctx.meta_["model"]["source"], "test");
+  auto model = ReadObj((out_dir / "model.obj").string());
+  ASSERT_TRUE(model.ok()) << model.status().message();
+  EXPECT_EQ(model->mesh.origin, (std::array<double, 3>{350000.5, 5800000.25, 42.0}));
+  EXPECT_EQ(model->mesh.face_count(), 200u);
+  EXPECT_EQ(model->base_color_png, FileBytes(color));
+  EXPECT_FALSE(model->normal_png.empty());
+}
+
+TEST_F(ExportStagesTest, MissingMeshInputIsAnError) {
+  FakeContext ctx(dir_ / "run", nlohmann::json::object());
+  const Status status = Run("export.obj", ctx);
+  EXPECT_FALSE(status.ok());
+  EXPECT_THAT(status.message(), HasSubstr("export.obj: input 'mesh' is not connected"));
+}
+
+}  // namespace
+}  // namespace pb

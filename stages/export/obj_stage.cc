@@ -1,0 +1,106 @@
+// export.obj: a mesh and its baked maps as Wavefront OBJ + MTL + PNG
+// (stages/geometry/obj.h).
+#include <string>
+#include <utility>
+
+#include "engine/stage.h"
+#include "stages/export/export_stages.h"
+#include "stages/geometry/obj.h"
+#include "stages/geometry/ply.h"
+#include "stages/params.h"
+
+namespace pb {
+namespace {
+
+constexpr const char* kId = "export.obj";
+
+constexpr const char* kSchema = R"({
+  "type": "object",
+  "additionalProperties": false,
+  "properties": {
+    "name": {
+      "type": "string",
+      "minLength": 1,
+      "default": "model",
+      "description": "Name of the object and material inside the files (the files are always model.obj, model.mtl, color.png, normal.png)."
+    },
+    "vertex_colors": {
+      "type": "boolean",
+      "default": true,
+      "description": "Write the mesh's vertex colors on the `v` lines (the extension MeshLab and Blender read)."
+    }
+  }
+})";
+
+Status Run(StageContext& ctx) {
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, "mesh", "mesh.ply"));
+  ObjWriteOptions options;
+  PB_ASSIGN_OR_RETURN(options.name, StringParam(ctx, kId, "name", "model"));
+  PB_ASSIGN_OR_RETURN(options.vertex_colors, BoolParam(ctx, kId, "vertex_colors", true));
+  Mesh mesh;
+  {
+    PB_PHASE(ctx, "io");
+    PlyReadOptions read_options;
+    read_options.progress = [&ctx](double fraction) { ctx.progress(0.3 * fraction); };
+    PB_ASSIGN_OR_RETURN(PlyMesh ply, ReadPlyMesh(path, read_options));
+    mesh = std::move(ply.mesh);
+    PB_ASSIGN_OR_RETURN(options.base_color_png, TexturePng(ctx, kId, "color", false));
+    PB_ASSIGN_OR_RETURN(options.normal_png, TexturePng(ctx, kId, "normal", true));
+  }
+  if ((!options.base_color_png.empty() || !options.normal_png.empty()) && !mesh.has_uvs()) {
+    return Status::Invalid(std::string(kId) + ": textures need uvs, and " + path +
+                           " has none (run uv.unwrap before baking and exporting)");
+  }
+  ctx.progress(0.4);
+  ObjWriteReport report;
+  {
+    PB_PHASE(ctx, "io");
+    const Status status = WriteObj(ctx.output_path("model", "model.obj"), mesh, options, &report);
+    if (!status.ok()) return status.WithContext(kId);
+  }
+  ctx.counter("faces", static_cast<double>(mesh.face_count()));
+  ctx.counter("vertices", static_cast<double>(mesh.vertex_count()));
+  ctx.counter("bytes", static_cast<double>(report.bytes));  // all files
+  const nlohmann::json& input_meta = ctx.input("mesh").meta;
+  nlohmann::json meta = input_meta.is_object() ? input_meta : nlohmann::json::object();
+  meta.update({{"format", "obj"},
+               {"origin", mesh.origin},
+               {"vertices", mesh.vertex_count()},
+               {"faces", mesh.face_count()},
+               {"bytes", report.bytes},
+               {"color_texture", !options.base_color_png.empty()},
+               {"normal_texture", !options.normal_png.empty()},
+               {"vertex_colors", mesh.has_colors() && options.vertex_colors},
+               {"normals", report.computed_normals ? "computed" : "mesh"}});
+  ctx.set_output_meta("model", std::move(meta));
+  ctx.progress(1.0);
+  return Status::Ok();
+}
+
+}  // namespace
+
+StageType ObjExportStage() {
+  StageType type;
+  type.id = kId;
+  type.version = 1;
+  type.summary = "Export a mesh and its color and normal maps as OBJ + MTL + PNG";
+  type.doc =
+      "Writes model.obj (absolute coordinates: origin + position in double precision, OBJ "
+      "having no node transform; z up as our frames; uvs with v up; unit normals, computed "
+      "when the mesh has none; vertex colors on the `v` lines), model.mtl (Kd 1 1 1, map_Kd "
+      "color.png, map_Bump and norm normal.png) and the maps as color.png and normal.png "
+      "(8-bit PNGs byte for byte; 16-bit PNGs and float EXRs converted to 8-bit). OBJ has no "
+      "tangents: viewers derive them from uvs. Opens in MeshLab and Blender (Up axis Z). "
+      "Textures need a mesh with uvs. See docs/export.md.\n\n"
+      "Counters: `faces`, `vertices`, `bytes` (all files together).";
+  type.params_schema = kSchema;
+  type.inputs = {
+      {"mesh", "mesh", "The mesh to export (mesh.ply), with uvs when textures are given.", false},
+      {"color", "image", "Base color map (sRGB PNG, or EXR converted to sRGB).", true},
+      {"normal", "image", "Tangent-space normal map (PNG, +Y up; or EXR in [-1,1]).", true}};
+  type.outputs = {{"model", "model", "The model (model.obj, model.mtl, color.png, normal.png).", false}};
+  type.run = &Run;
+  return type;
+}
+
+}  // namespace pb
