@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <limits>
 #include <numeric>
 #include <set>
@@ -71,6 +72,90 @@ Mesh EmptyLike(const Mesh& mesh) {
   return out;
 }
 
+// Slivers that float UVs cannot hold: faces whose smallest altitude would
+// be under 0.02 texel at the density of an atlas half covered (the packed
+// density is usually higher, which only makes them thicker).
+std::vector<uint32_t> TinyFaces(const Mesh& mesh, int size_texels) {
+  const size_t faces = mesh.face_count();
+  std::vector<double> area(faces), longest(faces);
+  double total = 0;
+  for (size_t f = 0; f < faces; ++f) {
+    double q[3][3];
+    for (int k = 0; k < 3; ++k) {
+      for (int d = 0; d < 3; ++d) q[k][d] = mesh.positions[3 * size_t(mesh.indices[3 * f + k]) + d];
+    }
+    const double e1[3] = {q[1][0] - q[0][0], q[1][1] - q[0][1], q[1][2] - q[0][2]};
+    const double e2[3] = {q[2][0] - q[0][0], q[2][1] - q[0][1], q[2][2] - q[0][2]};
+    const double e3[3] = {q[2][0] - q[1][0], q[2][1] - q[1][1], q[2][2] - q[1][2]};
+    const double cx = e1[1] * e2[2] - e1[2] * e2[1], cy = e1[2] * e2[0] - e1[0] * e2[2],
+                 cz = e1[0] * e2[1] - e1[1] * e2[0];
+    area[f] = 0.5 * std::sqrt(cx * cx + cy * cy + cz * cz);
+    longest[f] = std::sqrt(std::max({e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2],
+                                     e2[0] * e2[0] + e2[1] * e2[1] + e2[2] * e2[2],
+                                     e3[0] * e3[0] + e3[1] * e3[1] + e3[2] * e3[2]}));
+    total += area[f];
+  }
+  std::vector<uint32_t> tiny;
+  if (!(total > 0)) return tiny;
+  const double texels_per_m = double(size_texels) * std::sqrt(0.5 / total);
+  for (size_t f = 0; f < faces; ++f) {
+    const double altitude_m = longest[f] > 0 ? 2 * area[f] / longest[f] : 0;
+    if (altitude_m * texels_per_m < 0.02) tiny.push_back(uint32_t(f));
+  }
+  return tiny;
+}
+
+// The unwrapped mesh: chart by chart, vertices copied, UVs placed.
+Mesh Layout(const Mesh& mesh, const std::vector<FlatChart>& charts, const PackResult& packed,
+            int size_texels) {
+  Mesh out = EmptyLike(mesh);
+  size_t total_vertices = 0;
+  for (const FlatChart& c : charts) total_vertices += c.vertices.size();
+  out.positions.reserve(3 * total_vertices);
+  out.uvs.reserve(2 * total_vertices);
+  const double s = packed.texels_per_meter, inv_size = 1.0 / size_texels;
+  for (size_t c = 0; c < charts.size(); ++c) {
+    const FlatChart& chart = charts[c];
+    const uint32_t base = uint32_t(out.vertex_count());
+    const double x = double(packed.x_texels[c]), y = double(packed.y_texels[c]);
+    for (size_t i = 0; i < chart.vertices.size(); ++i) {
+      AppendVertex(mesh, chart.vertices[i], &out);
+      out.uvs.push_back(float((x + chart.uv_m[2 * i] * s) * inv_size));
+      out.uvs.push_back(float((y + chart.uv_m[2 * i + 1] * s) * inv_size));
+    }
+    for (size_t i = 0; i < chart.faces.size(); ++i) {
+      for (int k = 0; k < 3; ++k) {
+        out.indices[3 * size_t(chart.faces[i]) + k] = base + chart.corners[3 * i + k];
+      }
+    }
+    if (chart.isolated) {  // the fixed right triangle, one texel on a side
+      constexpr double kCorner[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+      for (int k = 0; k < 3; ++k) {
+        const size_t v = base + chart.corners[k];
+        out.uvs[2 * v] = float((x + kCorner[k][0]) * inv_size);
+        out.uvs[2 * v + 1] = float((y + kCorner[k][1]) * inv_size);
+      }
+    }
+  }
+  return out;
+}
+
+// Faces whose UV triangle (as stored, float) has under 10^-6 texel^2 of
+// signed area, increasing.
+std::vector<uint32_t> FacesWithoutUvArea(const Mesh& out, int size_texels) {
+  std::vector<uint32_t> faces;
+  const double min_area = 1e-6 / (double(size_texels) * size_texels);
+  for (size_t f = 0; f < out.face_count(); ++f) {
+    const float* a = &out.uvs[2 * size_t(out.indices[3 * f])];
+    const float* b = &out.uvs[2 * size_t(out.indices[3 * f + 1])];
+    const float* c = &out.uvs[2 * size_t(out.indices[3 * f + 2])];
+    const double area = 0.5 * ((double(b[0]) - a[0]) * (double(c[1]) - a[1]) -
+                               (double(c[0]) - a[0]) * (double(b[1]) - a[1]));
+    if (area < min_area) faces.push_back(uint32_t(f));
+  }
+  return faces;
+}
+
 template <typename F>
 auto InArena(int threads, F&& body) {
   if (threads > 0) {
@@ -91,43 +176,39 @@ Expected<Mesh> UnwrapCharts(const Mesh& mesh, const UnwrapOptions& options, Atla
     ChartOptions chart_options;
     chart_options.max_angle_deg = options.max_angle_deg;
     chart_options.max_stretch = options.max_stretch;
-    std::vector<FlatChart> charts = MakeFlatCharts(mesh, chart_options, nullptr, progress);
-    std::vector<ChartExtent> extents(charts.size());
-    for (size_t c = 0; c < charts.size(); ++c) extents[c] = {charts[c].width_m, charts[c].height_m};
-    auto packed = PackCharts(extents, options.size_texels, options.gutter_texels);
-    if (!packed.ok()) return packed.status();
-    if (options.progress) options.progress(0.85);
-
-    Mesh out = EmptyLike(mesh);
-    size_t total_vertices = 0;
-    for (const FlatChart& c : charts) total_vertices += c.vertices.size();
-    out.positions.reserve(3 * total_vertices);
-    out.uvs.reserve(2 * total_vertices);
-    const double s = packed->texels_per_meter, inv_size = 1.0 / options.size_texels;
-    for (size_t c = 0; c < charts.size(); ++c) {
-      const FlatChart& chart = charts[c];
-      const uint32_t base = uint32_t(out.vertex_count());
-      for (size_t i = 0; i < chart.vertices.size(); ++i) {
-        AppendVertex(mesh, chart.vertices[i], &out);
-        out.uvs.push_back(float((double(packed->x_texels[c]) + chart.uv_m[2 * i] * s) * inv_size));
-        out.uvs.push_back(
-            float((double(packed->y_texels[c]) + chart.uv_m[2 * i + 1] * s) * inv_size));
+    chart_options.isolated_faces = TinyFaces(mesh, options.size_texels);
+    // Faces whose float UVs come out with no area at the packed scale are
+    // isolated and everything is redone; each round isolates more faces, so
+    // this ends (in practice after one or two rounds).
+    for (int round = 0;; ++round) {
+      std::vector<FlatChart> charts = MakeFlatCharts(mesh, chart_options, nullptr, progress);
+      std::vector<ChartExtent> extents(charts.size());
+      for (size_t c = 0; c < charts.size(); ++c) {
+        extents[c] = {charts[c].width_m, charts[c].height_m};
       }
-      for (size_t i = 0; i < chart.faces.size(); ++i) {
-        for (int k = 0; k < 3; ++k) {
-          out.indices[3 * size_t(chart.faces[i]) + k] = base + chart.corners[3 * i + k];
-        }
+      auto packed = PackCharts(extents, options.size_texels, options.gutter_texels);
+      if (!packed.ok()) return packed.status();
+      if (options.progress) options.progress(0.85);
+      Mesh out = Layout(mesh, charts, *packed, options.size_texels);
+      std::vector<uint32_t> flat_faces = FacesWithoutUvArea(out, options.size_texels);
+      std::vector<uint32_t> merged;
+      std::set_union(chart_options.isolated_faces.begin(), chart_options.isolated_faces.end(),
+                     flat_faces.begin(), flat_faces.end(), std::back_inserter(merged));
+      if (merged.size() > chart_options.isolated_faces.size()) {
+        chart_options.isolated_faces = std::move(merged);
+        continue;
       }
+      if (report != nullptr) {
+        *report = MeasureAtlas(out, options.size_texels);
+        report->texels_per_meter = packed->texels_per_meter;
+        report->isolated_faces = chart_options.isolated_faces.size();
+        report->rounds = round + 1;
+      }
+      if (options.progress) options.progress(1.0);
+      return out;
     }
-    if (report != nullptr) {
-      *report = MeasureAtlas(out, options.size_texels);
-      report->texels_per_meter = s;
-    }
-    if (options.progress) options.progress(1.0);
-    return out;
   });
 }
-
 Expected<Mesh> UnwrapPerTriangle(const Mesh& mesh, const UnwrapOptions& options,
                                  AtlasReport* report) {
   PB_RETURN_IF_ERROR(CheckOptions(mesh, options));
@@ -216,7 +297,9 @@ struct FaceSums {
   uint64_t outside = 0, not_ccw = 0;
 };
 
-FaceSums MeasureFaces(const Mesh& mesh, size_t begin, size_t end) {
+// Faces with an altitude under `min_altitude_m` are left out of linf
+// (slivers the texture cannot show; the unwrapper isolates them).
+FaceSums MeasureFaces(const Mesh& mesh, size_t begin, size_t end, double min_altitude_m) {
   FaceSums sums;
   for (size_t f = begin; f < end; ++f) {
     const Tri2 t = UvTriangle(mesh, f);
@@ -255,7 +338,14 @@ FaceSums MeasureFaces(const Mesh& mesh, size_t begin, size_t end) {
     const double b = ss[0] * st[0] + ss[1] * st[1] + ss[2] * st[2];
     const double c = st[0] * st[0] + st[1] * st[1] + st[2] * st[2];
     sums.l2_weighted += area3 * 0.5 * (a + c);
-    if (area3 > 0) {
+    double longest2 = 0;
+    for (int k = 0; k < 3; ++k) {
+      const int m = (k + 1) % 3;
+      longest2 = std::max(longest2, (q[m][0] - q[k][0]) * (q[m][0] - q[k][0]) +
+                                        (q[m][1] - q[k][1]) * (q[m][1] - q[k][1]) +
+                                        (q[m][2] - q[k][2]) * (q[m][2] - q[k][2]));
+    }
+    if (area3 > 0 && 2 * area3 >= min_altitude_m * std::sqrt(longest2)) {
       sums.linf = std::max(sums.linf,
                            std::sqrt(0.5 * (a + c + std::sqrt((a - c) * (a - c) + 4 * b * b))));
     }
@@ -340,10 +430,24 @@ AtlasReport MeasureAtlas(const Mesh& mesh, int size_texels, const MeasureOptions
   constexpr size_t kChunk = 65536;
   const size_t chunks = (faces + kChunk - 1) / kChunk;
   std::vector<FaceSums> partial(chunks);
-  tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
-    partial[c] = MeasureFaces(mesh, c * kChunk, std::min(faces, (c + 1) * kChunk));
-  });
+  // Pass 1 finds the scale (texels per meter), pass 2 the stretch without
+  // sub-texel slivers.
+  double min_altitude_m = std::numeric_limits<double>::infinity();
   FaceSums total;
+  for (int pass = 0; pass < 2; ++pass) {
+    tbb::parallel_for(size_t(0), chunks, [&](size_t c) {
+      partial[c] =
+          MeasureFaces(mesh, c * kChunk, std::min(faces, (c + 1) * kChunk), min_altitude_m);
+    });
+    if (pass == 1) break;
+    double area3 = 0, area_uv = 0;
+    for (const FaceSums& p : partial) {
+      area3 += p.area3;
+      area_uv += p.area_uv;
+    }
+    if (!(area3 > 0 && area_uv > 0)) break;
+    min_altitude_m = 0.05 / (std::sqrt(area_uv / area3) * size_texels);
+  }
   for (const FaceSums& p : partial) {
     total.area3 += p.area3;
     total.area_uv += p.area_uv;

@@ -19,7 +19,14 @@
 //                     overlaps itself; rotate each to its minimal-area
 //                     bounding rectangle; scale all by one factor and pack
 //                     them (skyline, uv_pack.h) with `gutter` texels between
-//                     charts and at the border.
+//                     charts and at the border. Faces that drift beyond
+//                     max_stretch (x 1.2) of their chart's final mean normal
+//                     are peeled off into charts of their own. Slivers too
+//                     thin for float UVs (altitude < 0.02 texel at the density
+//                     of a half-covered atlas, or no positive float area
+//                     after packing, which costs a second round) become
+//                     "isolated" one-face charts: a fixed right triangle of
+//                     one texel per side (their stretch is not meaningful).
 //   UnwrapPerTriangle MeshLab's trivial per-triangle parametrization: face i
 //                     is a right isosceles triangle in cell i of a square grid
 //                     (row-major from the bottom left), `gutter` texels apart.
@@ -32,7 +39,9 @@
 // Ss = dq/du, St = dq/dv (3-D meters per UV unit), a = Ss.Ss, b = Ss.St,
 // c = St.St, L2 = sqrt((a + c) / 2), Linf = sqrt((a + c + sqrt((a - c)^2 +
 // 4 b^2)) / 2). Mesh L2 = sqrt(sum(A3 L2^2) / sum(A3)) (A3: 3-D area), Linf =
-// max over faces; both multiplied by sqrt(sum(Auv) / sum(A3)) so that 1 means
+// max over faces whose smallest altitude is at least 0.05 texel (thinner
+// slivers are invisible in the texture and would dominate the max); both
+// multiplied by sqrt(sum(Auv) / sum(A3)) so that 1 means
 // no distortion beyond the one global scale (>= 1 always for L2).
 #pragma once
 
@@ -73,7 +82,10 @@ struct AtlasReport {
   uint64_t overlapping_chart_pairs = 0;  // distinct chart pairs among those
   double min_chart_gap_texels = 0;  // closest approach of two charts, capped at gap_probe
   double min_border_gap_texels = 0; // closest approach of a UV vertex to the border
-  double texels_per_meter = 0;      // UnwrapCharts only: the packing scale
+  // UnwrapCharts only:
+  double texels_per_meter = 0;  // the packing scale
+  uint64_t isolated_faces = 0;  // slivers laid out as fixed 1-texel triangles
+  int rounds = 0;               // chart/pack rounds (slivers found after packing add one)
 };
 
 struct MeasureOptions {

@@ -101,9 +101,12 @@ V3 Normalized(const V3& v) {
 }
 
 // Flood fill from seeds in face order; returns the faces of each chart.
-std::vector<std::vector<uint32_t>> GrowCharts(const Topology& topo, double min_cos) {
+std::vector<std::vector<uint32_t>> GrowCharts(const Topology& topo, double min_cos,
+                                              const std::vector<uint32_t>& isolated) {
   const size_t faces = topo.area_normal.size();
   std::vector<uint32_t> chart_of(faces, kNone);
+  constexpr uint32_t kIsolated = kNone - 1;
+  for (uint32_t f : isolated) chart_of[f] = kIsolated;
   std::vector<std::vector<uint32_t>> charts;
   std::deque<uint32_t> queue;
   for (size_t seed = 0; seed < faces; ++seed) {
@@ -195,32 +198,85 @@ FlatChart Project(const Mesh& mesh, const Topology& topo, std::vector<uint32_t> 
   return chart;
 }
 
-// True when the flattened chart is one-to-one: every non-degenerate face
-// counter-clockwise and no two faces overlapping.
-bool IsInjective(const FlatChart& chart, const Topology& topo) {
+enum class Flatness { kOk, kFolded, kDrifted };
+
+// kOk when the flattened chart is one-to-one (every non-degenerate face
+// counter-clockwise, no two faces overlapping) and no face lies beyond
+// `min_cos` of the projection plane's normal (kDrifted: `drifted` lists
+// them, positions in chart.faces); else kFolded.
+Flatness CheckFlat(const FlatChart& chart, const Topology& topo, double min_cos,
+                   std::vector<uint32_t>* drifted) {
   const size_t n = chart.faces.size();
-  if (n <= 1) return true;
+  if (n <= 1) return Flatness::kOk;
   std::vector<Box2> boxes(n);
   double extent = 0;
+  bool folded = false;
   for (size_t i = 0; i < n; ++i) {
     const Tri2 t = ChartTriangle(chart, i);
     const double area3 = 0.5 * Norm(topo.area_normal[chart.faces[i]]);
+    const double area2 = SignedArea(t);
     // A projected area far below the 3-D one is a near-fold: reject it too.
-    if (area3 > 0 && SignedArea(t) <= 1e-6 * area3) return false;
+    if (area3 > 0 && area2 <= 1e-6 * area3) folded = true;
+    if (area3 > 0 && area2 < min_cos * area3) drifted->push_back(uint32_t(i));
     boxes[i] = {std::min({t[0], t[2], t[4]}), std::min({t[1], t[3], t[5]}),
                 std::max({t[0], t[2], t[4]}), std::max({t[1], t[3], t[5]})};
     extent = std::max({extent, boxes[i][2] - boxes[i][0], boxes[i][3] - boxes[i][1]});
   }
+  // Peeling drifted faces also removes flipped ones; split only otherwise.
+  if (!drifted->empty() && drifted->size() < n) return Flatness::kDrifted;
+  drifted->clear();
+  if (folded) return Flatness::kFolded;
+  // Faces of overlapping pairs are peeled off like drifted ones (a fold is
+  // usually a small wrinkle); halves only when every face is involved.
   const double tolerance = 1e-9 * extent;
-  bool overlap = false;
   ForEachIntersectingBoxPair(boxes, [&](uint32_t i, uint32_t j) {
     if (TrianglesOverlap(ChartTriangle(chart, i), ChartTriangle(chart, j), tolerance)) {
-      overlap = true;
-      return false;
+      drifted->push_back(i);
+      drifted->push_back(j);
     }
     return true;
   });
-  return !overlap;
+  if (drifted->empty()) return Flatness::kOk;
+  std::sort(drifted->begin(), drifted->end());
+  drifted->erase(std::unique(drifted->begin(), drifted->end()), drifted->end());
+  if (drifted->size() < n) return Flatness::kDrifted;
+  drifted->clear();
+  return Flatness::kFolded;
+}
+
+// The connected components of `faces` (increasing) across manifold edges
+// between faces with equal `keep`, in order of their lowest face.
+std::vector<std::vector<uint32_t>> Components(const std::vector<uint32_t>& faces,
+                                              const std::vector<char>& keep,
+                                              const Topology& topo) {
+  auto local = [&](uint32_t f) -> size_t {
+    const auto it = std::lower_bound(faces.begin(), faces.end(), f);
+    return it != faces.end() && *it == f ? size_t(it - faces.begin()) : faces.size();
+  };
+  std::vector<char> done(faces.size(), 0);
+  std::vector<std::vector<uint32_t>> parts;
+  for (size_t start = 0; start < faces.size(); ++start) {
+    if (done[start]) continue;
+    std::vector<uint32_t> part;
+    std::vector<uint32_t> stack{faces[start]};
+    done[start] = 1;
+    while (!stack.empty()) {
+      const uint32_t f = stack.back();
+      stack.pop_back();
+      part.push_back(f);
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t g = topo.neighbor[3 * size_t(f) + k];
+        if (g == kNone) continue;
+        const size_t i = local(g);
+        if (i == faces.size() || done[i] || keep[i] != keep[start]) continue;
+        done[i] = 1;
+        stack.push_back(g);
+      }
+    }
+    std::sort(part.begin(), part.end());
+    parts.push_back(std::move(part));
+  }
+  return parts;
 }
 
 // Breadth-first halves: the first half of the faces reached from the
@@ -336,7 +392,10 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
   if (progress) progress(0.2);
   const double min_cos = std::max(std::cos(options.max_angle_deg * M_PI / 180.0),
                                   1.0 / std::max(options.max_stretch, 1.0));
-  std::vector<std::vector<uint32_t>> pending = GrowCharts(topo, min_cos);
+  std::vector<std::vector<uint32_t>> pending = GrowCharts(topo, min_cos, options.isolated_faces);
+  // Growth compares faces with the running mean; the final mean may have
+  // moved. Faces beyond 1.2 x the stretch bound of it are peeled off.
+  const double drift_cos = min_cos / 1.2;
   if (progress) progress(0.4);
 
   // Flatten; split what folds, until nothing does. Order is kept: a split
@@ -344,11 +403,12 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
   std::vector<FlatChart> charts;
   for (int round = 0; !pending.empty(); ++round) {
     std::vector<FlatChart> flat(pending.size());
-    std::vector<char> ok(pending.size(), 1);
+    std::vector<Flatness> ok(pending.size(), Flatness::kOk);
+    std::vector<std::vector<uint32_t>> drifted(pending.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, pending.size(), 16), [&](const auto& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         flat[i] = Project(mesh, topo, pending[i]);
-        ok[i] = IsInjective(flat[i], topo);
+        ok[i] = CheckFlat(flat[i], topo, drift_cos, &drifted[i]);
       }
     });
     // `charts` holds the charts that passed in earlier rounds and an empty
@@ -362,10 +422,18 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
         merged.push_back(std::move(c));
         continue;
       }
-      if (ok[pi]) {
+      if (ok[pi] == Flatness::kOk) {
         merged.push_back(std::move(flat[pi]));
       } else {
-        for (auto& part : SplitInHalves(pending[pi], topo)) {
+        std::vector<std::vector<uint32_t>> parts;
+        if (ok[pi] == Flatness::kDrifted) {
+          std::vector<char> keep(pending[pi].size(), 1);
+          for (uint32_t i : drifted[pi]) keep[i] = 0;
+          parts = Components(pending[pi], keep, topo);
+        } else {
+          parts = SplitInHalves(pending[pi], topo);
+        }
+        for (auto& part : parts) {
           merged.emplace_back();  // placeholder
           next_pending.push_back(std::move(part));
         }
@@ -379,6 +447,22 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
   tbb::parallel_for(tbb::blocked_range<size_t>(0, charts.size(), 16), [&](const auto& r) {
     for (size_t i = r.begin(); i < r.end(); ++i) FitRectangle(&charts[i]);
   });
+  for (uint32_t f : options.isolated_faces) {
+    FlatChart chart;
+    chart.faces = {f};
+    chart.isolated = true;
+    for (int k = 0; k < 3; ++k) chart.vertices.push_back(mesh.indices[3 * size_t(f) + k]);
+    std::sort(chart.vertices.begin(), chart.vertices.end());
+    chart.vertices.erase(std::unique(chart.vertices.begin(), chart.vertices.end()),
+                         chart.vertices.end());
+    for (int k = 0; k < 3; ++k) {
+      chart.corners.push_back(uint32_t(std::lower_bound(chart.vertices.begin(), chart.vertices.end(),
+                                                        mesh.indices[3 * size_t(f) + k]) -
+                                       chart.vertices.begin()));
+    }
+    chart.uv_m.assign(2 * chart.vertices.size(), 0.0);
+    charts.push_back(std::move(chart));
+  }
 
   if (seam_length_m != nullptr) {
     std::vector<uint32_t> chart_of(mesh.face_count());
@@ -461,19 +545,21 @@ bool TrianglesOverlap(const Tri2& a, const Tri2& b, double tolerance) {
   for (const Tri2* t : {&a, &b}) {
     for (int k = 0; k < 3; ++k) {
       const int m = (k + 1) % 3;
+      // Axis not normalized: compare the overlap with tolerance * |axis|.
       const double nx = -((*t)[2 * m + 1] - (*t)[2 * k + 1]), ny = (*t)[2 * m] - (*t)[2 * k];
-      const double length = std::hypot(nx, ny);
-      if (!(length > 0)) continue;
+      const double length2 = nx * nx + ny * ny;
+      if (!(length2 > 0)) continue;
       double min_a = 1e300, max_a = -1e300, min_b = 1e300, max_b = -1e300;
       for (int v = 0; v < 3; ++v) {
-        const double pa = (a[2 * v] * nx + a[2 * v + 1] * ny) / length;
-        const double pb = (b[2 * v] * nx + b[2 * v + 1] * ny) / length;
+        const double pa = a[2 * v] * nx + a[2 * v + 1] * ny;
+        const double pb = b[2 * v] * nx + b[2 * v + 1] * ny;
         min_a = std::min(min_a, pa);
         max_a = std::max(max_a, pa);
         min_b = std::min(min_b, pb);
         max_b = std::max(max_b, pb);
       }
-      if (std::min(max_a, max_b) - std::max(min_a, min_b) <= tolerance) return false;
+      const double overlap = std::min(max_a, max_b) - std::max(min_a, min_b);
+      if (overlap <= 0 || overlap * overlap <= tolerance * tolerance * length2) return false;
     }
   }
   return true;

@@ -20,15 +20,24 @@ struct FlatChart {
   std::vector<double> uv_m;        // 2 per vertex
   double width_m = 0;              // extent along u (>= height_m)
   double height_m = 0;
+  // A face too small to flatten at the atlas resolution: one face, extent 0,
+  // laid out by the caller as a fixed 1-texel right triangle.
+  bool isolated = false;
 };
 
 struct ChartOptions {
   double max_angle_deg = 66;
   double max_stretch = 1.25;
+  // Faces (by id, increasing) that become isolated one-face charts and that
+  // no chart grows into.
+  std::vector<uint32_t> isolated_faces;
 };
 
 // The charts of `mesh` (valid, see Validate), in the order their seed faces
 // were reached (seeds in face order). Every face is in exactly one chart.
+// A chart whose projection folds or overlaps is split in breadth-first
+// halves; faces that moved beyond 1.2 x the stretch bound of the final mean normal
+// are peeled off into charts of their own.
 // `seam_length_m` (may be null) receives the 3-D length of edges between
 // faces of different charts. Threads through TBB; the result does not
 // depend on the thread count.
