@@ -246,6 +246,23 @@ TEST_F(ExportStagesTest, ObjWritesModelMaterialAndTextures) {
   EXPECT_FALSE(model->normal_png.empty());
 }
 
+TEST_F(ExportStagesTest, ObjRelativeCoordinates) {
+  FakeContext ctx(dir_ / "run", {{"coordinates", "relative"}});
+  ctx.AddInput("mesh", "mesh", WriteMesh(false));
+  ASSERT_TRUE(Run("export.obj", ctx).ok());
+  EXPECT_EQ(ctx.meta_["model"]["coordinates"], "relative");
+  std::ifstream in(ctx.outputs_["model"]);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(text, HasSubstr("\nv 1 1 0 "));  // the last grid corner, relative
+  auto model = ReadObj(ctx.outputs_["model"]);
+  ASSERT_TRUE(model.ok());
+  EXPECT_EQ(model->mesh.origin, (std::array<double, 3>{350000.5, 5800000.25, 42.0}));
+
+  FakeContext bad(dir_ / "bad", {{"coordinates", "local"}});
+  bad.AddInput("mesh", "mesh", Input("mesh.ply"));
+  EXPECT_THAT(Run("export.obj", bad).message(), HasSubstr("'coordinates' must be"));
+}
+
 TEST_F(ExportStagesTest, MissingMeshInputIsAnError) {
   FakeContext ctx(dir_ / "run", nlohmann::json::object());
   const Status status = Run("export.obj", ctx);

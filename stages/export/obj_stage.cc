@@ -28,6 +28,12 @@ constexpr const char* kSchema = R"({
       "type": "boolean",
       "default": true,
       "description": "Write the mesh's vertex colors on the `v` lines (the extension MeshLab and Blender read)."
+    },
+    "coordinates": {
+      "type": "string",
+      "enum": ["absolute", "relative"],
+      "default": "absolute",
+      "description": "`absolute`: v lines hold origin + position in double precision (georeferenced). `relative`: v lines hold the positions relative to the origin (written in a `# origin` comment), for viewers that keep float32 coordinates (Blender, MeshLab), which round coordinates of millions of meters to decimeters."
     }
   }
 })";
@@ -37,6 +43,12 @@ Status Run(StageContext& ctx) {
   ObjWriteOptions options;
   PB_ASSIGN_OR_RETURN(options.name, StringParam(ctx, kId, "name", "model"));
   PB_ASSIGN_OR_RETURN(options.vertex_colors, BoolParam(ctx, kId, "vertex_colors", true));
+  PB_ASSIGN_OR_RETURN(const std::string coordinates, StringParam(ctx, kId, "coordinates", "absolute"));
+  if (coordinates != "absolute" && coordinates != "relative") {
+    return Status::Invalid(std::string(kId) + ": parameter 'coordinates' must be \"absolute\" or \"relative\", got \"" +
+                           coordinates + "\"");
+  }
+  options.absolute_coordinates = coordinates == "absolute";
   Mesh mesh;
   {
     PB_PHASE(ctx, "io");
@@ -64,6 +76,7 @@ Status Run(StageContext& ctx) {
   const nlohmann::json& input_meta = ctx.input("mesh").meta;
   nlohmann::json meta = input_meta.is_object() ? input_meta : nlohmann::json::object();
   meta.update({{"format", "obj"},
+               {"coordinates", coordinates},
                {"origin", mesh.origin},
                {"vertices", mesh.vertex_count()},
                {"faces", mesh.face_count()},
@@ -85,8 +98,9 @@ StageType ObjExportStage() {
   type.version = 1;
   type.summary = "Export a mesh and its color and normal maps as OBJ + MTL + PNG";
   type.doc =
-      "Writes model.obj (absolute coordinates: origin + position in double precision, OBJ "
-      "having no node transform; z up as our frames; uvs with v up; unit normals, computed "
+      "Writes model.obj (absolute coordinates by default: origin + position in double "
+      "precision, OBJ having no node transform; `coordinates: relative` for float32 viewers; "
+      "z up as our frames; uvs with v up; unit normals, computed "
       "when the mesh has none; vertex colors on the `v` lines), model.mtl (Kd 1 1 1, map_Kd "
       "color.png, map_Bump and norm normal.png) and the maps as color.png and normal.png "
       "(8-bit PNGs byte for byte; 16-bit PNGs and float EXRs converted to 8-bit). OBJ has no "

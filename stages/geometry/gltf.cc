@@ -264,15 +264,23 @@ Status WriteGlb(const std::string& path, const Mesh& mesh, const GltfWriteOption
                         {"indices", indices_accessor},
                         {"material", 0},
                         {"mode", 4}}}}}};
-  nlohmann::json mesh_node = {{"name", options.name},
-                              {"mesh", 0},
-                              {"translation", {mesh.origin[0], mesh.origin[1], mesh.origin[2]}}};
+  // The origin sits on the root node, in glTF's y-up axes, and the z-up to
+  // y-up rotation on the mesh node below it: engines compose node matrices in
+  // float32, and a rotation above a large translation would add its rounding
+  // (1e-7 of the origin's size: 0.7 m at 5.4e6 m, seen in Blender) to the
+  // placement. The extras keep the z-up origin for readers.
+  const std::array<double, 3>& o = mesh.origin;
+  nlohmann::json root = {{"name", options.name},
+                         {"extras", {{"pointbake_origin", {o[0], o[1], o[2]}}}}};
   if (options.z_up_to_y_up) {
     const double h = std::sqrt(0.5);
-    gltf["nodes"] = {{{"name", "z_up_to_y_up"}, {"rotation", {-h, 0.0, 0.0, h}}, {"children", {1}}},
-                     mesh_node};
+    root["translation"] = {o[0], o[2], o[1] == 0 ? 0.0 : -o[1]};
+    root["children"] = {1};
+    gltf["nodes"] = {root, {{"name", "z_up_to_y_up"}, {"rotation", {-h, 0.0, 0.0, h}}, {"mesh", 0}}};
   } else {
-    gltf["nodes"] = {mesh_node};
+    root["translation"] = {o[0], o[1], o[2]};
+    root["mesh"] = 0;
+    gltf["nodes"] = {root};
   }
   gltf["scenes"] = {{{"nodes", {0}}}};
   gltf["scene"] = 0;
@@ -408,12 +416,21 @@ class GlbParser {
     }
     const nlohmann::json& primitive = meshes[0]["primitives"][0];
     if (primitive.value("mode", 4) != 4) return Corrupt("the primitive is not a triangle list");
-    for (const nlohmann::json& node : gltf_.value("nodes", nlohmann::json::array())) {
-      if (node.contains("mesh") && node["mesh"] == 0) {
-        model.name = node.value("name", std::string());
-        if (node.contains("translation")) {
-          for (int k = 0; k < 3; ++k) model.mesh.origin[k] = node["translation"].at(k).get<double>();
-        }
+    // The origin: the scene root's extras (what WriteGlb writes), else the
+    // translation of the node holding the mesh.
+    const nlohmann::json& nodes = gltf_.value("nodes", nlohmann::json::array());
+    bool have_origin = false;
+    if (!nodes.empty()) {
+      model.name = nodes[0].value("name", std::string());
+      const nlohmann::json* origin = nodes[0].contains("extras") ? &nodes[0]["extras"] : nullptr;
+      if (origin && origin->contains("pointbake_origin")) {
+        for (int k = 0; k < 3; ++k) model.mesh.origin[k] = (*origin)["pointbake_origin"].at(k).get<double>();
+        have_origin = true;
+      }
+    }
+    for (const nlohmann::json& node : nodes) {
+      if (!have_origin && node.contains("mesh") && node["mesh"] == 0 && node.contains("translation")) {
+        for (int k = 0; k < 3; ++k) model.mesh.origin[k] = node["translation"].at(k).get<double>();
       }
     }
     Mesh& mesh = model.mesh;

@@ -7,12 +7,16 @@
 //   every bufferView starts at a multiple of 4 in the BIN chunk.
 //   asset: version "2.0", generator "pointbake",
 //          extras.pointbake_glb_version = kGlbVersion (bump on layout change).
-//   scene 0 -> node 0 "z_up_to_y_up" (rotation -90° about x: our frames are z
-//          up, glTF's is y up; omitted when options.z_up_to_y_up is false)
-//          -> node 1 named options.name: mesh 0, translation = mesh.origin
-//          (JSON numbers with 17 significant digits: the double survives;
-//          positions stay relative to it, so large coordinates keep float
-//          precision).
+//   scene 0 -> node 0 named options.name: translation = mesh.origin in
+//          glTF's y-up axes (x, z, -y), extras.pointbake_origin = the origin
+//          as is (JSON numbers with 17 significant digits: the doubles
+//          survive) -> node 1 "z_up_to_y_up": rotation -90° about x (our
+//          frames are z up, glTF's y up), mesh 0. Positions stay relative to
+//          the origin, so large coordinates keep float precision, and the
+//          rotation sits below the translation so that engines composing
+//          matrices in float32 do not scale its rounding by the origin.
+//          With options.z_up_to_y_up false: one node, translation = origin,
+//          mesh 0.
 //   mesh 0, one triangle primitive (mode 4), one bufferView per attribute:
 //     POSITION   float32 VEC3, with min/max (exact float bounds)
 //     NORMAL     float32 VEC3, unit length (mesh normals renormalized, or
@@ -77,9 +81,10 @@ Status WriteGlb(const std::string& path, const Mesh& mesh, const GltfWriteOption
                 GltfWriteReport* report = nullptr);
 
 struct GlbModel {
-  Mesh mesh;                            // origin from the mesh node's translation,
-                                        // v flipped back, colors back to sRGB
-  std::string name;                     // the mesh node's name
+  Mesh mesh;                            // origin from extras.pointbake_origin (else the
+                                        // mesh node's translation), v flipped back,
+                                        // colors back to sRGB
+  std::string name;                     // the root node's name
   std::string generator;                // asset.generator
   std::vector<uint8_t> base_color_png;  // embedded image bytes, empty if none
   std::vector<uint8_t> normal_png;

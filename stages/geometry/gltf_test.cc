@@ -120,10 +120,22 @@ TEST_F(GltfTest, LayoutFollowsTheSpec) {
   EXPECT_EQ(material["pbrMetallicRoughness"]["baseColorTexture"]["index"], 0);
   EXPECT_EQ(material["normalTexture"]["index"], 1);
   for (const auto& image : gltf["images"]) EXPECT_EQ(image["mimeType"], "image/png");
-  // Root node turns z up into y up; the mesh node carries the origin.
+  // The root carries the origin in y-up axes, the mesh node the rotation.
   EXPECT_EQ(gltf["nodes"][0]["children"][0], 1);
-  EXPECT_NEAR(gltf["nodes"][0]["rotation"][0].get<double>(), -std::sqrt(0.5), 1e-15);
-  EXPECT_EQ(gltf["nodes"][1]["translation"][0].get<double>(), mesh.origin[0]);
+  EXPECT_EQ(gltf["nodes"][0]["translation"],
+            nlohmann::json({mesh.origin[0], mesh.origin[2], -mesh.origin[1]}));
+  EXPECT_EQ(gltf["nodes"][0]["extras"]["pointbake_origin"],
+            nlohmann::json({mesh.origin[0], mesh.origin[1], mesh.origin[2]}));
+  EXPECT_NEAR(gltf["nodes"][1]["rotation"][0].get<double>(), -std::sqrt(0.5), 1e-15);
+  EXPECT_EQ(gltf["nodes"][1]["mesh"], 0);
+  // Without the rotation: one node, translation = origin; read back the same.
+  GltfWriteOptions z_up;
+  z_up.z_up_to_y_up = false;
+  ASSERT_TRUE(WriteGlb(Path("z.glb"), mesh, z_up).ok());
+  const nlohmann::json plain = JsonChunk(Path("z.glb"));
+  ASSERT_EQ(plain["nodes"].size(), 1u);
+  EXPECT_EQ(plain["nodes"][0]["translation"], nlohmann::json({mesh.origin[0], mesh.origin[1], mesh.origin[2]}));
+  EXPECT_EQ(ReadGlb(Path("z.glb"))->mesh.origin, mesh.origin);
   const auto& attributes = gltf["meshes"][0]["primitives"][0]["attributes"];
   const auto& position = gltf["accessors"][attributes["POSITION"].get<int>()];
   EXPECT_EQ(position["min"], nlohmann::json({0.0, 0.0, 0.0}));

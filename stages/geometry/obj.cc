@@ -66,13 +66,17 @@ std::string ObjText(const Mesh& mesh, const std::vector<float>& normals, const O
   text += "# pointbake obj " + std::to_string(kObjVersion) + "\n";
   text += "# origin " + FormatDouble(mesh.origin[0]) + " " + FormatDouble(mesh.origin[1]) + " " +
           FormatDouble(mesh.origin[2]) + "\n";
-  text += "# v: absolute coordinates in meters (origin + position); vt: v up\n";
+  text += options.absolute_coordinates ? "# coordinates absolute\n" : "# coordinates relative\n";
   text += "mtllib " + mtl_name + "\no " + options.name + "\n";
   for (size_t v = 0; v < n; ++v) {
     text += 'v';
     for (int k = 0; k < 3; ++k) {
       text += ' ';
-      AppendNumber(&text, mesh.origin[k] + double(mesh.positions[3 * v + k]));
+      if (options.absolute_coordinates) {
+        AppendNumber(&text, mesh.origin[k] + double(mesh.positions[3 * v + k]));
+      } else {
+        AppendNumber(&text, mesh.positions[3 * v + k]);
+      }
     }
     if (colors) {
       for (int k = 0; k < 3; ++k) {
@@ -265,6 +269,7 @@ Expected<ObjModel> ReadObj(const std::string& obj_path) {
   std::vector<float> colors, uvs, normals;
   std::vector<Corner> corners;
   std::optional<std::array<double, 3>> origin;
+  bool relative = false;  // "# coordinates relative": v lines are relative to the origin
   std::string mtllib;
   ObjModel model;
   size_t line_number = 0, start = 0;
@@ -291,6 +296,8 @@ Expected<ObjModel> ReadObj(const std::string& obj_path) {
     if (key == "#" && count == 5 && words[1] == "origin") {
       if (!numbers(2, 3, values)) return error("malformed origin comment");
       origin = std::array<double, 3>{values[0], values[1], values[2]};
+    } else if (key == "#" && count == 3 && words[1] == "coordinates") {
+      relative = words[2] == "relative";
     } else if (key == "v") {
       if (!numbers(1, 3, values)) return error("expected 'v x y z'");
       positions.insert(positions.end(), values, values + 3);
@@ -349,7 +356,7 @@ Expected<ObjModel> ReadObj(const std::string& obj_path) {
   const size_t vertex_count = positions.size() / 3;
   if (origin) {
     mesh.origin = *origin;
-  } else if (vertex_count > 0) {
+  } else if (vertex_count > 0 && !relative) {
     for (int k = 0; k < 3; ++k) {
       double lo = positions[k], hi = positions[k];
       for (size_t v = 0; v < vertex_count; ++v) {
@@ -385,7 +392,8 @@ Expected<ObjModel> ReadObj(const std::string& obj_path) {
   const bool keep_normals = any_normal && std::all_of(vertices.begin(), vertices.end(), [](const Corner& c) { return c.n >= 0; });
   for (const Corner& c : vertices) {
     for (int k = 0; k < 3; ++k) {
-      mesh.positions.push_back(static_cast<float>(positions[3 * c.v + k] - mesh.origin[k]));
+      const double p = positions[3 * c.v + k];
+      mesh.positions.push_back(static_cast<float>(relative ? p : p - mesh.origin[k]));
     }
     if (!colors.empty()) {
       for (int k = 0; k < 3; ++k) {

@@ -5,12 +5,20 @@
 //   model.obj (the stem of obj_path)
 //     # pointbake obj 1                    <- signature + version (kObjVersion)
 //     # origin X Y Z                       <- the mesh's double origin, meters
+//     # coordinates absolute               <- or "relative" (see below)
 //     mtllib model.mtl
 //     o NAME
 //     v X Y Z [R G B]                      <- ABSOLUTE coordinates, meters:
 //                                             origin + position in double,
 //                                             shortest round-trip digits (OBJ
-//                                             has no node transform); colors
+//                                             has no node transform); with
+//                                             options.absolute_coordinates
+//                                             false, the float positions
+//                                             relative to the origin (viewers
+//                                             that store float32, Blender and
+//                                             MeshLab, round absolute
+//                                             coordinates of 5e6 m to 0.5 m);
+//                                             colors
 //                                             in [0,1] (sRGB, the MeshLab /
 //                                             Blender extension) when the mesh
 //                                             has colors and options.vertex_colors
@@ -49,6 +57,7 @@ struct ObjWriteOptions {
   std::vector<uint8_t> base_color_png;  // PNG file bytes (sRGB); empty: none
   std::vector<uint8_t> normal_png;      // PNG file bytes (tangent space); empty: none
   bool vertex_colors = true;            // colors on the v lines
+  bool absolute_coordinates = true;     // v = origin + position (else position)
 };
 
 struct ObjWriteReport {
@@ -65,7 +74,8 @@ Status WriteObj(const std::string& obj_path, const Mesh& mesh, const ObjWriteOpt
 
 struct ObjModel {
   Mesh mesh;                            // origin from "# origin" (else the
-                                        // bounding-box center rounded to 1 m)
+                                        // bounding-box center rounded to 1 m);
+                                        // "# coordinates relative" keeps v as is
   std::string material;                 // the first usemtl's name
   std::vector<uint8_t> base_color_png;  // the map_Kd file's bytes, empty if none
   std::vector<uint8_t> normal_png;      // norm / map_Bump / bump file's bytes

@@ -4,6 +4,8 @@
 
 #include <cmath>
 #include <filesystem>
+#include <fstream>
+#include <iterator>
 
 #include "stages/geometry/tangents.h"
 #include "stages/geometry/test_data.h"
@@ -90,6 +92,21 @@ TEST_F(ObjTest, CoordinatesAreAbsolute) {
   ASSERT_TRUE(model.ok()) << model.status().message();
   EXPECT_EQ(model->mesh.origin, (std::array<double, 3>{1001, 2001, 3}));
   EXPECT_EQ(model->mesh.positions[0], -0.5f);
+}
+
+TEST_F(ObjTest, RelativeCoordinatesRoundTrip) {
+  const Mesh mesh = Grid(3);
+  ObjWriteOptions options;
+  options.absolute_coordinates = false;
+  ASSERT_TRUE(WriteObj(Path("r.obj"), mesh, options).ok());
+  std::ifstream in(Path("r.obj"));
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_NE(text.find("# coordinates relative\nmtllib"), std::string::npos);
+  EXPECT_NE(text.find("\nv 0 0 0 0 0 0.011764706\n"), std::string::npos);
+  auto model = ReadObj(Path("r.obj"));
+  ASSERT_TRUE(model.ok()) << model.status().message();
+  EXPECT_EQ(model->mesh.origin, mesh.origin);
+  EXPECT_EQ(model->mesh.positions, mesh.positions);
 }
 
 TEST_F(ObjTest, ForeignIndexLayoutsAreRead) {
