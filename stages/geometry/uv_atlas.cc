@@ -118,10 +118,14 @@ Mesh Layout(const Mesh& mesh, const std::vector<FlatChart>& charts, const PackRe
     const FlatChart& chart = charts[c];
     const uint32_t base = uint32_t(out.vertex_count());
     const double x = double(packed.x_texels[c]), y = double(packed.y_texels[c]);
+    const bool turned = packed.turned[c] != 0;
     for (size_t i = 0; i < chart.vertices.size(); ++i) {
       AppendVertex(mesh, chart.vertices[i], &out);
-      out.uvs.push_back(float((x + chart.uv_m[2 * i] * s) * inv_size));
-      out.uvs.push_back(float((y + chart.uv_m[2 * i + 1] * s) * inv_size));
+      // A quarter turn (u, v) -> (height - v, u) is a rotation: no mirroring.
+      const double u = turned ? chart.height_m - chart.uv_m[2 * i + 1] : chart.uv_m[2 * i];
+      const double v = turned ? chart.uv_m[2 * i] : chart.uv_m[2 * i + 1];
+      out.uvs.push_back(float((x + u * s) * inv_size));
+      out.uvs.push_back(float((y + v * s) * inv_size));
     }
     for (size_t i = 0; i < chart.faces.size(); ++i) {
       for (int k = 0; k < 3; ++k) {

@@ -325,7 +325,9 @@ TEST(UvPackTest, FillsTheAtlasWithTheGutter) {
   double area = 0;
   for (size_t i = 0; i < charts.size(); ++i) {
     const double x0 = double(packed->x_texels[i]), y0 = double(packed->y_texels[i]);
-    const double x1 = x0 + std::ceil(charts[i].width * s), y1 = y0 + std::ceil(charts[i].height * s);
+    const double w = packed->turned[i] ? charts[i].height : charts[i].width;
+    const double h = packed->turned[i] ? charts[i].width : charts[i].height;
+    const double x1 = x0 + std::ceil(w * s), y1 = y0 + std::ceil(h * s);
     EXPECT_GE(x0, 4);
     EXPECT_GE(y0, 4);
     EXPECT_LE(x1, 1020);
@@ -333,7 +335,9 @@ TEST(UvPackTest, FillsTheAtlasWithTheGutter) {
     area += (x1 - x0) * (y1 - y0);
     for (size_t j = 0; j < i; ++j) {
       const double u0 = double(packed->x_texels[j]), v0 = double(packed->y_texels[j]);
-      const double u1 = u0 + std::ceil(charts[j].width * s), v1 = v0 + std::ceil(charts[j].height * s);
+      const double wj = packed->turned[j] ? charts[j].height : charts[j].width;
+      const double hj = packed->turned[j] ? charts[j].width : charts[j].height;
+      const double u1 = u0 + std::ceil(wj * s), v1 = v0 + std::ceil(hj * s);
       const bool apart = x0 >= u1 + 4 || u0 >= x1 + 4 || y0 >= v1 + 4 || v0 >= y1 + 4;
       EXPECT_TRUE(apart) << i << " vs " << j;
     }

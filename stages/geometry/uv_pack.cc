@@ -1,8 +1,5 @@
-// Skyline bottom-left rectangle packing (Jylänki 2010, SKYLINE-BL) with a
-// bisection on the uniform chart scale. Departure from the paper's
-// variants: no rotation of rectangles at pack time (charts arrive in
-// landscape orientation from their minimal bounding rectangle), which keeps
-// the placement a pure function of the sorted extents.
+// Skyline bottom-left rectangle packing (Jylänki 2010, SKYLINE-BL, with
+// quarter turns) and a bisection on the uniform chart scale.
 #include "stages/geometry/uv_pack.h"
 
 #include <algorithm>
@@ -21,30 +18,39 @@ class Skyline {
  public:
   explicit Skyline(int64_t limit) : limit_(limit) { segments_.push_back({0, 0, limit}); }
 
-  // Places a width x height box at the lowest top edge (ties: leftmost);
-  // false if it fits nowhere.
-  bool Insert(int64_t width, int64_t height, int64_t* x_out, int64_t* y_out) {
+  // Places a width x height box, or a height x width one (*turned), at the
+  // lowest top edge (ties: leftmost, then unturned); false if it fits
+  // nowhere.
+  bool Insert(int64_t width, int64_t height, int64_t* x_out, int64_t* y_out, bool* turned) {
     int64_t best_top = limit_ + 1, best_x = 0, best_y = 0;
     size_t best_index = segments_.size();
-    for (size_t i = 0; i < segments_.size(); ++i) {
-      const int64_t x = segments_[i].x;
-      if (x + width > limit_) break;
-      int64_t y = 0;
-      for (size_t j = i; j < segments_.size() && segments_[j].x < x + width; ++j) {
-        y = std::max(y, segments_[j].y);
-        if (y + height >= best_top) break;  // cannot beat the best any more
+    bool best_turned = false;
+    for (int turn = 0; turn < 2; ++turn) {
+      const int64_t w = turn ? height : width, h = turn ? width : height;
+      for (size_t i = 0; i < segments_.size(); ++i) {
+        const int64_t x = segments_[i].x;
+        if (x + w > limit_) break;
+        int64_t y = 0;
+        for (size_t j = i; j < segments_.size() && segments_[j].x < x + w; ++j) {
+          y = std::max(y, segments_[j].y);
+          if (y + h > best_top) break;  // cannot beat the best any more
+        }
+        const int64_t top = y + h;
+        if (top <= limit_ && (top < best_top || (top == best_top && x < best_x))) {
+          best_top = top;
+          best_x = x;
+          best_y = y;
+          best_index = i;
+          best_turned = turn == 1;
+        }
       }
-      if (y + height <= limit_ && y + height < best_top) {
-        best_top = y + height;
-        best_x = x;
-        best_y = y;
-        best_index = i;
-      }
+      if (width == height) break;
     }
     if (best_index == segments_.size()) return false;
-    Place(best_index, best_x, best_y + height, width);
+    Place(best_index, best_x, best_top, best_turned ? height : width);
     *x_out = best_x;
     *y_out = best_y;
+    *turned = best_turned;
     return true;
   }
 
@@ -87,16 +93,18 @@ int64_t BoxSize(double extent_m, double scale, int gutter) {
 // Packs in `order` at `scale`; false as soon as one box does not fit.
 bool TryPack(const std::vector<ChartExtent>& charts, const std::vector<uint32_t>& order,
              double scale, int size, int gutter, std::vector<int64_t>* xs,
-             std::vector<int64_t>* ys) {
+             std::vector<int64_t>* ys, std::vector<char>* turned) {
   // Boxes carry their gutter on the right and top; the skyline starts one
   // gutter in from the left and bottom border and ends at the atlas edge.
   Skyline skyline(static_cast<int64_t>(size) - gutter);
   for (uint32_t i : order) {
     int64_t x = 0, y = 0;
+    bool turn = false;
     if (!skyline.Insert(BoxSize(charts[i].width, scale, gutter),
-                        BoxSize(charts[i].height, scale, gutter), &x, &y)) {
+                        BoxSize(charts[i].height, scale, gutter), &x, &y, &turn)) {
       return false;
     }
+    (*turned)[i] = turn;
     (*xs)[i] = x + gutter;
     (*ys)[i] = y + gutter;
   }
@@ -114,6 +122,7 @@ Expected<PackResult> PackCharts(const std::vector<ChartExtent>& charts, int size
   PackResult result;
   result.x_texels.assign(charts.size(), 0);
   result.y_texels.assign(charts.size(), 0);
+  result.turned.assign(charts.size(), 0);
   if (charts.empty()) return result;
 
   // Tallest first (ties: wider, then lower index): the skyline's best case.
@@ -132,16 +141,18 @@ Expected<PackResult> PackCharts(const std::vector<ChartExtent>& charts, int size
   double hi = area_m2 > 0 ? usable / std::sqrt(area_m2) : usable;
   for (const ChartExtent& c : charts) hi = std::min(hi, usable / std::max({c.width, c.height, 1e-30}));
   std::vector<int64_t> xs(charts.size()), ys(charts.size());
+  std::vector<char> turned(charts.size(), 0);
 
   // Step down from the area bound until a packing fits, then bisect.
   double lo = 0;
   double scale = hi;
   for (int step = 0; step < 60; ++step) {
     ++result.attempts;
-    if (TryPack(charts, order, scale, size_texels, gutter_texels, &xs, &ys)) {
+    if (TryPack(charts, order, scale, size_texels, gutter_texels, &xs, &ys, &turned)) {
       lo = scale;
       result.x_texels = xs;
       result.y_texels = ys;
+      result.turned = turned;
       break;
     }
     hi = scale;
@@ -156,10 +167,11 @@ Expected<PackResult> PackCharts(const std::vector<ChartExtent>& charts, int size
   while (hi > lo * (1.0 + 1.0 / 256.0)) {
     const double mid = 0.5 * (lo + hi);
     ++result.attempts;
-    if (TryPack(charts, order, mid, size_texels, gutter_texels, &xs, &ys)) {
+    if (TryPack(charts, order, mid, size_texels, gutter_texels, &xs, &ys, &turned)) {
       lo = mid;
       result.x_texels = xs;
       result.y_texels = ys;
+      result.turned = turned;
     } else {
       hi = mid;
     }
