@@ -233,6 +233,10 @@ TEST_F(ExportStagesTest, ObjWritesModelMaterialAndTextures) {
     bytes += entry.file_size();
   }
   EXPECT_EQ(files, (std::set<std::string>{"model.obj", "model.mtl", "color.png", "normal.png"}));
+  std::set<std::string> declared;  // the files the engine is told about
+  for (const auto& [name, file] : ctx.files_) declared.insert(name);
+  EXPECT_EQ(declared, (std::set<std::string>{"model/model.obj", "model/model.mtl", "model/color.png",
+                                             "model/normal.png"}));
   EXPECT_EQ(ctx.counters_["bytes"], bytes);
   EXPECT_EQ(ctx.counters_["faces"], 200);
   EXPECT_EQ(ctx.counters_["vertices"], 121);
@@ -251,10 +255,12 @@ TEST_F(ExportStagesTest, ObjRelativeCoordinates) {
   ctx.AddInput("mesh", "mesh", WriteMesh(false));
   ASSERT_TRUE(Run("export.obj", ctx).ok());
   EXPECT_EQ(ctx.meta_["model"]["coordinates"], "relative");
-  std::ifstream in(ctx.outputs_["model"]);
+  EXPECT_EQ(ctx.files_.size(), 2u);  // model.obj, model.mtl: no textures
+  const std::string obj = ctx.files_["model/model.obj"];
+  std::ifstream in(obj);
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   EXPECT_THAT(text, HasSubstr("\nv 1 1 0 "));  // the last grid corner, relative
-  auto model = ReadObj(ctx.outputs_["model"]);
+  auto model = ReadObj(obj);
   ASSERT_TRUE(model.ok());
   EXPECT_EQ(model->mesh.origin, (std::array<double, 3>{350000.5, 5800000.25, 42.0}));
 

@@ -67,7 +67,13 @@ Status Run(StageContext& ctx) {
   ObjWriteReport report;
   {
     PB_PHASE(ctx, "io");
-    const Status status = WriteObj(ctx.output_path("model", "model.obj"), mesh, options, &report);
+    // Every file of the artifact is named to the engine, which keeps exactly
+    // those; WriteObj puts them in one folder.
+    const std::string obj_path = ctx.output_path("model", "model.obj");
+    ctx.output_path("model", "model.mtl");
+    if (!options.base_color_png.empty()) ctx.output_path("model", "color.png");
+    if (!options.normal_png.empty()) ctx.output_path("model", "normal.png");
+    const Status status = WriteObj(obj_path, mesh, options, &report);
     if (!status.ok()) return status.WithContext(kId);
   }
   ctx.counter("faces", static_cast<double>(mesh.face_count()));
