@@ -282,8 +282,17 @@ Expected<ObjModel> ReadObj(const std::string& obj_path) {
     const std::string_view line(text.data() + start, end - start);
     start = end + 1;
     ++line_number;
-    std::string_view words[16];
-    const size_t count = std::min<size_t>(SplitWords(line, words, 15), 15);
+    // Most lines have a few words: split without allocating, and fall back
+    // to a vector for long polygons.
+    std::string_view fixed_words[16];
+    std::vector<std::string_view> many_words;
+    const std::string_view* words = fixed_words;
+    size_t count = SplitWords(line, fixed_words, 16);
+    if (count > 16) {
+      many_words = SplitWords(line);
+      words = many_words.data();
+      count = many_words.size();
+    }
     if (count == 0) continue;
     const std::string_view key = words[0];
     auto numbers = [&](size_t first, size_t how_many, double* out) {

@@ -125,6 +125,18 @@ TEST_F(ObjTest, ForeignIndexLayoutsAreRead) {
   ASSERT_EQ(mesh.uvs.size(), 14u);
   EXPECT_EQ(mesh.uvs[2 * mesh.indices[6]], 0.5f);
   EXPECT_EQ(mesh.normals.size(), 21u);
+
+  // A 20-gon: fan-triangulated into 18 triangles, no corner lost.
+  std::string polygon;
+  for (int i = 0; i < 20; ++i) {
+    polygon += "v " + std::to_string(std::cos(i * M_PI / 10)) + " " + std::to_string(std::sin(i * M_PI / 10)) + " 0\n";
+  }
+  polygon += "f";
+  for (int i = 1; i <= 20; ++i) polygon += " " + std::to_string(i);
+  auto ngon = ReadObj(Write("ngon.obj", polygon + "\n"));
+  ASSERT_TRUE(ngon.ok()) << ngon.status().message();
+  EXPECT_EQ(ngon->mesh.face_count(), 18u);
+  EXPECT_EQ(ngon->mesh.indices.back(), 19u);
 }
 
 TEST_F(ObjTest, ErrorsNameTheFileAndLine) {
