@@ -244,21 +244,26 @@ Flatness CheckFlat(const FlatChart& chart, const Topology& topo, double min_cos,
   return Flatness::kFolded;
 }
 
-// The connected components of `faces` (increasing) across manifold edges
-// between faces with equal `keep`, in order of their lowest face.
-std::vector<std::vector<uint32_t>> Components(const std::vector<uint32_t>& faces,
-                                              const std::vector<char>& keep,
-                                              const Topology& topo) {
-  auto local = [&](uint32_t f) -> size_t {
-    const auto it = std::lower_bound(faces.begin(), faces.end(), f);
-    return it != faces.end() && *it == f ? size_t(it - faces.begin()) : faces.size();
-  };
+// Where each face sits in the round's pending charts: chart `owner[f]`,
+// index `position[f]` in its face list. Charts are disjoint, so threads fill
+// and read it without conflict.
+struct FaceSlots {
+  std::vector<uint32_t> owner, position;
+};
+
+// The connected components of pending chart `chart` (faces increasing)
+// across manifold edges between faces with equal `keep`, in order of their
+// lowest face.
+std::vector<std::vector<uint32_t>> Components(const std::vector<uint32_t>& faces, uint32_t chart,
+                                              const std::vector<char>& keep, const Topology& topo,
+                                              const FaceSlots& slots) {
   std::vector<char> done(faces.size(), 0);
   std::vector<std::vector<uint32_t>> parts;
+  std::vector<uint32_t> stack;
   for (size_t start = 0; start < faces.size(); ++start) {
     if (done[start]) continue;
     std::vector<uint32_t> part;
-    std::vector<uint32_t> stack{faces[start]};
+    stack.assign(1, faces[start]);
     done[start] = 1;
     while (!stack.empty()) {
       const uint32_t f = stack.back();
@@ -266,9 +271,9 @@ std::vector<std::vector<uint32_t>> Components(const std::vector<uint32_t>& faces
       part.push_back(f);
       for (int k = 0; k < 3; ++k) {
         const uint32_t g = topo.neighbor[3 * size_t(f) + k];
-        if (g == kNone) continue;
-        const size_t i = local(g);
-        if (i == faces.size() || done[i] || keep[i] != keep[start]) continue;
+        if (g == kNone || slots.owner[g] != chart) continue;
+        const size_t i = slots.position[g];
+        if (done[i] || keep[i] != keep[start]) continue;
         done[i] = 1;
         stack.push_back(g);
       }
@@ -282,12 +287,11 @@ std::vector<std::vector<uint32_t>> Components(const std::vector<uint32_t>& faces
 // Breadth-first halves: the first half of the faces reached from the
 // chart's first face, then each connected component of the rest.
 std::vector<std::vector<uint32_t>> SplitInHalves(const std::vector<uint32_t>& faces,
-                                                 const Topology& topo) {
-  auto in_chart = [&](uint32_t f) { return std::binary_search(faces.begin(), faces.end(), f); };
+                                                 uint32_t chart, const Topology& topo,
+                                                 const FaceSlots& slots) {
+  auto in_chart = [&](uint32_t f) { return slots.owner[f] == chart; };
   std::vector<char> taken(faces.size(), 0);
-  auto local = [&](uint32_t f) {
-    return size_t(std::lower_bound(faces.begin(), faces.end(), f) - faces.begin());
-  };
+  auto local = [&](uint32_t f) { return size_t(slots.position[f]); };
   std::vector<std::vector<uint32_t>> parts;
   size_t budget = (faces.size() + 1) / 2;
   for (size_t start = 0; start < faces.size(); ++start) {
@@ -396,6 +400,9 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
   // Growth compares faces with the running mean; the final mean may have
   // moved. Faces beyond 1.2 x the stretch bound of it are peeled off.
   const double drift_cos = min_cos / 1.2;
+  FaceSlots slots;
+  slots.owner.assign(mesh.face_count(), kNone);
+  slots.position.assign(mesh.face_count(), 0);
   if (progress) progress(0.4);
 
   // Flatten; split what folds, until nothing does. Order is kept: a split
@@ -404,11 +411,29 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
   for (int round = 0; !pending.empty(); ++round) {
     std::vector<FlatChart> flat(pending.size());
     std::vector<Flatness> ok(pending.size(), Flatness::kOk);
-    std::vector<std::vector<uint32_t>> drifted(pending.size());
+    std::vector<std::vector<std::vector<uint32_t>>> parts(pending.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, pending.size(), 16), [&](const auto& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
+        for (size_t j = 0; j < pending[i].size(); ++j) {
+          slots.owner[pending[i][j]] = uint32_t(i);
+          slots.position[pending[i][j]] = uint32_t(j);
+        }
+      }
+    });
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, pending.size(), 16), [&](const auto& r) {
+      std::vector<uint32_t> drifted;
+      for (size_t i = r.begin(); i < r.end(); ++i) {
         flat[i] = Project(mesh, topo, pending[i]);
-        ok[i] = CheckFlat(flat[i], topo, drift_cos, &drifted[i]);
+        drifted.clear();
+        ok[i] = CheckFlat(flat[i], topo, drift_cos, &drifted);
+        if (ok[i] == Flatness::kDrifted) {
+          std::vector<char> keep(pending[i].size(), 1);
+          for (uint32_t j : drifted) keep[j] = 0;
+          parts[i] = Components(pending[i], uint32_t(i), keep, topo, slots);
+        } else if (ok[i] == Flatness::kFolded) {
+          parts[i] = SplitInHalves(pending[i], uint32_t(i), topo, slots);
+        }
+        if (ok[i] != Flatness::kOk) flat[i] = FlatChart();
       }
     });
     // `charts` holds the charts that passed in earlier rounds and an empty
@@ -425,15 +450,7 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
       if (ok[pi] == Flatness::kOk) {
         merged.push_back(std::move(flat[pi]));
       } else {
-        std::vector<std::vector<uint32_t>> parts;
-        if (ok[pi] == Flatness::kDrifted) {
-          std::vector<char> keep(pending[pi].size(), 1);
-          for (uint32_t i : drifted[pi]) keep[i] = 0;
-          parts = Components(pending[pi], keep, topo);
-        } else {
-          parts = SplitInHalves(pending[pi], topo);
-        }
-        for (auto& part : parts) {
+        for (auto& part : parts[pi]) {
           merged.emplace_back();  // placeholder
           next_pending.push_back(std::move(part));
         }
