@@ -411,10 +411,12 @@ class GlbParser {
     model.generator = gltf_.value("/asset/generator"_json_pointer, std::string());
 
     const nlohmann::json& meshes = gltf_.value("meshes", nlohmann::json::array());
-    if (meshes.size() != 1 || meshes[0]["primitives"].size() != 1) {
+    // at() throughout: a missing key must throw (caught above), never reach
+    // the const operator[]'s undefined behaviour.
+    if (!meshes.is_array() || meshes.size() != 1 || meshes.at(0).at("primitives").size() != 1) {
       return Corrupt("expected one mesh with one primitive (the subset pointbake writes)");
     }
-    const nlohmann::json& primitive = meshes[0]["primitives"][0];
+    const nlohmann::json& primitive = meshes.at(0).at("primitives").at(0);
     if (primitive.value("mode", 4) != 4) return Corrupt("the primitive is not a triangle list");
     // The origin: the scene root's extras (what WriteGlb writes), else the
     // translation of the node holding the mesh.
@@ -422,7 +424,7 @@ class GlbParser {
     bool have_origin = false;
     if (!nodes.empty()) {
       model.name = nodes[0].value("name", std::string());
-      const nlohmann::json* origin = nodes[0].contains("extras") ? &nodes[0]["extras"] : nullptr;
+      const nlohmann::json* origin = nodes[0].contains("extras") ? &nodes[0].at("extras") : nullptr;
       if (origin && origin->contains("pointbake_origin")) {
         for (int k = 0; k < 3; ++k) model.mesh.origin[k] = (*origin)["pointbake_origin"].at(k).get<double>();
         have_origin = true;
@@ -507,7 +509,7 @@ class GlbParser {
                                                                " is not in the BIN chunk");
     const uint64_t offset = view.value("byteOffset", uint64_t{0});
     *length = view.at("byteLength").get<size_t>();
-    if (offset + *length > bin_size_) {
+    if (offset > bin_size_ || *length > bin_size_ - offset) {  // no wrap-around
       return Corrupt("bufferView " + std::to_string(index) + " ends past the BIN chunk");
     }
     return std::make_pair(bin_ + offset, &view);
@@ -547,8 +549,10 @@ class GlbParser {
     const size_t element_bytes = component_bytes * size_t(out.components);
     out.stride = view.second->value("byteStride", element_bytes);
     const size_t offset = a.value("byteOffset", size_t{0});
-    if (out.stride < element_bytes ||
-        (out.count > 0 && offset + (out.count - 1) * uint64_t(out.stride) + element_bytes > length)) {
+    // Written to not overflow on hostile sizes: the last element must end
+    // within the view.
+    if (out.stride < element_bytes || offset > length || element_bytes > length - offset ||
+        (out.count > 0 && out.count - 1 > (length - offset - element_bytes) / out.stride)) {
       return Corrupt(name + ": its elements run past its bufferView");
     }
     out.data = view.first + offset;
