@@ -390,7 +390,8 @@ Image RenderAtlas(const Mesh& mesh, int pixels) {
 
 // PB_UV_MESH=path.ply [PB_UV_PNG=atlas.png] [PB_UV_SIZE=4096] [PB_UV_METHOD=
 // per_triangle]: unwraps, prints the time and the report, renders the atlas.
-// PB_UV_SYNTH_CELL=0.05 unwraps SynthTruthMesh(room, cell) instead.
+// PB_UV_SYNTH_CELL=0.05 unwraps SynthTruthMesh(room, cell) instead;
+// PB_UV_MEASURE_ONLY=1 measures the file's own UVs instead of unwrapping.
 TEST(UvAtlasTool, DISABLED_UnwrapFile) {
   const char* path = std::getenv("PB_UV_MESH");
   const char* cell = std::getenv("PB_UV_SYNTH_CELL");
@@ -408,9 +409,15 @@ TEST(UvAtlasTool, DISABLED_UnwrapFile) {
     if (std::string(method) == "per_triangle") options.method = UnwrapMethod::kPerTriangle;
   }
   if (const char* threads = std::getenv("PB_UV_THREADS")) options.threads = std::atoi(threads);
+  if (const char* stretch = std::getenv("PB_UV_MAX_STRETCH")) options.max_stretch = std::atof(stretch);
   AtlasReport report;
   const auto start = std::chrono::steady_clock::now();
-  auto out = UnwrapMesh(ply->mesh, options, &report);
+  // PB_UV_MEASURE_ONLY=1: measure the file's own UVs (e.g. Blender's).
+  auto out = std::getenv("PB_UV_MEASURE_ONLY") != nullptr ? Expected<Mesh>(ply->mesh)
+                                                         : UnwrapMesh(ply->mesh, options, &report);
+  if (std::getenv("PB_UV_MEASURE_ONLY") != nullptr) {
+    report = MeasureAtlas(*out, options.size_texels);
+  }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_TRUE(out.ok()) << out.status().message();
