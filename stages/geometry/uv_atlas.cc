@@ -350,8 +350,8 @@ FaceSums MeasureFaces(const Mesh& mesh, size_t begin, size_t end, double min_alt
                                         (q[m][2] - q[k][2]) * (q[m][2] - q[k][2]));
     }
     if (area3 > 0 && 2 * area3 >= min_altitude_m * std::sqrt(longest2)) {
-      sums.linf = std::max(sums.linf,
-                           std::sqrt(0.5 * (a + c + std::sqrt((a - c) * (a - c) + 4 * b * b))));
+      sums.linf =
+          std::max(sums.linf, std::sqrt(0.5 * (a + c + std::sqrt((a - c) * (a - c) + 4 * b * b))));
     }
   }
   return sums;
@@ -368,7 +368,8 @@ double SeamLength(const Mesh& mesh) {
   std::vector<uint32_t> incident(mesh.indices.size());
   {
     std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
-    for (size_t i = 0; i < mesh.indices.size(); ++i) incident[fill[mesh.indices[i]]++] = uint32_t(i / 3);
+    for (size_t i = 0; i < mesh.indices.size(); ++i)
+      incident[fill[mesh.indices[i]]++] = uint32_t(i / 3);
   }
   struct Open {
     std::array<float, 6> key;  // end positions, lower one first
@@ -482,8 +483,9 @@ AtlasReport MeasureAtlas(const Mesh& mesh, int size_texels, const MeasureOptions
   std::vector<Box2> boxes(faces);
   for (size_t f = 0; f < faces; ++f) {
     const Tri2 t = UvTriangle(mesh, f);
-    boxes[f] = {std::min({t[0], t[2], t[4]}) - 0.5 * probe, std::min({t[1], t[3], t[5]}) - 0.5 * probe,
-                std::max({t[0], t[2], t[4]}) + 0.5 * probe, std::max({t[1], t[3], t[5]}) + 0.5 * probe};
+    boxes[f] = {
+        std::min({t[0], t[2], t[4]}) - 0.5 * probe, std::min({t[1], t[3], t[5]}) - 0.5 * probe,
+        std::max({t[0], t[2], t[4]}) + 0.5 * probe, std::max({t[1], t[3], t[5]}) + 0.5 * probe};
   }
   std::set<std::pair<uint32_t, uint32_t>> chart_pairs;
   double gap = probe;

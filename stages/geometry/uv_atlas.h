@@ -57,31 +57,31 @@ enum class UnwrapMethod { kCharts, kPerTriangle };
 
 struct UnwrapOptions {
   UnwrapMethod method = UnwrapMethod::kCharts;
-  int size_texels = 4096;      // atlas width = height, texels (>= 8)
-  int gutter_texels = 4;       // between charts and at the border (>= 0)
-  double max_angle_deg = 66;   // charts: face normal vs chart mean normal, (0, 90)
-  double max_stretch = 1.25;   // charts: per-face Linf of the projection (>= 1),
-                               // i.e. normals within acos(1/max_stretch) = 36.9 deg
-  int threads = 0;             // 0: TBB's default; results do not depend on it
+  int size_texels = 4096;                // atlas width = height, texels (>= 8)
+  int gutter_texels = 4;                 // between charts and at the border (>= 0)
+  double max_angle_deg = 66;             // charts: face normal vs chart mean normal, (0, 90)
+  double max_stretch = 1.25;             // charts: per-face Linf of the projection (>= 1),
+                                         // i.e. normals within acos(1/max_stretch) = 36.9 deg
+  int threads = 0;                       // 0: TBB's default; results do not depend on it
   std::function<void(double)> progress;  // fraction done, optional
 };
 
 // Quality of an atlas (see the header comment for stretch).
 struct AtlasReport {
   uint64_t faces = 0;
-  uint64_t vertices = 0;          // of the unwrapped mesh (seams split vertices)
-  uint64_t charts = 0;            // connected components through shared vertices
-  double coverage = 0;            // sum of UV triangle areas / atlas area, [0, 1]
-  double stretch_l2 = 0;          // normalized, 1 = no distortion
-  double stretch_linf = 0;        // normalized, max over faces
-  double seam_length_m = 0;       // 3-D length of edges cut (each edge once)
-  uint64_t faces_outside = 0;     // faces with a UV outside [0,1]^2
-  uint64_t faces_not_ccw = 0;     // faces with signed UV area <= 0
+  uint64_t vertices = 0;       // of the unwrapped mesh (seams split vertices)
+  uint64_t charts = 0;         // connected components through shared vertices
+  double coverage = 0;         // sum of UV triangle areas / atlas area, [0, 1]
+  double stretch_l2 = 0;       // normalized, 1 = no distortion
+  double stretch_linf = 0;     // normalized, max over faces
+  double seam_length_m = 0;    // 3-D length of edges cut (each edge once)
+  uint64_t faces_outside = 0;  // faces with a UV outside [0,1]^2
+  uint64_t faces_not_ccw = 0;  // faces with signed UV area <= 0
   // Filled only when MeasureOptions::check_overlaps:
   uint64_t overlapping_faces = 0;        // face pairs whose UV interiors overlap
   uint64_t overlapping_chart_pairs = 0;  // distinct chart pairs among those
-  double min_chart_gap_texels = 0;  // closest approach of two charts, capped at gap_probe
-  double min_border_gap_texels = 0; // closest approach of a UV vertex to the border
+  double min_chart_gap_texels = 0;       // closest approach of two charts, capped at gap_probe
+  double min_border_gap_texels = 0;      // closest approach of a UV vertex to the border
   // UnwrapCharts only:
   double texels_per_meter = 0;  // the packing scale
   uint64_t isolated_faces = 0;  // slivers laid out as fixed 1-texel triangles

@@ -25,9 +25,9 @@ Mesh MakeCylinder(double radius, double height, int segments, int rows) {
   for (int j = 0; j <= rows; ++j) {
     for (int i = 0; i < segments; ++i) {
       const double a = 2 * M_PI * i / segments;
-      mesh.positions.insert(mesh.positions.end(),
-                            {float(radius * std::cos(a)), float(radius * std::sin(a)),
-                             float(height * j / rows)});
+      mesh.positions.insert(
+          mesh.positions.end(),
+          {float(radius * std::cos(a)), float(radius * std::sin(a)), float(height * j / rows)});
       mesh.normals.insert(mesh.normals.end(), {float(std::cos(a)), float(std::sin(a)), 0.0f});
       mesh.colors.insert(mesh.colors.end(), {uint8_t(j * 7), uint8_t(i * 3), 99});
       mesh.tangents.insert(mesh.tangents.end(), {float(-std::sin(a)), float(std::cos(a)), 0, 1});
@@ -76,7 +76,8 @@ Mesh MakeBrickPanel() {
     const double offset = (row % 2) * 0.5 * length;
     const double in_x = std::fmod(x + offset, length), in_y = std::fmod(y, course);
     // Distance into the brick face from its nearest edge (joint at the end).
-    const double dx = std::min(in_x, length - 0.010 - in_x), dy = std::min(in_y, course - 0.010 - in_y);
+    const double dx = std::min(in_x, length - 0.010 - in_x),
+                 dy = std::min(in_y, course - 0.010 - in_y);
     const double d = std::min(dx, dy);
     if (d <= 0) return -0.004;
     return d >= 0.002 ? 0.0 : -0.004 * (1 - d / 0.002);
@@ -353,7 +354,8 @@ TEST(UvAtlasTest, RejectsBadOptionsAndMeshes) {
   for (int i = 0; i < 20; ++i) {
     const float x = float(i);
     soup.positions.insert(soup.positions.end(), {x, 0, 0, x + 1, 0, 0, x, 1, 0});
-    soup.indices.insert(soup.indices.end(), {uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
+    soup.indices.insert(soup.indices.end(),
+                        {uint32_t(3 * i), uint32_t(3 * i + 1), uint32_t(3 * i + 2)});
   }
   options = {};
   options.size_texels = 8;
@@ -456,26 +458,28 @@ TEST(UvAtlasTool, DISABLED_UnwrapFile) {
     if (std::string(method) == "per_triangle") options.method = UnwrapMethod::kPerTriangle;
   }
   if (const char* threads = std::getenv("PB_UV_THREADS")) options.threads = std::atoi(threads);
-  if (const char* stretch = std::getenv("PB_UV_MAX_STRETCH")) options.max_stretch = std::atof(stretch);
+  if (const char* stretch = std::getenv("PB_UV_MAX_STRETCH"))
+    options.max_stretch = std::atof(stretch);
   AtlasReport report;
   const auto start = std::chrono::steady_clock::now();
   // PB_UV_MEASURE_ONLY=1: measure the file's own UVs (e.g. Blender's).
   auto out = std::getenv("PB_UV_MEASURE_ONLY") != nullptr ? Expected<Mesh>(ply->mesh)
-                                                         : UnwrapMesh(ply->mesh, options, &report);
+                                                          : UnwrapMesh(ply->mesh, options, &report);
   if (std::getenv("PB_UV_MEASURE_ONLY") != nullptr) {
     report = MeasureAtlas(*out, options.size_texels);
   }
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   ASSERT_TRUE(out.ok()) << out.status().message();
-  std::printf("faces %zu vertices %zu->%zu: %.3f s (incl. measuring), charts %llu, coverage %.4f, "
-              "stretch L2 %.4f Linf %.3f, seams %.1f m, outside %llu, not ccw %llu, isolated %llu, "
-              "rounds %d\n",
-              ply->mesh.face_count(), ply->mesh.vertex_count(), out->vertex_count(), seconds,
-              (unsigned long long)report.charts, report.coverage, report.stretch_l2,
-              report.stretch_linf, report.seam_length_m, (unsigned long long)report.faces_outside,
-              (unsigned long long)report.faces_not_ccw, (unsigned long long)report.isolated_faces,
-              report.rounds);
+  std::printf(
+      "faces %zu vertices %zu->%zu: %.3f s (incl. measuring), charts %llu, coverage %.4f, "
+      "stretch L2 %.4f Linf %.3f, seams %.1f m, outside %llu, not ccw %llu, isolated %llu, "
+      "rounds %d\n",
+      ply->mesh.face_count(), ply->mesh.vertex_count(), out->vertex_count(), seconds,
+      (unsigned long long)report.charts, report.coverage, report.stretch_l2, report.stretch_linf,
+      report.seam_length_m, (unsigned long long)report.faces_outside,
+      (unsigned long long)report.faces_not_ccw, (unsigned long long)report.isolated_faces,
+      report.rounds);
   if (std::getenv("PB_UV_CHECK") != nullptr) {
     MeasureOptions measure;
     measure.check_overlaps = true;

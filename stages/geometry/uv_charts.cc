@@ -184,9 +184,9 @@ FlatChart Project(const Mesh& mesh, const Topology& topo, std::vector<uint32_t> 
   for (size_t i = 0; i < chart.faces.size(); ++i) {
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = mesh.indices[3 * size_t(chart.faces[i]) + k];
-      chart.corners[3 * i + k] = uint32_t(
-          std::lower_bound(chart.vertices.begin(), chart.vertices.end(), v) -
-          chart.vertices.begin());
+      chart.corners[3 * i + k] =
+          uint32_t(std::lower_bound(chart.vertices.begin(), chart.vertices.end(), v) -
+                   chart.vertices.begin());
     }
   }
   chart.uv_m.resize(2 * chart.vertices.size());
@@ -286,9 +286,8 @@ std::vector<std::vector<uint32_t>> Components(const std::vector<uint32_t>& faces
 
 // Breadth-first halves: the first half of the faces reached from the
 // chart's first face, then each connected component of the rest.
-std::vector<std::vector<uint32_t>> SplitInHalves(const std::vector<uint32_t>& faces,
-                                                 uint32_t chart, const Topology& topo,
-                                                 const FaceSlots& slots) {
+std::vector<std::vector<uint32_t>> SplitInHalves(const std::vector<uint32_t>& faces, uint32_t chart,
+                                                 const Topology& topo, const FaceSlots& slots) {
   auto in_chart = [&](uint32_t f) { return slots.owner[f] == chart; };
   std::vector<char> taken(faces.size(), 0);
   auto local = [&](uint32_t f) { return size_t(slots.position[f]); };
@@ -311,7 +310,7 @@ std::vector<std::vector<uint32_t>> SplitInHalves(const std::vector<uint32_t>& fa
       }
     }
     for (uint32_t f : queue) taken[local(f)] = 0;  // reached but not kept
-    budget = faces.size();  // only the first part is halved
+    budget = faces.size();                         // only the first part is halved
     std::sort(part.begin(), part.end());
     parts.push_back(std::move(part));
   }
@@ -473,9 +472,10 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
     chart.vertices.erase(std::unique(chart.vertices.begin(), chart.vertices.end()),
                          chart.vertices.end());
     for (int k = 0; k < 3; ++k) {
-      chart.corners.push_back(uint32_t(std::lower_bound(chart.vertices.begin(), chart.vertices.end(),
-                                                        mesh.indices[3 * size_t(f) + k]) -
-                                       chart.vertices.begin()));
+      chart.corners.push_back(
+          uint32_t(std::lower_bound(chart.vertices.begin(), chart.vertices.end(),
+                                    mesh.indices[3 * size_t(f) + k]) -
+                   chart.vertices.begin()));
     }
     chart.uv_m.assign(2 * chart.vertices.size(), 0.0);
     charts.push_back(std::move(chart));
@@ -521,8 +521,12 @@ void ForEachIntersectingBoxPair(const std::vector<Box2>& boxes,
   cell = std::max(cell, extent / 4096.0);
   const int64_t nx = std::max<int64_t>(1, int64_t((hi[0] - lo[0]) / cell) + 1);
   const int64_t ny = std::max<int64_t>(1, int64_t((hi[1] - lo[1]) / cell) + 1);
-  auto cell_x = [&](double x) { return std::clamp<int64_t>(int64_t((x - lo[0]) / cell), 0, nx - 1); };
-  auto cell_y = [&](double y) { return std::clamp<int64_t>(int64_t((y - lo[1]) / cell), 0, ny - 1); };
+  auto cell_x = [&](double x) {
+    return std::clamp<int64_t>(int64_t((x - lo[0]) / cell), 0, nx - 1);
+  };
+  auto cell_y = [&](double y) {
+    return std::clamp<int64_t>(int64_t((y - lo[1]) / cell), 0, ny - 1);
+  };
   std::vector<uint32_t> offsets(size_t(nx * ny) + 1, 0);
   for (const Box2& b : boxes) {
     for (int64_t y = cell_y(b[1]); y <= cell_y(b[3]); ++y) {
@@ -536,7 +540,8 @@ void ForEachIntersectingBoxPair(const std::vector<Box2>& boxes,
     for (uint32_t i = 0; i < n; ++i) {
       const Box2& b = boxes[i];
       for (int64_t y = cell_y(b[1]); y <= cell_y(b[3]); ++y) {
-        for (int64_t x = cell_x(b[0]); x <= cell_x(b[2]); ++x) members[fill[size_t(y * nx + x)]++] = i;
+        for (int64_t x = cell_x(b[0]); x <= cell_x(b[2]); ++x)
+          members[fill[size_t(y * nx + x)]++] = i;
       }
     }
   }

@@ -35,9 +35,10 @@ struct ChartOptions {
 
 // The charts of `mesh` (valid, see Validate), in the order their seed faces
 // were reached (seeds in face order). Every face is in exactly one chart.
-// A chart whose projection folds or overlaps is split in breadth-first
-// halves; faces that moved beyond 1.2 x the stretch bound of the final mean normal
-// are peeled off into charts of their own.
+// After projection, faces beyond 1.2 x the stretch bound of the chart's
+// final mean normal and faces of overlapping pairs are peeled off (the
+// remainder and the peeled faces each split into connected components);
+// a chart whose every face is involved is split in breadth-first halves.
 // `seam_length_m` (may be null) receives the 3-D length of edges between
 // faces of different charts. Threads through TBB; the result does not
 // depend on the thread count.

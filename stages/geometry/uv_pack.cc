@@ -92,8 +92,8 @@ int64_t BoxSize(double extent_m, double scale, int gutter) {
 
 // Packs in `order` at `scale`; false as soon as one box does not fit.
 bool TryPack(const std::vector<ChartExtent>& charts, const std::vector<uint32_t>& order,
-             double scale, int size, int gutter, std::vector<int64_t>* xs,
-             std::vector<int64_t>* ys, std::vector<char>* turned) {
+             double scale, int size, int gutter, std::vector<int64_t>* xs, std::vector<int64_t>* ys,
+             std::vector<char>* turned) {
   // Boxes carry their gutter on the right and top; the skyline starts one
   // gutter in from the left and bottom border and ends at the atlas edge.
   Skyline skyline(static_cast<int64_t>(size) - gutter);
@@ -139,7 +139,8 @@ Expected<PackResult> PackCharts(const std::vector<ChartExtent>& charts, int size
   const double usable = static_cast<double>(size_texels - 2 * gutter_texels);
   // No packing beats the charts' total area filling the whole atlas.
   double hi = area_m2 > 0 ? usable / std::sqrt(area_m2) : usable;
-  for (const ChartExtent& c : charts) hi = std::min(hi, usable / std::max({c.width, c.height, 1e-30}));
+  for (const ChartExtent& c : charts)
+    hi = std::min(hi, usable / std::max({c.width, c.height, 1e-30}));
   std::vector<int64_t> xs(charts.size()), ys(charts.size());
   std::vector<char> turned(charts.size(), 0);
 

@@ -19,21 +19,21 @@ struct ChartExtent {
 };
 
 struct PackResult {
-  double texels_per_meter = 0;      // the one scale of every chart
-  std::vector<int64_t> x_texels;    // lower-left corner of each chart's box
+  double texels_per_meter = 0;    // the one scale of every chart
+  std::vector<int64_t> x_texels;  // lower-left corner of each chart's box
   std::vector<int64_t> y_texels;
-  std::vector<char> turned;         // 1: the chart is placed a quarter turn
-                                    // counter-clockwise (its box height x width)
-  int attempts = 0;                 // packings tried by the scale search
+  // 1: the chart is placed a quarter turn counter-clockwise (its box is
+  // height x width).
+  std::vector<char> turned;
+  int attempts = 0;          // packings tried by the scale search
 };
 
 // Packs every chart, scaled by one factor s, into a size x size texel atlas:
 // chart i occupies ceil(width_i * s) x ceil(height_i * s) texels from its
-// corner (swapped when turned), at least `gutter_texels` from every other chart and from the border.
-// s is the largest found by bisection (to 1/256 relative) for which the
-// skyline packer fits everything; largest charts (by height) go first.
-// Deterministic. Status::Invalid if no scale above 10^-5 of the area bound
-// fits (far more charts than gutter-padded cells in the atlas).
+// corner (swapped when turned), at least `gutter_texels` from every other chart and from the
+// border. s is the largest found by bisection (to 1/256 relative) for which the skyline packer fits
+// everything; largest charts (by height) go first. Deterministic. Status::Invalid if no scale above
+// 10^-5 of the area bound fits (far more charts than gutter-padded cells in the atlas).
 Expected<PackResult> PackCharts(const std::vector<ChartExtent>& charts, int size_texels,
                                 int gutter_texels);
 

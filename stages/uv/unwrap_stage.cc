@@ -71,7 +71,8 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.max_angle_deg, NumberParam(ctx, kId, "max_angle_deg", 66.0));
   PB_ASSIGN_OR_RETURN(options.max_stretch, NumberParam(ctx, kId, "max_stretch", 1.25));
   if (!(options.max_angle_deg > 0 && options.max_angle_deg < 90)) {
-    return Status::Invalid(std::string(kId) + ": parameter 'max_angle_deg' must be in (0, 90), got " +
+    return Status::Invalid(std::string(kId) +
+                           ": parameter 'max_angle_deg' must be in (0, 90), got " +
                            std::to_string(options.max_angle_deg));
   }
   if (!(options.max_stretch >= 1)) {
@@ -140,7 +141,8 @@ StageType UnwrapStage() {
   StageType type;
   type.id = kId;
   type.version = 1;
-  type.summary = "UV atlas: charts of similar normals, planar projection, one packed square texture";
+  type.summary =
+      "UV atlas: charts of similar normals, planar projection, one packed square texture";
   type.doc =
       "Gives the mesh per-vertex UVs in [0,1]^2 for one `size` x `size` texture. `charts` "
       "(default) grows charts across manifold edges while face normals stay within "
@@ -159,8 +161,10 @@ StageType UnwrapStage() {
       "is no distortion), `seam_length_m`, `vertices_out`. The output meta's `uv` object has "
       "the parameters and these figures.";
   type.params_schema = kSchema;
-  type.inputs = {{"mesh", "mesh", "The mesh to unwrap (mesh.ply); existing UVs are replaced.", false}};
-  type.outputs = {{"mesh", "mesh", "The same surface with UVs, vertices split at seams (mesh.ply).", false}};
+  type.inputs = {
+      {"mesh", "mesh", "The mesh to unwrap (mesh.ply); existing UVs are replaced.", false}};
+  type.outputs = {
+      {"mesh", "mesh", "The same surface with UVs, vertices split at seams (mesh.ply).", false}};
   type.run = &Run;
   return type;
 }

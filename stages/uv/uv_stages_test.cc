@@ -141,9 +141,9 @@ TEST_F(UvStagesTest, SameBytesWithOneOrTwoThreads) {
   const int n = 60;
   for (int j = 0; j <= n; ++j) {
     for (int i = 0; i <= n; ++i) {
-      wavy.positions.insert(wavy.positions.end(),
-                            {float(i) / n, float(j) / n,
-                             0.1f * float(std::sin(i * 0.5) * std::cos(j * 0.4))});
+      wavy.positions.insert(
+          wavy.positions.end(),
+          {float(i) / n, float(j) / n, 0.1f * float(std::sin(i * 0.5) * std::cos(j * 0.4))});
     }
   }
   for (int j = 0; j < n; ++j) {
@@ -191,6 +191,9 @@ TEST_F(UvStagesTest, ClearErrors) {
   FakeContext angle(dir_ / "c", {{"max_angle_deg", 120}});
   angle.AddInput("mesh", "mesh", input);
   EXPECT_THAT(Run("uv.unwrap", angle).message(), HasSubstr("'max_angle_deg' must be in (0, 90)"));
+  FakeContext stretch(dir_ / "s", {{"max_stretch", 0.5}});
+  stretch.AddInput("mesh", "mesh", input);
+  EXPECT_THAT(Run("uv.unwrap", stretch).message(), HasSubstr("'max_stretch' must be >= 1"));
   // 12 faces, one per cell, in 64 texels with a 15-texel gutter: no room.
   FakeContext crowded(dir_ / "d", {{"method", "per_triangle"}, {"size", 64}, {"gutter", 15}});
   crowded.AddInput("mesh", "mesh", input);
