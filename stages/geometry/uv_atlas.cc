@@ -185,14 +185,17 @@ Expected<Mesh> UnwrapCharts(const Mesh& mesh, const UnwrapOptions& options, Atla
     // isolated and everything is redone; each round isolates more faces, so
     // this ends (in practice after one or two rounds).
     for (int round = 0;; ++round) {
-      std::vector<FlatChart> charts = MakeFlatCharts(mesh, chart_options, nullptr, progress);
+      // Progress is reported by the first round only (it must not go back).
+      std::vector<FlatChart> charts = MakeFlatCharts(
+          mesh, chart_options, nullptr,
+          round == 0 ? std::function<void(double)>(progress) : std::function<void(double)>());
       std::vector<ChartExtent> extents(charts.size());
       for (size_t c = 0; c < charts.size(); ++c) {
         extents[c] = {charts[c].width_m, charts[c].height_m};
       }
       auto packed = PackCharts(extents, options.size_texels, options.gutter_texels);
       if (!packed.ok()) return packed.status();
-      if (options.progress) options.progress(0.85);
+      if (options.progress && round == 0) options.progress(0.85);
       Mesh out = Layout(mesh, charts, *packed, options.size_texels);
       std::vector<uint32_t> flat_faces = FacesWithoutUvArea(out, options.size_texels);
       std::vector<uint32_t> merged;

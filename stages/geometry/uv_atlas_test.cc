@@ -232,6 +232,32 @@ TEST(UvAtlasTest, SpiralThatWouldOverlapIsSplit) {
   EXPECT_GE(report.charts, 2u);
 }
 
+TEST(UvAtlasTest, SliversBecomeOneTexelTriangles) {
+  // A cylinder plus a needle 1 m long and 1 nm high: float UVs cannot hold
+  // the needle at its true shape, so it gets a fixed triangle and stays CCW.
+  Mesh mesh = MakeCylinder(0.5, 1.0, 24, 4);
+  const uint32_t base = uint32_t(mesh.vertex_count());
+  for (float x : {0.0f, 1.0f, 0.5f}) {
+    mesh.positions.insert(mesh.positions.end(), {x, x == 0.5f ? 1e-9f : 0.0f, 3.0f});
+    mesh.normals.insert(mesh.normals.end(), {0, 0, 1});
+    mesh.colors.insert(mesh.colors.end(), {1, 2, 3});
+    mesh.tangents.insert(mesh.tangents.end(), {1, 0, 0, 1});
+  }
+  mesh.indices.insert(mesh.indices.end(), {base, base + 1, base + 2});
+  UnwrapOptions options;
+  options.size_texels = 512;
+  AtlasReport report;
+  auto out = UnwrapCharts(mesh, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(mesh, *out, options);
+  EXPECT_EQ(report.isolated_faces, 1u);
+  const size_t f = mesh.face_count() - 1;
+  const float* a = &out->uvs[2 * size_t(out->indices[3 * f])];
+  const float* b = &out->uvs[2 * size_t(out->indices[3 * f + 1])];
+  EXPECT_NEAR((b[0] - a[0]) * 512, 1.0, 1e-3);  // one texel along u
+  EXPECT_LT(report.stretch_linf, 1.5);          // the needle is left out of Linf
+}
+
 TEST(UvAtlasTest, MeasureFindsOverlapsAndNarrowGaps) {
   // Two triangles of different charts, overlapping; then 2 texels apart.
   Mesh mesh;
