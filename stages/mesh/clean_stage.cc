@@ -4,7 +4,7 @@
 #include "stages/mesh/clean_stage.h"
 
 #include "stages/geometry/mesh_clean.h"
-#include "stages/geometry/ply.h"
+#include "stages/mesh/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {
@@ -53,21 +53,14 @@ Status Run(StageContext& ctx) {
                       NumberParam(ctx, kId, "min_component_fraction", 0));
   PB_ASSIGN_OR_RETURN(options.min_component_area_m2,
                       NumberParam(ctx, kId, "min_component_area_m2", 0.01));
-  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, "mesh", "mesh.ply"));
-  Mesh mesh;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions read_options;
-    read_options.progress = [&ctx](double f) { ctx.progress(0.3 * f); };
-    PB_ASSIGN_OR_RETURN(PlyMesh read, ReadPlyMesh(path, read_options));
-    mesh = std::move(read.mesh);
-  }
+  PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.3));
+  Mesh& mesh = input.mesh;
   ctx.progress(0.3);
   CleanReport report;
   {
     PB_PHASE(ctx, "compute");
     Expected<Mesh> cleaned = CleanMesh(mesh, options, &report);
-    if (!cleaned.ok()) return cleaned.status().WithContext(path);
+    if (!cleaned.ok()) return cleaned.status().WithContext(input.path);
     mesh = std::move(cleaned).value();
   }
   ctx.progress(0.7);
@@ -82,17 +75,8 @@ Status Run(StageContext& ctx) {
   ctx.counter("unreferenced_vertices", static_cast<double>(report.unreferenced_vertices));
   ctx.counter("faces_out", static_cast<double>(report.faces_out));
   ctx.counter("vertices_out", static_cast<double>(report.vertices_out));
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WritePlyMesh(ctx.output_path("mesh", "mesh.ply"), mesh));
-  }
-  ctx.set_output_meta("mesh", {{"origin", mesh.origin},
-                               {"faces", mesh.face_count()},
-                               {"vertices", mesh.vertex_count()},
-                               {"has_normals", mesh.has_normals()},
-                               {"has_colors", mesh.has_colors()},
-                               {"has_uvs", mesh.has_uvs()},
-                               {"manifold", true}});
+  PB_RETURN_IF_ERROR(
+      WriteOutputMesh(ctx, mesh, InputMeshMetaWith(ctx, mesh, {{"manifold", true}})));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -102,7 +86,7 @@ Status Run(StageContext& ctx) {
 StageType CleanStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;  // 2: small components must also be small in area
+  type.version = 3;  // 2: small components must also be small in area; 3: input meta passed on
   type.summary = "Mesh repair: degenerate/duplicate faces, specks, non-manifold edges and vertices";
   type.doc =
       "Makes a reconstructed mesh 2-manifold, in this order: removes faces with a repeated "

@@ -7,7 +7,7 @@
 
 #include "engine/stage.h"
 #include "stages/geometry/mesh_decimate.h"
-#include "stages/geometry/ply.h"
+#include "stages/mesh/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {
@@ -50,8 +50,6 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, "mesh", "mesh.ply"));
-
   const bool has_target =
       ctx.params().contains("target_faces") && !ctx.params()["target_faces"].is_null();
   const bool has_ratio = ctx.params().contains("ratio") && !ctx.params()["ratio"].is_null();
@@ -73,14 +71,8 @@ Status Run(StageContext& ctx) {
     PB_ASSIGN_OR_RETURN(target, IntegerParam(ctx, kId, "target_faces", std::nullopt, 1));
   }
 
-  Mesh mesh;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions read_options;
-    read_options.progress = [&ctx](double fraction) { ctx.progress(0.2 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyMesh ply, ReadPlyMesh(path, read_options));
-    mesh = std::move(ply.mesh);
-  }
+  PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.2));
+  const Mesh& mesh = input.mesh;
   if (has_ratio) target = std::llround(ratio * static_cast<double>(mesh.face_count()));
   options.target_faces = static_cast<size_t>(target);
   if (mesh.face_count() <= options.target_faces) {
@@ -95,29 +87,20 @@ Status Run(StageContext& ctx) {
   {
     PB_PHASE(ctx, "compute");
     auto decimated = DecimateMesh(mesh, options, &report);
-    if (!decimated.ok()) return decimated.status().WithContext(path);
+    if (!decimated.ok()) return decimated.status().WithContext(input.path);
     output = std::move(*decimated);
   }
   ctx.counter("faces_in", static_cast<double>(report.faces_in));
   ctx.counter("faces_out", static_cast<double>(report.faces_out));
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WritePlyMesh(ctx.output_path("mesh", "mesh.ply"), output));
-  }
-  const nlohmann::json& input_meta = ctx.input("mesh").meta;
-  nlohmann::json meta = input_meta.is_object() ? input_meta : nlohmann::json::object();
-  meta.update({{"origin", output.origin},
-               {"vertices", output.vertex_count()},
-               {"faces", output.face_count()},
-               {"has_normals", output.has_normals()},
-               {"has_colors", output.has_colors()},
-               {"decimate",
-                {{"target_faces", options.target_faces},
-                 {"collapses", report.collapses},
-                 {"rejected_link", report.rejected_link},
-                 {"rejected_flip", report.rejected_flip},
-                 {"rejected_degenerate", report.rejected_degenerate}}}});
-  ctx.set_output_meta("mesh", std::move(meta));
+  PB_RETURN_IF_ERROR(WriteOutputMesh(
+      ctx, output,
+      InputMeshMetaWith(ctx, output,
+                        {{"decimate",
+                          {{"target_faces", options.target_faces},
+                           {"collapses", report.collapses},
+                           {"rejected_link", report.rejected_link},
+                           {"rejected_flip", report.rejected_flip},
+                           {"rejected_degenerate", report.rejected_degenerate}}}})));
   ctx.progress(1.0);
   return Status::Ok();
 }

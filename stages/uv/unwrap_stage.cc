@@ -4,7 +4,7 @@
 #include <utility>
 
 #include "engine/stage.h"
-#include "stages/geometry/ply.h"
+#include "stages/mesh/mesh_io.h"
 #include "stages/geometry/uv_atlas.h"
 #include "stages/params.h"
 #include "stages/uv/uv_stages.h"
@@ -55,7 +55,6 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, "mesh", "mesh.ply"));
   UnwrapOptions options;
   PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method", "charts"));
   if (method == "charts") {
@@ -83,21 +82,15 @@ Status Run(StageContext& ctx) {
   options.gutter_texels = static_cast<int>(gutter);
   options.threads = ctx.threads();
 
-  Mesh mesh;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions read_options;
-    read_options.progress = [&ctx](double fraction) { ctx.progress(0.2 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyMesh ply, ReadPlyMesh(path, read_options));
-    mesh = std::move(ply.mesh);
-  }
+  PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.2));
+  const Mesh& mesh = input.mesh;
   options.progress = [&ctx](double fraction) { ctx.progress(0.2 + 0.7 * fraction); };
   AtlasReport report;
   Mesh output;
   {
     PB_PHASE(ctx, "compute");
     auto unwrapped = UnwrapMesh(mesh, options, &report);
-    if (!unwrapped.ok()) return unwrapped.status().WithContext(path);
+    if (!unwrapped.ok()) return unwrapped.status().WithContext(input.path);
     output = std::move(*unwrapped);
   }
   ctx.counter("charts", static_cast<double>(report.charts));
@@ -106,19 +99,10 @@ Status Run(StageContext& ctx) {
   ctx.counter("stretch_linf", report.stretch_linf);
   ctx.counter("seam_length_m", report.seam_length_m);
   ctx.counter("vertices_out", static_cast<double>(output.vertex_count()));
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WritePlyMesh(ctx.output_path("mesh", "mesh.ply"), output));
-  }
-  const nlohmann::json& input_meta = ctx.input("mesh").meta;
-  nlohmann::json meta = input_meta.is_object() ? input_meta : nlohmann::json::object();
-  meta.update({{"origin", output.origin},
-               {"vertices", output.vertex_count()},
-               {"faces", output.face_count()},
-               {"has_normals", output.has_normals()},
-               {"has_colors", output.has_colors()},
-               {"has_uvs", true},
-               {"uv",
+  PB_RETURN_IF_ERROR(WriteOutputMesh(
+      ctx, output,
+      InputMeshMetaWith(ctx, output,
+              {{"uv",
                 {{"method", method},
                  {"size", size},
                  {"gutter", gutter},
@@ -129,8 +113,7 @@ Status Run(StageContext& ctx) {
                  {"stretch_l2", report.stretch_l2},
                  {"stretch_linf", report.stretch_linf},
                  {"seam_length_m", report.seam_length_m},
-                 {"texels_per_meter", report.texels_per_meter}}}});
-  ctx.set_output_meta("mesh", std::move(meta));
+                 {"texels_per_meter", report.texels_per_meter}}}})));
   ctx.progress(1.0);
   return Status::Ok();
 }
