@@ -10,6 +10,7 @@
 
 #include "stages/geometry/image.h"
 #include "stages/geometry/text_parse.h"
+#include "stages/mesh/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {
@@ -76,6 +77,38 @@ Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_v
     return EncodePng(ToEightBit(*image, normal_map));
   }
   return Status::Unsupported(context + ": " + path + ": expected a .png or .exr image");
+}
+
+Expected<ExportInputs> ReadExportInputs(StageContext& ctx, std::string_view stage_id) {
+  ExportInputs inputs;
+  PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, stage_id, 0.3));
+  inputs.mesh_path = std::move(input.path);
+  inputs.mesh = std::move(input.mesh);
+  {
+    PB_PHASE(ctx, "io");
+    PB_ASSIGN_OR_RETURN(inputs.color_png, TexturePng(ctx, stage_id, "color", false));
+    PB_ASSIGN_OR_RETURN(inputs.normal_png, TexturePng(ctx, stage_id, "normal", true));
+  }
+  if ((!inputs.color_png.empty() || !inputs.normal_png.empty()) && !inputs.mesh.has_uvs()) {
+    return Status::Invalid(std::string(stage_id) + ": textures need uvs, and " +
+                           inputs.mesh_path +
+                           " has none (run uv.unwrap before baking and exporting)");
+  }
+  ctx.progress(0.4);
+  return inputs;
+}
+
+nlohmann::json ExportMetaWith(const StageContext& ctx, const Mesh& mesh, std::string_view format,
+                              uint64_t bytes, const nlohmann::json& changes) {
+  const nlohmann::json& input_meta = ctx.input("mesh").meta;
+  nlohmann::json meta = input_meta.is_object() ? input_meta : nlohmann::json::object();
+  meta.update({{"format", format},
+               {"origin", mesh.origin},
+               {"vertices", mesh.vertex_count()},
+               {"faces", mesh.face_count()},
+               {"bytes", bytes}});
+  meta.update(changes);
+  return meta;
 }
 
 }  // namespace pb

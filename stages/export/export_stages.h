@@ -4,11 +4,13 @@
 #pragma once
 
 #include <cstdint>
+#include <string>
 #include <string_view>
 #include <vector>
 
 #include "engine/base/status.h"
 #include "engine/stage.h"
+#include "stages/geometry/mesh.h"
 
 namespace pb {
 
@@ -24,5 +26,21 @@ StageType ObjExportStage();
 // (n + 1) / 2 * 255. Status naming the stage, port and file otherwise.
 Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_view stage_id,
                                           std::string_view port, bool normal_map);
+
+// What both export stages read, in an "io" phase (progress 0..0.3): input
+// "mesh" and the PNG bytes of the optional "color" and "normal" maps. A map
+// with a mesh without uvs is a Status naming the file.
+struct ExportInputs {
+  std::string mesh_path;
+  Mesh mesh;
+  std::vector<uint8_t> color_png;   // empty: no color map
+  std::vector<uint8_t> normal_png;  // empty: no normal map
+};
+Expected<ExportInputs> ReadExportInputs(StageContext& ctx, std::string_view stage_id);
+
+// The exported model's meta: the mesh input's, with the facts every export
+// shares (format, origin, counts, bytes), then `changes`.
+nlohmann::json ExportMetaWith(const StageContext& ctx, const Mesh& mesh, std::string_view format,
+                              uint64_t bytes, const nlohmann::json& changes);
 
 }  // namespace pb

@@ -6,7 +6,6 @@
 #include "engine/stage.h"
 #include "stages/export/export_stages.h"
 #include "stages/geometry/gltf.h"
-#include "stages/geometry/ply.h"
 #include "stages/params.h"
 
 namespace pb {
@@ -33,25 +32,13 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, "mesh", "mesh.ply"));
   GltfWriteOptions options;
   PB_ASSIGN_OR_RETURN(options.name, StringParam(ctx, kId, "name", "model"));
   PB_ASSIGN_OR_RETURN(options.vertex_colors, BoolParam(ctx, kId, "vertex_colors", true));
-  Mesh mesh;
-  {
-    PB_PHASE(ctx, "io");
-    PlyReadOptions read_options;
-    read_options.progress = [&ctx](double fraction) { ctx.progress(0.3 * fraction); };
-    PB_ASSIGN_OR_RETURN(PlyMesh ply, ReadPlyMesh(path, read_options));
-    mesh = std::move(ply.mesh);
-    PB_ASSIGN_OR_RETURN(options.base_color_png, TexturePng(ctx, kId, "color", false));
-    PB_ASSIGN_OR_RETURN(options.normal_png, TexturePng(ctx, kId, "normal", true));
-  }
-  if ((!options.base_color_png.empty() || !options.normal_png.empty()) && !mesh.has_uvs()) {
-    return Status::Invalid(std::string(kId) + ": textures need uvs, and " + path +
-                           " has none (run uv.unwrap before baking and exporting)");
-  }
-  ctx.progress(0.4);
+  PB_ASSIGN_OR_RETURN(ExportInputs inputs, ReadExportInputs(ctx, kId));
+  options.base_color_png = std::move(inputs.color_png);
+  options.normal_png = std::move(inputs.normal_png);
+  const Mesh& mesh = inputs.mesh;
   GltfWriteReport report;
   {
     PB_PHASE(ctx, "io");
@@ -61,20 +48,15 @@ Status Run(StageContext& ctx) {
   ctx.counter("faces", static_cast<double>(mesh.face_count()));
   ctx.counter("vertices", static_cast<double>(mesh.vertex_count()));
   ctx.counter("bytes", static_cast<double>(report.bytes));
-  const nlohmann::json& input_meta = ctx.input("mesh").meta;
-  nlohmann::json meta = input_meta.is_object() ? input_meta : nlohmann::json::object();
-  meta.update({{"format", "glb"},
-               {"origin", mesh.origin},
-               {"vertices", mesh.vertex_count()},
-               {"faces", mesh.face_count()},
-               {"bytes", report.bytes},
-               {"color_texture", !options.base_color_png.empty()},
-               {"normal_texture", !options.normal_png.empty()},
-               {"vertex_colors", report.wrote_colors},
-               {"normals", report.computed_normals ? "computed" : "mesh"},
-               {"tangents", !report.wrote_tangents     ? "none"
-                            : report.computed_tangents ? "computed"
-                                                       : "mesh"}});
+  nlohmann::json meta = ExportMetaWith(
+      ctx, mesh, "glb", report.bytes,
+      {{"color_texture", !options.base_color_png.empty()},
+       {"normal_texture", !options.normal_png.empty()},
+       {"vertex_colors", report.wrote_colors},
+       {"normals", report.computed_normals ? "computed" : "mesh"},
+       {"tangents", !report.wrote_tangents     ? "none"
+                    : report.computed_tangents ? "computed"
+                                               : "mesh"}});
   ctx.set_output_meta("model", std::move(meta));
   ctx.progress(1.0);
   return Status::Ok();
