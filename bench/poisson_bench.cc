@@ -126,7 +126,7 @@ int main(int argc, char** argv) {
     options.threads = threads;
     auto out = pb::ReconstructPoisson(cloud, options);
     if (!out.ok()) Die(out.status().message());
-    mesh = pb::TrimByDensity(out->mesh, out->densities, trim, nullptr);
+    mesh = pb::TrimByDensity(std::move(out->mesh), out->densities, trim, nullptr);
   } else {
     if (trim > 0) Die("--trim needs densities: Open3D only");
     mesh = RunPcl(cloud, depth, threads, point_weight, samples_per_node);

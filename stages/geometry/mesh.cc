@@ -1,6 +1,8 @@
 #include "stages/geometry/mesh.h"
 
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace pb {
 
@@ -25,7 +27,42 @@ Status CheckAttribute(const char* name, size_t values, size_t per_vertex, size_t
                          std::to_string(per_vertex) + " per vertex)");
 }
 
+// Keeps the entries of the vertices with a new index, in order.
+template <typename T>
+void Compact(const std::vector<uint32_t>& new_index, size_t width, std::vector<T>& values) {
+  if (values.empty()) return;
+  size_t out = 0;
+  for (size_t v = 0; v < new_index.size(); ++v) {
+    if (new_index[v] == UINT32_MAX) continue;
+    for (size_t a = 0; a < width; ++a) values[width * out + a] = values[width * v + a];
+    ++out;
+  }
+  values.resize(width * out);
+}
+
 }  // namespace
+
+size_t DropUnreferencedVertices(Mesh& mesh) {
+  std::vector<uint32_t> new_index(mesh.vertex_count(), UINT32_MAX);
+  for (const uint32_t v : mesh.indices) new_index[v] = 0;
+  uint32_t next = 0;
+  size_t dropped = 0;
+  for (uint32_t& n : new_index) {
+    if (n == UINT32_MAX) {
+      ++dropped;
+    } else {
+      n = next++;
+    }
+  }
+  if (dropped == 0) return 0;
+  for (uint32_t& v : mesh.indices) v = new_index[v];
+  Compact(new_index, 3, mesh.positions);
+  Compact(new_index, 3, mesh.normals);
+  Compact(new_index, 3, mesh.colors);
+  Compact(new_index, 2, mesh.uvs);
+  Compact(new_index, 4, mesh.tangents);
+  return dropped;
+}
 
 Status Validate(const Mesh& mesh) {
   if (mesh.positions.size() % 3 != 0) {

@@ -43,6 +43,10 @@ Bounds AbsoluteBounds(const Mesh& mesh);
 // a vertex; Status::Invalid naming the first problem otherwise.
 Status Validate(const Mesh& mesh);
 
+// Drops the vertices no face uses (the others keep their order and every
+// attribute) and renumbers the indices. Returns how many were dropped.
+size_t DropUnreferencedVertices(Mesh& mesh);
+
 // The vertices of a mesh as a point cloud (positions, normals, colors),
 // e.g. to bake from a mesh's own vertex colors.
 PointCloud VerticesAsPoints(const Mesh& mesh);

@@ -115,18 +115,6 @@ void AppendCopy(std::vector<T>* values, size_t width, uint32_t from) {
   for (size_t a = 0; a < width; ++a) values->push_back((*values)[width * from + a]);
 }
 
-template <typename T>
-void Compact(const std::vector<uint32_t>& new_index, size_t width, std::vector<T>* values) {
-  if (values->empty()) return;
-  size_t out = 0;
-  for (size_t v = 0; v < new_index.size(); ++v) {
-    if (new_index[v] == UINT32_MAX) continue;
-    for (size_t a = 0; a < width; ++a) (*values)[width * out + a] = (*values)[width * v + a];
-    ++out;
-  }
-  values->resize(width * out);
-}
-
 }  // namespace
 
 Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanReport* report) {
@@ -278,24 +266,7 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
   }
 
   // 6. Unreferenced vertices.
-  {
-    std::vector<uint32_t> new_index(mesh.vertex_count(), UINT32_MAX);
-    for (uint32_t v : idx) new_index[v] = 0;
-    uint32_t next = 0;
-    for (uint32_t& n : new_index) {
-      if (n == UINT32_MAX) {
-        ++r.unreferenced_vertices;
-      } else {
-        n = next++;
-      }
-    }
-    for (uint32_t& v : idx) v = new_index[v];
-    Compact(new_index, 3, &mesh.positions);
-    Compact(new_index, 3, &mesh.normals);
-    Compact(new_index, 3, &mesh.colors);
-    Compact(new_index, 2, &mesh.uvs);
-    Compact(new_index, 4, &mesh.tangents);
-  }
+  r.unreferenced_vertices = DropUnreferencedVertices(mesh);
   r.faces_out = mesh.face_count();
   r.vertices_out = mesh.vertex_count();
   return mesh;

@@ -235,7 +235,7 @@ Expected<PoissonOutput> ReconstructPoisson(const PointCloud& cloud, const Poisso
   return out;
 }
 
-Mesh TrimByDensity(const Mesh& mesh, const std::vector<float>& densities, double quantile,
+Mesh TrimByDensity(Mesh mesh, const std::vector<float>& densities, double quantile,
                    TrimReport* report) {
   TrimReport local;
   TrimReport& r = report ? *report : local;
@@ -251,11 +251,7 @@ Mesh TrimByDensity(const Mesh& mesh, const std::vector<float>& densities, double
   const float threshold = sorted[rank];
   r.threshold = threshold;
 
-  const size_t nv = mesh.vertex_count();
-  std::vector<uint8_t> used(nv, 0);
-  Mesh out;
-  out.origin = mesh.origin;
-  out.indices.reserve(mesh.indices.size());
+  size_t kept = 0;
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
     if (densities[t[0]] < threshold || densities[t[1]] < threshold ||
@@ -263,33 +259,11 @@ Mesh TrimByDensity(const Mesh& mesh, const std::vector<float>& densities, double
       ++r.faces_removed;
       continue;
     }
-    for (int k = 0; k < 3; ++k) {
-      out.indices.push_back(t[k]);
-      used[t[k]] = 1;
-    }
+    std::copy_n(t, 3, &mesh.indices[3 * kept++]);
   }
-  std::vector<uint32_t> remap(nv, std::numeric_limits<uint32_t>::max());
-  uint32_t next = 0;
-  for (size_t v = 0; v < nv; ++v) {
-    if (!used[v]) {
-      ++r.vertices_removed;
-      continue;
-    }
-    remap[v] = next++;
-    out.positions.insert(out.positions.end(), &mesh.positions[3 * v], &mesh.positions[3 * v + 3]);
-    if (mesh.has_normals()) {
-      out.normals.insert(out.normals.end(), &mesh.normals[3 * v], &mesh.normals[3 * v + 3]);
-    }
-    if (mesh.has_colors()) {
-      out.colors.insert(out.colors.end(), &mesh.colors[3 * v], &mesh.colors[3 * v + 3]);
-    }
-    if (mesh.has_uvs()) out.uvs.insert(out.uvs.end(), &mesh.uvs[2 * v], &mesh.uvs[2 * v + 2]);
-    if (mesh.has_tangents()) {
-      out.tangents.insert(out.tangents.end(), &mesh.tangents[4 * v], &mesh.tangents[4 * v + 4]);
-    }
-  }
-  for (uint32_t& index : out.indices) index = remap[index];
-  return out;
+  mesh.indices.resize(3 * kept);
+  r.vertices_removed = DropUnreferencedVertices(mesh);
+  return mesh;
 }
 
 DepthChoice ChooseDepthForFaces(uint64_t target_faces, int probe_depth, uint64_t faces_at_probe,

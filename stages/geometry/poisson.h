@@ -62,13 +62,14 @@ std::vector<std::string> PoissonModuleCandidates();
 
 // Density-quantile trimming: drops every vertex whose density is below the
 // `quantile` of all densities (0 keeps everything), the faces that use
-// one, and vertices left unreferenced. Returns the threshold applied.
+// one, and vertices left unreferenced. Takes the mesh by value so that a
+// caller done with it can move it in (quantile 0 then costs nothing).
 struct TrimReport {
   double threshold = 0;
   uint64_t faces_removed = 0;
   uint64_t vertices_removed = 0;
 };
-Mesh TrimByDensity(const Mesh& mesh, const std::vector<float>& densities, double quantile,
+Mesh TrimByDensity(Mesh mesh, const std::vector<float>& densities, double quantile,
                    TrimReport* report);
 
 // Depth for a face budget. Poisson's face count grows ~4x per octree level

@@ -150,7 +150,7 @@ Status Run(StageContext& ctx) {
   ctx.progress(0.85);
   const size_t faces_solved = out.mesh.face_count();
   TrimReport trimmed;
-  Mesh mesh = TrimByDensity(out.mesh, out.densities, trim, &trimmed);
+  Mesh mesh = TrimByDensity(std::move(out.mesh), out.densities, trim, &trimmed);
   out = PoissonOutput();
 
   ctx.counter("depth", options.depth);
@@ -164,10 +164,9 @@ Status Run(StageContext& ctx) {
                        {"faces_solved", faces_solved},
                        {"density_threshold", trimmed.threshold},
                        {"faces_trimmed", trimmed.faces_removed}});
-  const nlohmann::json& input_meta = ctx.input("points").meta;
   nlohmann::json meta = nlohmann::json::object();
   for (const char* key : {"spacing_m", "scene", "source"}) {
-    if (input_meta.is_object() && input_meta.contains(key)) meta[key] = input_meta[key];
+    if (points_meta.is_object() && points_meta.contains(key)) meta[key] = points_meta[key];
   }
   meta.update({{"origin", mesh.origin},
                {"vertices", mesh.vertex_count()},
