@@ -79,6 +79,13 @@ Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_v
   return Status::Unsupported(context + ": " + path + ": expected a .png or .exr image");
 }
 
+std::vector<PortSpec> ExportInputPorts() {
+  return {
+      {"mesh", "mesh", "The mesh to export (mesh.ply), with uvs when textures are given.", false},
+      {"color", "image", "Base color map (sRGB PNG, or EXR converted to sRGB).", true},
+      {"normal", "image", "Tangent-space normal map (PNG, +Y up; or EXR in [-1,1]).", true}};
+}
+
 Expected<ExportInputs> ReadExportInputs(StageContext& ctx, std::string_view stage_id) {
   ExportInputs inputs;
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, stage_id, 0.3));

@@ -27,6 +27,10 @@ StageType ObjExportStage();
 Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_view stage_id,
                                           std::string_view port, bool normal_map);
 
+// The input ports both export stages declare: mesh, and optional color and
+// normal maps.
+std::vector<PortSpec> ExportInputPorts();
+
 // What both export stages read, in an "io" phase (progress 0..0.3): input
 // "mesh" and the PNG bytes of the optional "color" and "normal" maps. A map
 // with a mesh without uvs is a Status naming the file.

@@ -82,10 +82,7 @@ StageType GltfExportStage() {
       "docs/export.md.\n\n"
       "Counters: `faces`, `vertices`, `bytes` (size of model.glb).";
   type.params_schema = kSchema;
-  type.inputs = {
-      {"mesh", "mesh", "The mesh to export (mesh.ply), with uvs when textures are given.", false},
-      {"color", "image", "Base color map (sRGB PNG, or EXR converted to sRGB).", true},
-      {"normal", "image", "Tangent-space normal map (PNG, +Y up; or EXR in [-1,1]).", true}};
+  type.inputs = ExportInputPorts();
   type.outputs = {{"model", "model", "The model (model.glb).", false}};
   type.run = &Run;
   return type;
