@@ -1,5 +1,6 @@
 #include "stages/builtin.h"
 
+#include "stages/bake/bake_stages.h"
 #include "stages/export/export_stages.h"
 #include "stages/io/io_stages.h"
 #include "stages/mesh/mesh_stages.h"
@@ -17,6 +18,7 @@ void RegisterBuiltinStages(StageRegistry& registry) {
   RegisterMeshStages(registry);
   RegisterMetricsStages(registry);
   RegisterUvStages(registry);
+  RegisterBakeStages(registry);
   RegisterExportStages(registry);
 }
 

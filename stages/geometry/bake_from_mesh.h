@@ -1,0 +1,34 @@
+// bake.from_mesh: color and normal maps of a low mesh from a high mesh by ray
+// casting (Blender's "selected to active" bake; the paper's Remeshing
+// workflow). Embree 3 for the rays (includes stay in the .cc).
+#pragma once
+
+#include <cstddef>
+
+#include "engine/base/status.h"
+#include "stages/geometry/bake.h"
+#include "stages/geometry/mesh.h"
+
+namespace pb {
+
+struct FromMeshOptions {
+  // Rays leave the low surface along its interpolated normal, forwards and
+  // backwards, up to this distance (meters); the nearer hit wins.
+  double cage_m = 0.05;
+};
+
+struct FromMeshReport {
+  size_t texels_hit = 0;       // baked from the high mesh
+  size_t texels_fallback = 0;  // no hit within the cage: low mesh's own colors
+  double mean_hit_distance_m = 0;
+};
+
+// For every texel of `low` (which needs uvs): the hit's interpolated vertex
+// color and normal on `high` (which needs vertex colors; normals are computed
+// when missing), the normal in the low texel's tangent frame; texels with no
+// hit take the low mesh's interpolated vertex colors and a flat normal (and
+// black if low has no colors). The meshes may have different origins.
+Expected<BakeResult> BakeFromMesh(Mesh low, const Mesh& high, const BakeOptions& options,
+                                  const FromMeshOptions& from_mesh, FromMeshReport* report = nullptr);
+
+}  // namespace pb

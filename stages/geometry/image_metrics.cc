@@ -1,0 +1,1 @@
+// image_metrics: PSNR, SSIM, MS-SSIM, FLIP (in progress)

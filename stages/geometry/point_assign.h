@@ -1,0 +1,66 @@
+// Point-to-face assignment for the paper's point-based detail transfer
+// (paper, "Detail Transfer Algorithm", lines 5-10 and 20-28 of its
+// pseudo-code): every scan point goes to the face of the low mesh it lies on,
+// keeping its barycentric coordinates, and so to a position in the face's UV
+// triangle (texel space, bake_raster.h).
+//
+// "The face it lies on": the nearest face (Euclidean distance from the point
+// to the closest point of the triangle) among those within max_distance_m
+// whose face normal is within max_angle_deg of the point's normal; the
+// point's position on the face is that closest point. Points with no such
+// face are dropped. A spatial grid over the faces keeps this O(N log M)-ish
+// (each point tests the faces registered in its cell), not a per-face scan.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <vector>
+
+#include "engine/base/status.h"
+#include "stages/geometry/mesh.h"
+#include "stages/geometry/point_cloud.h"
+
+namespace pb {
+
+struct AssignOptions {
+  double max_distance_m = 0.01;  // > 0
+  // Angle between the point's normal and the face normal; 180 (or a cloud
+  // without normals) disables the test. Orientation matters: 120 accepts a
+  // point whose normal is 100 degrees off, 45 only nearly parallel ones.
+  double max_angle_deg = 90;
+  int size = 4096;               // texel space of a size x size map
+  int threads = 0;               // 0 = all; never changes the output
+  std::function<void(double)> progress;
+};
+
+struct AssignReport {
+  size_t points = 0;
+  size_t assigned = 0;
+  size_t too_far = 0;       // no face within max_distance_m
+  size_t wrong_angle = 0;   // faces within reach, none within max_angle_deg
+  double mean_distance_m = 0;  // over assigned points
+  size_t faces_with_points = 0;
+};
+
+// The assigned points grouped by face: the points of face f are
+// [face_begin[f], face_begin[f + 1]); within a face sorted by (s, t, color,
+// normal), so the grouping does not depend on the thread count.
+struct MappedPoints {
+  std::vector<uint64_t> face_begin;  // face_count + 1 offsets
+  std::vector<float> st;             // 2 per point: texel-space position
+  std::vector<uint8_t> colors;       // 3 per point, sRGB (empty if the cloud had none)
+  std::vector<float> normals;        // 3 per point, world unit normal (empty if none)
+
+  size_t size() const { return st.size() / 2; }
+};
+
+// Consumes `cloud` and reuses its arrays, so peak memory stays near the
+// cloud's own size (plus 8 bytes per face and the grid). The mesh needs uvs
+// and must fail no Validate; the cloud's origin may differ from the mesh's.
+// Status::Invalid for bad options or input.
+Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
+                                           const AssignOptions& options,
+                                           AssignReport* report = nullptr);
+
+}  // namespace pb

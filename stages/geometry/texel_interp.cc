@@ -1,0 +1,1 @@
+#include "stages/geometry/texel_interp.h"
