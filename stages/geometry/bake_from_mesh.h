@@ -20,7 +20,12 @@ struct FromMeshOptions {
 struct FromMeshReport {
   size_t texels_hit = 0;       // baked from the high mesh
   size_t texels_fallback = 0;  // no hit within the cage: low mesh's own colors
-  double mean_hit_distance_m = 0;
+  double mean_hit_distance_m = 0;  // over the hits, |t| along the normal
+  size_t rays_cast = 0;            // forward + backward, 2 per baked texel
+  // Wall time (seconds) of building Embree's BVH of `high` and of casting
+  // the rays: for measuring, never part of the output.
+  double build_seconds = 0;
+  double ray_seconds = 0;
 };
 
 // For every texel of `low` (which needs uvs): the hit's interpolated vertex
@@ -28,6 +33,11 @@ struct FromMeshReport {
 // when missing), the normal in the low texel's tangent frame; texels with no
 // hit take the low mesh's interpolated vertex colors and a flat normal (and
 // black if low has no colors). The meshes may have different origins.
+// Status::Invalid when `low` has no uvs, `high` has no colors or no faces,
+// either fails Validate, or cage_m is not > 0; Status::Internal with
+// Embree's message when Embree fails. Threads: options.threads (0 = all) for
+// the BVH build (Embree's "threads=N") and the rays; the output does not
+// depend on the count.
 Expected<BakeResult> BakeFromMesh(Mesh low, const Mesh& high, const BakeOptions& options,
                                   const FromMeshOptions& from_mesh, FromMeshReport* report = nullptr);
 
