@@ -5,7 +5,10 @@
 namespace pb {
 
 void RegisterBakeStages(StageRegistry& registry) {
-  (void)registry;  // the stages register here as they land
+  for (StageType type : {VertexColorsBakeStage()}) {
+    [[maybe_unused]] const Status status = registry.Register(std::move(type));
+    assert(status.ok());
+  }
 }
 
 }  // namespace pb
