@@ -1,1 +1,230 @@
-// Tests (in progress).
+// PSNR, SSIM, MS-SSIM and FLIP against the independent reference values of
+// issue 7 (official FLIP v1.6; a float64 SSIM agreeing with scikit-image to
+// 1e-13) and against closed-form cases.
+#include "stages/geometry/image_metrics.h"
+
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <limits>
+
+namespace pb {
+namespace {
+
+constexpr int kSize = 256;
+
+Image MakeRgb(int width, int height, const std::function<int(int, int, int)>& value) {
+  Image image = Image::Make(width, height, 3, Image::PixelType::kU8);
+  for (int y = 0; y < height; ++y)
+    for (int x = 0; x < width; ++x)
+      for (int c = 0; c < 3; ++c) image.at_u8(x, y, c) = uint8_t(value(x, y, c));
+  return image;
+}
+
+// The issue's formulas; integer arithmetic, `/` is floor division (all
+// operands are non-negative here, so C++'s truncation is the same).
+int R0(int x, int y, int c) { return ((x * x + 3 * x * y + 7 * y * y) / 16 + 2 * x + y + 40 * c) % 256; }
+int T1(int x, int y, int c) {
+  return std::clamp(R0(x, y, c) + ((17 * x + 31 * y + (x * y % 13) + 5 * c) % 21) - 10, 0, 255);
+}
+int T2(int x, int y, int c) {
+  int sum = 0;
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx)
+      sum += R0(std::clamp(x + dx, 0, kSize - 1), std::clamp(y + dy, 0, kSize - 1), c);
+  return (sum + 4) / 9;
+}
+
+Image Gray(int width, int height, int level) {
+  return MakeRgb(width, height, [level](int, int, int) { return level; });
+}
+
+struct Reference {
+  const char* name;
+  Image reference, test;
+  double psnr_db, ssim_luma, ssim_rgb, ms_ssim_luma, flip;
+};
+
+std::vector<Reference> ReferenceCases() {
+  const Image r0 = MakeRgb(kSize, kSize, R0);
+  return {
+      {"R0,T1", r0, MakeRgb(kSize, kSize, T1), 32.5856, 0.997619, 0.996503, 0.997406, 0.0620375},
+      {"R0,T2", r0, MakeRgb(kSize, kSize, T2), 11.2835, 0.179604, 0.145733, 0.693916, 0.299146},
+      {"C100,C110", Gray(kSize, kSize, 100), Gray(kSize, kSize, 110), 28.1308, 0.995476, 0.995476,
+       0.999396, 0.153475},
+  };
+}
+
+// Tolerances: the table gives 6 significant digits. PSNR within 1e-4 dB (the
+// table's rounding; 1e-5 relative would be 3e-4 dB), SSIM and MS-SSIM within
+// 1e-5 absolute, FLIP within 1e-3 relative.
+TEST(ImageMetricsTest, ReproducesReferenceTable) {
+  for (const Reference& r : ReferenceCases()) {
+    SCOPED_TRACE(r.name);
+    Expected<ImageMetrics> m = CompareImages(r.reference, r.test);
+    ASSERT_TRUE(m.ok()) << m.status().message();
+    std::printf("%-10s PSNR %.10f  SSIM-Y %.10f  SSIM-RGB %.10f  MS-SSIM %.10f  FLIP %.10f\n", r.name,
+                m->psnr_db, m->ssim_luma, m->ssim_rgb, m->ms_ssim_luma, m->flip_mean);
+    EXPECT_NEAR(m->psnr_db, r.psnr_db, 1e-4);
+    EXPECT_NEAR(m->ssim_luma, r.ssim_luma, 1e-5);
+    EXPECT_NEAR(m->ssim_rgb, r.ssim_rgb, 1e-5);
+    EXPECT_NEAR(m->ms_ssim_luma, r.ms_ssim_luma, 1e-5);
+    EXPECT_NEAR(m->flip_mean, r.flip, 1e-3 * r.flip);
+  }
+}
+
+TEST(ImageMetricsTest, DefaultPpdIsFlipsMonitorSetup) {
+  EXPECT_NEAR(FlipDefaultPpd(), 67.0206, 5e-5);
+}
+
+TEST(ImageMetricsTest, IdenticalImages) {
+  const Image r0 = MakeRgb(kSize, kSize, R0);
+  Expected<ImageMetrics> m = CompareImages(r0, r0);
+  ASSERT_TRUE(m.ok()) << m.status().message();
+  EXPECT_TRUE(std::isinf(m->psnr_db) && m->psnr_db > 0);
+  EXPECT_NEAR(m->ssim_luma, 1.0, 1e-12);
+  EXPECT_NEAR(m->ssim_rgb, 1.0, 1e-12);
+  EXPECT_NEAR(m->ms_ssim_luma, 1.0, 1e-12);
+  EXPECT_EQ(m->flip_mean, 0.0);
+}
+
+// A constant offset of d levels: MSE = d^2 exactly, PSNR = 20 log10(255/d).
+TEST(ImageMetricsTest, ConstantOffsetPsnr) {
+  const Image r0 = MakeRgb(64, 48, [](int x, int y, int c) { return std::min(R0(x, y, c), 200); });
+  for (int d : {1, 3, 17, 55}) {
+    const Image shifted = MakeRgb(64, 48, [d](int x, int y, int c) { return std::min(R0(x, y, c), 200) + d; });
+    Expected<double> psnr = Psnr(r0, shifted);
+    ASSERT_TRUE(psnr.ok());
+    EXPECT_DOUBLE_EQ(*psnr, 20 * std::log10(255.0 / d)) << d;
+  }
+}
+
+// Uniform images: the SSIM map is constant and equals the luminance term
+// (2 a b + C1) / (a^2 + b^2 + C1), variances being zero.
+TEST(ImageMetricsTest, SsimOfUniformImagesIsLuminanceTerm) {
+  Expected<SsimResult> s = Ssim(Gray(40, 30, 100), Gray(40, 30, 110));
+  ASSERT_TRUE(s.ok());
+  const double c1 = (0.01 * 255) * (0.01 * 255);
+  const double expected = (2.0 * 100 * 110 + c1) / (100.0 * 100 + 110.0 * 110 + c1);
+  EXPECT_NEAR(s->luma, expected, 1e-13);
+  EXPECT_NEAR(s->rgb, expected, 1e-13);
+}
+
+TEST(ImageMetricsTest, SymmetricMetrics) {
+  const Image a = MakeRgb(kSize, kSize, R0), b = MakeRgb(kSize, kSize, T1);
+  Expected<ImageMetrics> ab = CompareImages(a, b), ba = CompareImages(b, a);
+  ASSERT_TRUE(ab.ok() && ba.ok());
+  EXPECT_EQ(ab->psnr_db, ba->psnr_db);
+  EXPECT_NEAR(ab->ssim_luma, ba->ssim_luma, 1e-15);
+  EXPECT_NEAR(ab->ssim_rgb, ba->ssim_rgb, 1e-15);
+  EXPECT_NEAR(ab->ms_ssim_luma, ba->ms_ssim_luma, 1e-15);
+  // FLIP is symmetric too: every step treats the two images alike.
+  EXPECT_NEAR(ab->flip_mean, ba->flip_mean, 1e-7);
+}
+
+TEST(ImageMetricsTest, GrayAndAlphaChannelsCountAsRgb) {
+  const Image rgb = MakeRgb(32, 32, [](int x, int y, int) { return (x * 7 + y * 3) % 256; });
+  Image gray = Image::Make(32, 32, 1, Image::PixelType::kU8);
+  Image rgba = Image::Make(32, 32, 4, Image::PixelType::kU8);
+  for (int y = 0; y < 32; ++y)
+    for (int x = 0; x < 32; ++x) {
+      gray.at_u8(x, y, 0) = rgb.at_u8(x, y, 0);
+      for (int c = 0; c < 3; ++c) rgba.at_u8(x, y, c) = rgb.at_u8(x, y, c);
+      rgba.at_u8(x, y, 3) = uint8_t(x * 8);  // ignored
+    }
+  const Image other = Gray(32, 32, 90);
+  Expected<ImageMetrics> m_rgb = CompareImages(rgb, other), m_gray = CompareImages(gray, other),
+                         m_rgba = CompareImages(rgba, other);
+  ASSERT_TRUE(m_rgb.ok() && m_gray.ok() && m_rgba.ok());
+  for (const auto* m : {&*m_gray, &*m_rgba}) {
+    EXPECT_EQ(m->psnr_db, m_rgb->psnr_db);
+    EXPECT_EQ(m->ssim_luma, m_rgb->ssim_luma);
+    EXPECT_EQ(m->flip_mean, m_rgb->flip_mean);
+  }
+  // 32 px is too small for MS-SSIM's five scales: NaN, not an error.
+  EXPECT_TRUE(std::isnan(m_rgb->ms_ssim_luma));
+  EXPECT_FALSE(MsSsim(rgb, other).ok());
+}
+
+TEST(ImageMetricsTest, BadInputIsInvalid) {
+  const Image a = Gray(64, 64, 10), b = Gray(64, 63, 10);
+  for (const Status& s : {Psnr(a, b).status(), Ssim(a, b).status(), MsSsim(a, b).status(),
+                          Flip(a, b).status(), CompareImages(a, b).status()}) {
+    EXPECT_EQ(s.code(), Status::Code::kInvalid);
+    EXPECT_NE(s.message().find("64x63"), std::string::npos) << s.message();
+  }
+  Image wide = Image::Make(64, 64, 3, Image::PixelType::kU16);
+  EXPECT_EQ(Psnr(wide, wide).status().code(), Status::Code::kInvalid);
+  EXPECT_EQ(Flip(a, a, 0.0).status().code(), Status::Code::kInvalid);
+  EXPECT_EQ(Flip(a, a, std::nan("")).status().code(), Status::Code::kInvalid);
+  EXPECT_EQ(Ssim(Gray(10, 64, 1), Gray(10, 64, 1)).status().code(), Status::Code::kInvalid);
+}
+
+// FLIP's error map: size, range, zero where nothing differs far away, and
+// its mean is the reported mean.
+TEST(ImageMetricsTest, FlipMapAndColorMap) {
+  const Image a = Gray(80, 60, 128);
+  Image b = a;
+  for (int c = 0; c < 3; ++c) b.at_u8(40, 30, c) = 255;  // one white pixel
+  Expected<FlipResult> flip = Flip(a, b);
+  ASSERT_TRUE(flip.ok());
+  ASSERT_EQ(flip->error.size(), size_t(80 * 60));
+  double sum = 0;
+  for (float e : flip->error) {
+    EXPECT_GE(e, 0.0f);
+    EXPECT_LE(e, 1.0f);
+    sum += e;
+  }
+  EXPECT_DOUBLE_EQ(flip->mean, sum / (80 * 60));
+  EXPECT_GT(flip->error[30 * 80 + 40], 0.1f);
+  EXPECT_EQ(flip->error[0], 0.0f);  // beyond every filter's reach
+  const Image map = FlipErrorColorMap(*flip);
+  ASSERT_EQ(map.width, 80);
+  ASSERT_EQ(map.channels, 3);
+  EXPECT_EQ((std::array<uint8_t, 3>{map.at_u8(0, 0, 0), map.at_u8(0, 0, 1), map.at_u8(0, 0, 2)}),
+            MagmaColor(0));
+}
+
+// The transcribed colormap: the published end points, and magma's luminance
+// rising monotonically (a wrong digit in the table would likely break it).
+TEST(ImageMetricsTest, MagmaTable) {
+  EXPECT_EQ(MagmaColor(0), (std::array<uint8_t, 3>{0, 0, 4}));
+  EXPECT_EQ(MagmaColor(255), (std::array<uint8_t, 3>{252, 253, 191}));
+  double previous = -1;
+  for (int i = 0; i < 256; ++i) {
+    const auto c = MagmaColor(i);
+    auto linear = [](uint8_t v) {
+      const double s = v / 255.0;
+      return s <= 0.04045 ? s / 12.92 : std::pow((s + 0.055) / 1.055, 2.4);
+    };
+    const double luma = 0.2126 * linear(c[0]) + 0.7152 * linear(c[1]) + 0.0722 * linear(c[2]);
+    EXPECT_GE(luma, previous) << i;
+    previous = luma;
+  }
+}
+
+// Rows are summed in a fixed order: the same bits on 1 and 2 threads.
+TEST(ImageMetricsTest, SameResultOnAnyThreadCount) {
+  const Image a = MakeRgb(kSize, kSize, R0), b = MakeRgb(kSize, kSize, T2);
+  ImageMetrics m[2];
+  FlipResult flip[2];
+  for (int threads : {1, 2}) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] {
+      Expected<ImageMetrics> r = CompareImages(a, b, {}, &flip[threads - 1]);
+      ASSERT_TRUE(r.ok());
+      m[threads - 1] = *r;
+    });
+  }
+  EXPECT_EQ(m[0].ssim_luma, m[1].ssim_luma);
+  EXPECT_EQ(m[0].ssim_rgb, m[1].ssim_rgb);
+  EXPECT_EQ(m[0].ms_ssim_luma, m[1].ms_ssim_luma);
+  EXPECT_EQ(m[0].flip_mean, m[1].flip_mean);
+  EXPECT_EQ(flip[0].error, flip[1].error);
+}
+
+}  // namespace
+}  // namespace pb

@@ -1,0 +1,105 @@
+// Image-quality metrics between a reference and a test image of the same
+// size: PSNR, SSIM, MS-SSIM and FLIP (LDR).
+//
+// Inputs are 8-bit sRGB images (Image::PixelType::kU8) with 1 to 4 channels:
+// gray (1, 2 channels) counts as R = G = B, alpha (channel 2 or 4) is ignored,
+// so every metric uses all pixels. Sizes must match (Status::Invalid
+// otherwise); x = column, y = row as in image.h.
+//
+// Definitions (docs/metrics.md has the reference values they reproduce):
+//  - PSNR: 10 log10(255^2 / MSE), MSE over all pixels and the three channels
+//    R, G, B. Identical images give +infinity.
+//  - SSIM: Wang, Bovik, Sheikh, Simoncelli 2004, "Image quality assessment:
+//    from error visibility to structural similarity", IEEE TIP 13(4).
+//    11x11 Gaussian window of sigma 1.5 (normalized to sum 1), K1 = 0.01,
+//    K2 = 0.03, L = 255, population (not sample) covariances, computed in
+//    double, averaged over the valid region: the (W-10) x (H-10) positions
+//    where the whole window lies inside the image. This is scikit-image's
+//    structural_similarity(gaussian_weights=True, sigma=1.5,
+//    use_sample_covariance=False, data_range=255) cropped the same way.
+//    Two variants: on luma Y = 0.299 R + 0.587 G + 0.114 B (in double, not
+//    rounded) and the mean of the SSIMs of R, G and B.
+//  - MS-SSIM: Wang, Simoncelli, Bovik 2003, "Multi-scale structural
+//    similarity for image quality assessment", on luma. Five scales with
+//    weights 0.0448, 0.2856, 0.3001, 0.2363, 0.1333; between scales a 2x2
+//    box average (an odd last row / column is dropped). Scales 1-4
+//    contribute the valid-region mean of the contrast-structure term cs,
+//    scale 5 the valid-region mean SSIM (luminance x cs):
+//      MS-SSIM = prod_{j=1..4} mean(cs_j)^w_j * mean(ssim_5)^w_5.
+//    A negative mean cs (strongly anti-correlated images) makes the product
+//    undefined; it is then NaN. Needs the coarsest scale to hold a window:
+//    both sides >= 11 * 16 = 176 pixels.
+//  - FLIP: Andersson, Nilsson, Akenine-Moeller, Oskarsson, Astrom, Fairchild
+//    2020, "FLIP: A Difference Evaluator for Alternating Images", HPG, in its
+//    LDR form as NVIDIA's reference implementation v1.6 computes it (spatial
+//    CSF filtering in YCxCz, Hunt-adjusted HyAB color difference, edge and
+//    point feature difference; single-precision per-pixel arithmetic, edges
+//    clamped). The mean is summed in double.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "engine/base/status.h"
+#include "stages/geometry/image.h"
+
+namespace pb {
+
+// FLIP's default observer: 0.7 m from a 0.7 m wide, 3840-pixel monitor,
+// 0.7 * 3840 / 0.7 * pi / 180 pixels per degree evaluated in float as the
+// reference implementation does (67.02064514160156).
+double FlipDefaultPpd();
+
+// SSIM of two gray planes of `width` x `height` doubles (row-major), as
+// defined above. Status::Invalid when a side is below 11 pixels.
+Expected<double> SsimPlane(const std::vector<double>& reference, const std::vector<double>& test,
+                           int width, int height);
+
+struct SsimResult {
+  double luma = 0;  // on Y = 0.299 R + 0.587 G + 0.114 B
+  double rgb = 0;   // mean of the SSIMs of R, G, B
+};
+
+// Status::Invalid: size mismatch, not 8-bit, or a side below 11 pixels.
+Expected<double> Psnr(const Image& reference, const Image& test);
+Expected<SsimResult> Ssim(const Image& reference, const Image& test);
+// Status::Invalid also when a side is below 176 pixels.
+Expected<double> MsSsim(const Image& reference, const Image& test);
+
+struct FlipResult {
+  int width = 0;
+  int height = 0;
+  std::vector<float> error;  // width * height per-pixel FLIP values in [0,1], row-major
+  double mean = 0;           // mean of `error`, summed in double
+};
+// `ppd`: pixels per degree of visual angle (> 0).
+Expected<FlipResult> Flip(const Image& reference, const Image& test, double ppd = FlipDefaultPpd());
+
+// The FLIP error map as an 8-bit RGB image through the "magma" colormap
+// (matplotlib's, by Smith and van der Walt, CC0; the map FLIP's tool uses):
+// value v picks entry round(255 v), as the FLIP tool does.
+Image FlipErrorColorMap(const FlipResult& flip);
+// Entry `index` (0..255) of that colormap as 8-bit sRGB (for legends).
+std::array<uint8_t, 3> MagmaColor(int index);
+
+struct ImageMetricsOptions {
+  double flip_ppd = FlipDefaultPpd();
+};
+
+// All four metrics. For images too small for SSIM (< 11 px) or MS-SSIM
+// (< 176 px) those values are NaN instead of an error, so small images still
+// get PSNR and FLIP.
+struct ImageMetrics {
+  double psnr_db = 0;  // +infinity for identical images
+  double ssim_luma = 0;
+  double ssim_rgb = 0;
+  double ms_ssim_luma = 0;
+  double flip_mean = 0;
+};
+// `flip` (optional) receives the FLIP error map.
+Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
+                                     const ImageMetricsOptions& options = {},
+                                     FlipResult* flip = nullptr);
+
+}  // namespace pb
