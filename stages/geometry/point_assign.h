@@ -10,6 +10,9 @@
 // point's position on the face is that closest point. Points with no such
 // face are dropped. A spatial grid over the faces keeps this O(N log M)-ish
 // (each point tests the faces registered in its cell), not a per-face scan.
+// Faces of zero area are never chosen. A point whose normal is zero or not
+// finite skips the angle test; a point with a non-finite position is dropped
+// and counted in AssignReport::non_finite.
 #pragma once
 
 #include <cstddef>
@@ -39,6 +42,8 @@ struct AssignReport {
   size_t assigned = 0;
   size_t too_far = 0;       // no face within max_distance_m
   size_t wrong_angle = 0;   // faces within reach, none within max_angle_deg
+  size_t non_finite = 0;    // NaN or infinite position (dropped)
+  // points == assigned + too_far + wrong_angle + non_finite
   double mean_distance_m = 0;  // over assigned points
   size_t faces_with_points = 0;
 };
@@ -56,9 +61,15 @@ struct MappedPoints {
 };
 
 // Consumes `cloud` and reuses its arrays, so peak memory stays near the
-// cloud's own size (plus 8 bytes per face and the grid). The mesh needs uvs
-// and must fail no Validate; the cloud's origin may differ from the mesh's.
-// Status::Invalid for bad options or input.
+// cloud's own size (plus O(faces + grid): ~8 bytes per face and thread, the
+// grid's cell table and face lists): positions become st in place, the
+// points are bucket-sorted by face in place, and the memory of the dropped
+// points and of the third st float is returned to the system (the vectors
+// keep their capacity; the pages past size() are released). The mesh needs
+// uvs, finite positions and uvs, and must fail no Validate; the cloud's origin
+// may differ from the mesh's (the work is done in the mesh's frame, the offset
+// in double). Status::Invalid for bad options (max_distance_m <= 0 or not
+// finite, max_angle_deg outside [0, 180], size < 1) or input.
 Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
                                            const AssignOptions& options,
                                            AssignReport* report = nullptr);
