@@ -237,8 +237,8 @@ Expected<double> MsSsim(const Image& reference, const Image& test) {
   for (int scale = 0; scale < kMsSsimScales; ++scale) {
     const SsimMeans means = SsimValidMeans(pa, pb, w, h);
     const double term = scale + 1 < kMsSsimScales ? means.cs : means.ssim;
-    // pow of a negative base with a fractional weight: NaN, as documented.
-    product *= std::pow(term, kMsSsimWeights[scale]);
+    // A negative base has no real fractional power: 0, as documented.
+    product *= std::pow(std::max(term, 0.0), kMsSsimWeights[scale]);
     if (scale + 1 < kMsSsimScales) {
       pa = Downsample(pa, w, h);
       pb = Downsample(pb, w, h);

@@ -26,9 +26,11 @@
 //    contribute the valid-region mean of the contrast-structure term cs,
 //    scale 5 the valid-region mean SSIM (luminance x cs):
 //      MS-SSIM = prod_{j=1..4} mean(cs_j)^w_j * mean(ssim_5)^w_5.
-//    A negative mean cs (strongly anti-correlated images) makes the product
-//    undefined; it is then NaN. Needs the coarsest scale to hold a window:
-//    both sides >= 11 * 16 = 176 pixels.
+//    A negative term (anti-correlated or unrelated structure at a scale)
+//    would make the fractional power undefined; such a term counts as 0, so
+//    MS-SSIM is 0, as TensorFlow's ssim_multiscale does (it applies a ReLU).
+//    Needs the coarsest scale to hold a window: both sides >= 11 * 16 = 176
+//    pixels.
 //  - FLIP: Andersson, Nilsson, Akenine-Moeller, Oskarsson, Astrom, Fairchild
 //    2020, "FLIP: A Difference Evaluator for Alternating Images", HPG, in its
 //    LDR form as NVIDIA's reference implementation v1.6 computes it (spatial

@@ -113,6 +113,18 @@ TEST(ImageMetricsTest, SsimOfUniformImagesIsLuminanceTerm) {
   EXPECT_NEAR(s->rgb, expected, 1e-13);
 }
 
+// An image against its negative: SSIM strongly negative, and MS-SSIM 0
+// rather than NaN (negative terms count as 0).
+TEST(ImageMetricsTest, NegativeImage) {
+  const Image a = MakeRgb(kSize, kSize, R0);
+  const Image b = MakeRgb(kSize, kSize, [](int x, int y, int c) { return 255 - R0(x, y, c); });
+  Expected<ImageMetrics> m = CompareImages(a, b);
+  ASSERT_TRUE(m.ok());
+  EXPECT_LT(m->ssim_rgb, -0.5);
+  EXPECT_EQ(m->ms_ssim_luma, 0.0);
+  EXPECT_GT(m->flip_mean, 0.3);
+}
+
 TEST(ImageMetricsTest, SymmetricMetrics) {
   const Image a = MakeRgb(kSize, kSize, R0), b = MakeRgb(kSize, kSize, T1);
   Expected<ImageMetrics> ab = CompareImages(a, b), ba = CompareImages(b, a);

@@ -3,12 +3,15 @@
 #include <cassert>
 
 #include "stages/metrics/geometry_stage.h"
+#include "stages/metrics/image_stage.h"
 
 namespace pb {
 
 void RegisterMetricsStages(StageRegistry& registry) {
   [[maybe_unused]] const Status status = registry.Register(GeometryMetricsStage());
   assert(status.ok());
+  [[maybe_unused]] const Status image_status = registry.Register(ImageMetricsStage());
+  assert(image_status.ok());
 }
 
 }  // namespace pb
