@@ -26,10 +26,7 @@
 
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Spatial_sort_traits_adapter_2.h>
 #include <CGAL/Triangulation_vertex_base_with_info_2.h>
-#include <CGAL/property_map.h>
-#include <CGAL/spatial_sort.h>
 
 #include <algorithm>
 #include <cassert>
@@ -302,7 +299,7 @@ struct InterpScratch {
   // kDelaunay.
   Delaunay triangulation;
   std::vector<Point> points;
-  std::vector<std::size_t> order;
+  std::vector<std::pair<uint32_t, uint32_t>> order;  // (Morton code, sample)
   std::vector<Value> vertex_values;  // per triangulation vertex (its info)
   std::vector<uint32_t> vertex_counts;
 
@@ -382,7 +379,7 @@ void InterpolateSplat(InterpScratch& s, std::span<const BakeTexel> texels,
     const Value& value = s.values[p];
     s.grid.ForEachWithin(s.texel_positions, s.positions[p][0], s.positions[p][1], radius,
                          [&](uint32_t i, double d2) {
-                           double w = std::exp(-d2 * inv_two_sigma2);
+                           double w = std::exp(float(-d2 * inv_two_sigma2));
                            s.texel_weights[i] += w;
                            for (int c = 0; c < 6; ++c) s.texel_values[i][c] += w * value[c];
                          });
@@ -408,6 +405,34 @@ void InterpolateSplat(InterpScratch& s, std::span<const BakeTexel> texels,
   for (size_t i = 0; i < texels.size(); ++i) {
     if (s.texel_weights[i] == 0) s.texel_values[i] = s.pull_push.At(texels[i].x, texels[i].y);
   }
+}
+
+// The samples from `first` on in Z (Morton) order of their positions
+// quantized to 16 bits over their bounding box, ties by index: a spatial
+// sort for the insertion. CGAL's spatial_sort (a Hilbert median sort after
+// a shuffle) measured 10% slower per face for ~120 points.
+void MortonOrder(std::span<const Position> positions, size_t first,
+                 std::vector<std::pair<uint32_t, uint32_t>>& order) {
+  order.clear();
+  if (positions.size() <= first) return;
+  float s_min = positions[first][0], s_max = s_min, t_min = positions[first][1], t_max = t_min;
+  for (size_t i = first; i < positions.size(); ++i) {
+    s_min = std::min(s_min, positions[i][0]), s_max = std::max(s_max, positions[i][0]);
+    t_min = std::min(t_min, positions[i][1]), t_max = std::max(t_max, positions[i][1]);
+  }
+  double scale = 65535.0 / std::max({double(s_max) - s_min, double(t_max) - t_min, 1e-30});
+  auto spread = [](uint32_t x) {  // bit i to bit 2i
+    x = (x | (x << 8)) & 0x00ff00ffu;
+    x = (x | (x << 4)) & 0x0f0f0f0fu;
+    x = (x | (x << 2)) & 0x33333333u;
+    return (x | (x << 1)) & 0x55555555u;
+  };
+  for (size_t i = first; i < positions.size(); ++i) {
+    auto qs = uint32_t(std::min(65535.0, (double(positions[i][0]) - s_min) * scale));
+    auto qt = uint32_t(std::min(65535.0, (double(positions[i][1]) - t_min) * scale));
+    order.push_back({spread(qs) | (spread(qt) << 1), uint32_t(i)});
+  }
+  std::sort(order.begin(), order.end());
 }
 
 // Linear interpolation in the finite triangle `face` at q; barycentric
@@ -449,17 +474,13 @@ void InterpolateDelaunay(InterpScratch& s, std::span<const BakeTexel> texels) {
   }
 
   // Corners first, so the hull is the face from the start, then the points
-  // in spatial order (CGAL's Hilbert sort, deterministic); a sample that
-  // lands on an existing vertex is averaged into it.
+  // in Morton order, so that each insertion starts its walk next to the
+  // previous one; a sample that lands on an existing vertex is averaged
+  // into it.
   dt.clear();
   s.vertex_values.clear();
   s.vertex_counts.clear();
-  s.order.clear();
-  for (size_t i = 3; i < s.points.size(); ++i) s.order.push_back(i);
-  using PointMap = CGAL::Pointer_property_map<Point>::type;
-  using SortTraits = CGAL::Spatial_sort_traits_adapter_2<Kernel, PointMap>;
-  CGAL::spatial_sort(s.order.begin(), s.order.end(),
-                     SortTraits(CGAL::make_property_map(s.points), Kernel()));
+  MortonOrder(s.positions, 3, s.order);
   Delaunay::Face_handle hint;
   auto insert = [&](size_t i) {
     size_t before = dt.number_of_vertices();
@@ -476,7 +497,7 @@ void InterpolateDelaunay(InterpScratch& s, std::span<const BakeTexel> texels) {
     hint = v->face();
   };
   for (size_t i = 0; i < 3; ++i) insert(i);
-  for (size_t i : s.order) insert(i);
+  for (const auto& [code, i] : s.order) insert(i);
   for (size_t v = 0; v < s.vertex_values.size(); ++v) {
     if (s.vertex_counts[v] == 1) continue;
     for (double& x : s.vertex_values[v]) x /= s.vertex_counts[v];
