@@ -22,10 +22,13 @@ struct FromMeshReport {
   size_t texels_fallback = 0;  // no hit within the cage: low mesh's own colors
   double mean_hit_distance_m = 0;  // over the hits, |t| along the normal
   size_t rays_cast = 0;            // forward + backward, 2 per baked texel
-  // Wall time (seconds) of building Embree's BVH of `high` and of casting
-  // the rays: for measuring, never part of the output.
+  // Wall time and process CPU time (all threads), seconds, of building
+  // Embree's BVH of `high` and of casting the rays: for measuring (the CPU
+  // time stays meaningful on a loaded machine), never part of the output.
   double build_seconds = 0;
   double ray_seconds = 0;
+  double build_cpu_seconds = 0;
+  double ray_cpu_seconds = 0;
 };
 
 // For every texel of `low` (which needs uvs): the hit's interpolated vertex

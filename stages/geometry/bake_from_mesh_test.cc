@@ -381,12 +381,13 @@ TEST(BakeFromMeshTest, DISABLED_Timing) {
       std::chrono::duration<double>(std::chrono::steady_clock::now() - bake_start).count();
   ASSERT_TRUE(result.ok()) << result.status().message();
   std::printf(
-      "low %zu faces, high %zu faces, %d^2: meshes made in %.2f s; bake %.2f s (BVH %.2f s, "
-      "rays %.2f s for %zu rays = %.1f Mrays/s); hit %zu, fallback %zu, mean distance %.5f m, "
-      "gutter %zu\n",
+      "low %zu faces, high %zu faces, %d^2: meshes made in %.2f s; bake %.2f s wall (BVH %.2f s "
+      "wall, %.2f s CPU; rays %.2f s wall, %.2f s CPU for %zu rays = %.1f Mrays per CPU-second); "
+      "hit %zu, fallback %zu, mean distance %.5f m, gutter %zu\n",
       result->mesh.face_count(), high.face_count(), options.size, make_s, bake_s,
-      report.build_seconds, report.ray_seconds, report.rays_cast,
-      report.rays_cast / report.ray_seconds * 1e-6, report.texels_hit, report.texels_fallback,
+      report.build_seconds, report.build_cpu_seconds, report.ray_seconds, report.ray_cpu_seconds,
+      report.rays_cast, report.rays_cast / report.ray_cpu_seconds * 1e-6, report.texels_hit,
+      report.texels_fallback,
       report.mean_hit_distance_m, result->gutter_texels);
 }
 
