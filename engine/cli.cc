@@ -218,11 +218,15 @@ int CmdStages(const std::string& id, Registry& registry) {
 
 }  // namespace
 
-int CliMain(int argc, char** argv, Registry& registry) {
+int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliCommand>& extra) {
   for (const std::string& e : registry.TakeErrors())
     std::fprintf(stderr, "internal error registering built-in stages: %s\n", e.c_str());
   // The hidden child-process entry point, kept out of CLI11 for speed.
   if (argc == 3 && std::string(argv[1]) == "__stage") return RunStageSubcommand(argv[2], registry);
+  // Extra commands parse their own arguments.
+  if (argc >= 2)
+    for (const CliCommand& command : extra)
+      if (command.name == argv[1]) return command.run(std::vector<std::string>(argv + 2, argv + argc));
 
   CLI::App app{"pointbake: point clouds to VR-ready textured meshes, as cached workflows"};
   app.require_subcommand(1);
@@ -262,6 +266,8 @@ int CliMain(int argc, char** argv, Registry& registry) {
   cache_gc->add_option("--max-size", max_size, "Size to keep, e.g. 20G")->required();
   bool repair = false;
   cache_verify->add_flag("--repair", repair, "Remove what is corrupt");
+  // Listed in --help only; dispatched above.
+  for (const CliCommand& command : extra) app.add_subcommand(command.name, command.summary);
 
   try {
     app.parse(argc, argv);

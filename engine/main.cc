@@ -1,9 +1,10 @@
-// pointbake: the engine's CLI with the built-in stages.
+// pointbake: the engine's CLI with the built-in stages and commands.
 #include "engine/cli.h"
 #include "stages/builtin.h"
+#include "stages/metrics/compare_command.h"
 
 int main(int argc, char** argv) {
   pb::Registry registry;
   pb::RegisterBuiltinStages(registry);
-  return pb::CliMain(argc, argv, registry);
+  return pb::CliMain(argc, argv, registry, {pb::CompareCommand()});
 }
