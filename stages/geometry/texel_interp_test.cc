@@ -386,6 +386,108 @@ TEST(TexelInterpTest, SameInputsGiveIdenticalOutputsAcrossReuseAndMoves) {
   }
 }
 
+// An independent check of the triangulation: at every texel the output must
+// be the linear interpolation in some triangle of samples that contains the
+// texel's sample point and whose circumcircle holds no other sample (brute
+// force over all triples).
+TEST(TexelInterpTest, DelaunayMatchesABruteForceEmptyCircumcircleTriangle) {
+  std::array<TexelSample, 3> corners = {Sample(0.5f, 0.5f, {100, 0, 0}),
+                                        Sample(14.5f, 2.5f, {0, 100, 0}),
+                                        Sample(3.5f, 13.5f, {0, 0, 100})};
+  auto texels = TexelsInside(corners);
+  for (uint32_t seed = 0; seed < 5; ++seed) {
+    auto points = RandomPoints(corners, 14, 100 + seed);
+    std::vector<TexelSample> all(corners.begin(), corners.end());
+    all.insert(all.end(), points.begin(), points.end());
+    Output out = Interp(corners, points, texels, TexelInterpolation::kDelaunay);
+    const size_t n = all.size();
+    for (size_t i = 0; i < texels.size(); ++i) {
+      double qs = texels[i].s, qt = texels[i].t;
+      bool found = false;
+      for (size_t a = 0; a < n && !found; ++a) {
+        for (size_t b = a + 1; b < n && !found; ++b) {
+          for (size_t c = b + 1; c < n && !found; ++c) {
+            const TexelSample &A = all[a], &B = all[b], &C = all[c];
+            double as = A.s, at = A.t, bs = B.s, bt = B.t, cs = C.s, ct = C.t;
+            double det = (bt - ct) * (as - cs) + (cs - bs) * (at - ct);
+            if (std::abs(det) < 1e-9) continue;
+            double w0 = ((bt - ct) * (qs - cs) + (cs - bs) * (qt - ct)) / det;
+            double w1 = ((ct - at) * (qs - cs) + (as - cs) * (qt - ct)) / det;
+            double w2 = 1 - w0 - w1;
+            // Texels on the hull edges have a weight ~0 up to rounding.
+            if (w0 < -1e-9 || w1 < -1e-9 || w2 < -1e-9) continue;
+            // Circumcircle empty: the in-circle determinant of every other
+            // sample, oriented by the triangle, is not positive beyond its
+            // rounding error.
+            auto strictly_inside = [&](const TexelSample& d) {
+              double ax = as - d.s, ay = at - d.t, bx = bs - d.s, by = bt - d.t;
+              double cx = cs - d.s, cy = ct - d.t;
+              double t0 = (ax * ax + ay * ay) * (bx * cy - cx * by);
+              double t1 = -(bx * bx + by * by) * (ax * cy - cx * ay);
+              double t2 = (cx * cx + cy * cy) * (ax * by - bx * ay);
+              double v = det > 0 ? t0 + t1 + t2 : -(t0 + t1 + t2);
+              return v > 1e-9 * (std::abs(t0) + std::abs(t1) + std::abs(t2));
+            };
+            bool empty = true;
+            for (size_t d = 0; d < n && empty; ++d) {
+              if (d != a && d != b && d != c && strictly_inside(all[d])) empty = false;
+            }
+            if (!empty) continue;
+            bool match = true;
+            for (int k = 0; k < 3; ++k) {
+              double expected = w0 * A.color[k] + w1 * B.color[k] + w2 * C.color[k];
+              match = match && std::abs(expected - out.colors[i][k]) < 1e-3;
+            }
+            found = match;
+          }
+        }
+      }
+      EXPECT_TRUE(found) << "seed " << seed << " texel " << texels[i].x << "," << texels[i].y;
+    }
+  }
+}
+
+// Many points and texels (the bucket grids' ring searches over many cells),
+// and a long thin diagonal face whose texel bounding box is far larger than
+// its texel count (pull-push on a coarsened grid).
+TEST(TexelInterpTest, LargeAndSliverFacesStayWithinTheSampleRange) {
+  auto big = RightTriangle();
+  for (auto& c : big) c.s = 0.5f + (c.s - 0.5f) * 8, c.t = 0.5f + (c.t - 0.5f) * 8;  // legs 128
+  auto big_texels = TexelsInside(big);
+  auto big_points = RandomPoints(big, 5000, 21);
+  std::array<TexelSample, 3> sliver = {Sample(0.5f, 0.5f, {10, 10, 10}),
+                                       Sample(3000.5f, 3000.5f, {20, 20, 20}),
+                                       Sample(3000.5f, 3001.5f, {30, 30, 30})};
+  std::vector<BakeTexel> sliver_texels;
+  for (int k = 0; k <= 3000; ++k) {
+    BakeTexel texel;
+    texel.x = k, texel.y = k, texel.s = k + 0.5f, texel.t = k + 0.5f;
+    texel.bary = Bary(sliver, texel.s, texel.t);
+    sliver_texels.push_back(texel);
+  }
+  std::vector<TexelSample> sliver_points = {Sample(1000.5f, 1000.7f, {40, 40, 40}),
+                                            Sample(2000.5f, 2000.9f, {50, 50, 50})};
+  for (TexelInterpolation mode : kAllModes) {
+    TexelInterpolationOptions options;
+    options.mode = mode;
+    options.splat_sigma_texels = 0.4f;  // leaves most texels uncovered
+    FaceInterpolator interpolator;
+    Output out = Interp(interpolator, big, big_points, big_texels, options);
+    for (size_t i = 0; i < big_texels.size(); ++i) {
+      for (int k = 0; k < 3; ++k) {
+        EXPECT_GE(out.colors[i][k], -1e-3f) << int(mode);
+        EXPECT_LE(out.colors[i][k], 255 + 1e-3f) << int(mode);
+      }
+      EXPECT_NEAR(Length(out.normals[i]), 1, 1e-5);
+    }
+    out = Interp(interpolator, sliver, sliver_points, sliver_texels, options);
+    for (size_t i = 0; i < sliver_texels.size(); ++i) {
+      EXPECT_GE(out.colors[i][0], 10 - 1e-3f) << int(mode) << " texel " << i;
+      EXPECT_LE(out.colors[i][0], 50 + 1e-3f) << int(mode) << " texel " << i;
+    }
+  }
+}
+
 // Timing tool, not a test: run with
 //   texel_interp_test --gtest_also_run_disabled_tests --gtest_filter='*DISABLED_Timing*'
 // 2.5e4 random faces of ~120 points and ~50 texels (the 3e7-point,
