@@ -5,7 +5,7 @@
 namespace pb {
 
 void RegisterBakeStages(StageRegistry& registry) {
-  for (StageType type : {VertexColorsBakeStage(), FromMeshBakeStage()}) {
+  for (StageType type : {VertexColorsBakeStage(), FromMeshBakeStage(), FromPointsBakeStage()}) {
     [[maybe_unused]] const Status status = registry.Register(std::move(type));
     assert(status.ok());
   }
