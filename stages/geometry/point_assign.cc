@@ -15,12 +15,14 @@
 //
 // Structure: a uniform grid over the faces (dense, or hashed when a dense one
 // would be large), each face registered in the cells that its bounding box
-// expanded by max_distance overlaps and that lie within max_distance (plus
-// the cell's half-diagonal) of its plane; a point tests the faces of its own
-// cell. The results overwrite the cloud's positions in place as (s, t, face);
-// an in-place two-level bucket sort (American flag: 1024 face ranges, then
-// faces) groups the points by face across positions, colors and normals; a
-// per-face sort orders each face's points; st is compacted from 3 floats to 2.
+// expanded by max_distance overlaps and whose centre lies within
+// max_distance + half the cell diagonal of the triangle; a point tests only
+// the faces of its own cell, the previous point's face first, each through a
+// cheap lower bound (plane and edge lines) before the exact closest point.
+// The results overwrite the cloud's positions in place as (s, t, face); an
+// in-place two-level bucket sort (American flag: 256 face ranges, then faces)
+// groups the points by face across positions, colors and normals; a per-face
+// sort orders each face's points; st is compacted from 3 floats to 2.
 #include "stages/geometry/point_assign.h"
 
 #include <sys/mman.h>
@@ -46,6 +48,8 @@ namespace pb {
 namespace {
 
 constexpr uint32_t kDropped = 0xffffffffu;
+// Grid cell edge relative to the mean triangle edge (see FaceGrid::Build).
+constexpr double kCellPerMeanEdge = 0.5;
 
 // A face as the inner loop reads it: corners relative to the mesh's origin
 // (as the mesh stores them) and the unit face normal.
@@ -54,17 +58,47 @@ struct FaceGeom {
   float n[3];
 };
 
+// The per-point test's view of a face: its plane and the three in-plane
+// lines through its edges, unit normals (in-plane ones pointing out). For a
+// point at height h over the plane and `out` past the farthest edge line,
+// h^2 + out^2 is a lower bound of its squared distance to the triangle, and
+// exact (h^2) when the point projects inside.
+struct FaceBound {
+  float plane[4];    // n, n . a
+  float edge[3][4];  // m_k, m_k . (a point of edge k)
+};
+
+FaceBound MakeBound(const FaceGeom& g) {
+  FaceBound b;
+  const double n[3] = {g.n[0], g.n[1], g.n[2]};
+  b.plane[0] = g.n[0], b.plane[1] = g.n[1], b.plane[2] = g.n[2];
+  b.plane[3] = float(n[0] * g.a[0] + n[1] * g.a[1] + n[2] * g.a[2]);
+  const float* v[3] = {g.a, g.b, g.c};
+  for (int k = 0; k < 3; ++k) {
+    const float* p = v[k];
+    const float* q = v[(k + 1) % 3];
+    const double e[3] = {double(q[0]) - p[0], double(q[1]) - p[1], double(q[2]) - p[2]};
+    // m = e x n points out of a counter-clockwise triangle.
+    double m[3] = {e[1] * n[2] - e[2] * n[1], e[2] * n[0] - e[0] * n[2], e[0] * n[1] - e[1] * n[0]};
+    const double len = std::sqrt(m[0] * m[0] + m[1] * m[1] + m[2] * m[2]);
+    for (int j = 0; j < 3; ++j) m[j] /= len;
+    for (int j = 0; j < 3; ++j) b.edge[k][j] = float(m[j]);
+    b.edge[k][3] = float(double(b.edge[k][0]) * p[0] + double(b.edge[k][1]) * p[1] + double(b.edge[k][2]) * p[2]);
+  }
+  return b;
+}
+
 // Squared distance from p to triangle f and the barycentric coordinates of
 // the closest point (Ericson, Real-Time Collision Detection, 5.1.5). The
 // triangle must have nonzero area.
-double ClosestOnTriangle(const double p[3], const FaceGeom& f, double bary[3]) {
+double ClosestOnTriangle(const double p[3], const float* a, const float* b, const float* c, double bary[3]) {
   double ab[3], ac[3], ap[3], bp[3], cp[3];
   for (int k = 0; k < 3; ++k) {
-    ab[k] = double(f.b[k]) - f.a[k];
-    ac[k] = double(f.c[k]) - f.a[k];
-    ap[k] = p[k] - f.a[k];
-    bp[k] = p[k] - f.b[k];
-    cp[k] = p[k] - f.c[k];
+    ab[k] = double(b[k]) - a[k];
+    ac[k] = double(c[k]) - a[k];
+    ap[k] = p[k] - a[k];
+    bp[k] = p[k] - b[k];
+    cp[k] = p[k] - c[k];
   }
   auto dot = [](const double* x, const double* y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
   double v = 0, w = 0;
@@ -104,31 +138,48 @@ double ClosestOnTriangle(const double p[3], const FaceGeom& f, double bary[3]) {
 }
 
 // Faces by grid cell. Cell (i, j, k) covers min + [i, i+1) * cell_m etc.
+// Dense (an offset per cell of the bounding box) when that costs no more
+// than the face lists themselves; otherwise the occupied cells in an
+// open-addressing hash table, as a surface fills few cells of its box.
 class FaceGrid {
  public:
+  // The last cell looked up, for points that come in spatial runs.
+  struct Cache {
+    uint64_t idx[3] = {~uint64_t(0), 0, 0};
+    std::pair<uint32_t, uint32_t> range;
+  };
   // [begin, end) of the cell's faces in faces(); empty outside the grid.
-  std::pair<uint32_t, uint32_t> CellOf(const double q[3]) const {
+  std::pair<uint32_t, uint32_t> CellOf(const double q[3], Cache* cache) const {
     uint64_t idx[3];
     for (int k = 0; k < 3; ++k) {
-      const double f = std::floor((q[k] - min_[k]) * inv_cell_);
+      // Truncation is floor here (f >= 0), and no libm call.
+      const double f = (q[k] - min_[k]) * inv_cell_;
       if (!(f >= 0 && f < double(n_[k]))) return {0, 0};
       idx[k] = uint64_t(f);
     }
-    if (dense_) {
-      const uint64_t c = (idx[2] * n_[1] + idx[1]) * n_[0] + idx[0];
-      return {cell_begin_[c], cell_begin_[c + 1]};
-    }
-    const uint64_t key = Key(idx[0], idx[1], idx[2]);
-    for (uint64_t slot = Hash(key);; slot = (slot + 1) & mask_) {
-      const Slot& s = slots_[slot];
-      if (s.key == key) return {s.begin, s.end};
-      if (s.key == kEmptyKey) return {0, 0};
-    }
+    if (idx[0] == cache->idx[0] && idx[1] == cache->idx[1] && idx[2] == cache->idx[2]) return cache->range;
+    std::copy(idx, idx + 3, cache->idx);
+    cache->range = Lookup(idx);
+    return cache->range;
   }
+
+ private:
+  std::pair<uint32_t, uint32_t> Lookup(const uint64_t idx[3]) const {
+    uint64_t c;
+    if (dense_) {
+      c = (idx[2] * n_[1] + idx[1]) * n_[0] + idx[0];
+    } else {
+      c = Find(Key(idx[0], idx[1], idx[2]));
+      if (c == kNone) return {0, 0};
+    }
+    return {cell_begin_[c], cell_begin_[c + 1]};
+  }
+
+ public:
   const std::vector<uint32_t>& faces() const { return faces_; }
   double cell_m() const { return cell_m_; }
   bool dense() const { return dense_; }
-  size_t occupied_cells() const { return occupied_; }
+  size_t cells() const { return cell_begin_.size() - 1; }
   size_t memory_bytes() const {
     return faces_.capacity() * 4 + cell_begin_.capacity() * 4 + slots_.capacity() * sizeof(Slot);
   }
@@ -138,13 +189,24 @@ class FaceGrid {
 
  private:
   static constexpr uint64_t kEmptyKey = ~uint64_t(0);
+  static constexpr uint32_t kNone = ~uint32_t(0);
   static constexpr int kAxisBits = 21;
   struct Slot {
     uint64_t key = kEmptyKey;
-    uint32_t begin = 0, end = 0;
+    uint32_t cell = kNone;  // ordinal of the occupied cell
   };
   static uint64_t Key(uint64_t i, uint64_t j, uint64_t k) { return i | (j << kAxisBits) | (k << (2 * kAxisBits)); }
   uint64_t Hash(uint64_t key) const { return (key * 0x9E3779B97F4A7C15ull) >> shift_; }
+  uint32_t Find(uint64_t key) const {
+    for (uint64_t slot = Hash(key);; slot = (slot + 1) & mask_) {
+      const Slot& s = slots_[slot];
+      if (s.key == key) return s.cell;
+      if (s.key == kEmptyKey) return kNone;
+    }
+  }
+  // The ordinal of key's cell, adding it (ordinal = cells so far) if new.
+  uint32_t FindOrAdd(uint64_t key, uint32_t* cells);
+  void Rehash(int bits);
 
   // Calls visit(i, j, k) for every cell face `f` is registered in.
   template <typename Visit>
@@ -154,13 +216,36 @@ class FaceGrid {
   double cell_m_ = 1, inv_cell_ = 1;
   uint64_t n_[3] = {0, 0, 0};
   bool dense_ = true;
-  std::vector<uint32_t> cell_begin_;  // dense: cells + 1 offsets into faces_
+  std::vector<uint32_t> cell_begin_;  // cells + 1 offsets into faces_
   std::vector<Slot> slots_;           // hashed: open addressing, linear probing
   uint64_t mask_ = 0;
   int shift_ = 64;
-  size_t occupied_ = 0;
   std::vector<uint32_t> faces_;  // per cell, ascending face index
 };
+
+void FaceGrid::Rehash(int bits) {
+  std::vector<Slot> old = std::move(slots_);
+  slots_.assign(size_t(1) << bits, Slot{});
+  mask_ = (uint64_t(1) << bits) - 1;
+  shift_ = 64 - bits;
+  for (const Slot& s : old) {
+    if (s.key == kEmptyKey) continue;
+    uint64_t slot = Hash(s.key);
+    while (slots_[slot].key != kEmptyKey) slot = (slot + 1) & mask_;
+    slots_[slot] = s;
+  }
+}
+
+uint32_t FaceGrid::FindOrAdd(uint64_t key, uint32_t* cells) {
+  if (2 * (uint64_t(*cells) + 1) > slots_.size()) Rehash(std::countr_zero(slots_.size()) + 1);
+  uint64_t slot = Hash(key);
+  for (;; slot = (slot + 1) & mask_) {
+    if (slots_[slot].key == key) return slots_[slot].cell;
+    if (slots_[slot].key == kEmptyKey) break;
+  }
+  slots_[slot] = Slot{key, (*cells)++};
+  return slots_[slot].cell;
+}
 
 template <typename Visit>
 void FaceGrid::ForEachCell(const FaceGeom& f, double d, Visit&& visit) const {
@@ -171,11 +256,13 @@ void FaceGrid::ForEachCell(const FaceGeom& f, double d, Visit&& visit) const {
     lo[k] = std::clamp<int64_t>(int64_t(std::floor((mn - min_[k]) * inv_cell_)), 0, int64_t(n_[k]) - 1);
     hi[k] = std::clamp<int64_t>(int64_t(std::floor((mx - min_[k]) * inv_cell_)), 0, int64_t(n_[k]) - 1);
   }
-  // A point within d of the triangle is within d of its plane; a cell whose
-  // centre is farther than d + its half-extent along n from the plane holds
-  // no such point.
+  // A point of the cell within d of the triangle is within half the cell's
+  // diagonal of its centre, so the centre is within d + that of the triangle
+  // (and of its plane: the cheap test first).
   const double n[3] = {f.n[0], f.n[1], f.n[2]};
-  const double reach = d + 0.5 * cell_m_ * (std::abs(n[0]) + std::abs(n[1]) + std::abs(n[2])) + 1e-6 * cell_m_;
+  const double slack = 1e-6 * cell_m_;
+  const double slab = d + 0.5 * cell_m_ * (std::abs(n[0]) + std::abs(n[1]) + std::abs(n[2])) + slack;
+  const double reach = d + 0.5 * std::sqrt(3.0) * cell_m_ + slack;
   const double offset = n[0] * f.a[0] + n[1] * f.a[1] + n[2] * f.a[2];
   for (int64_t k = lo[2]; k <= hi[2]; ++k) {
     const double cz = min_[2] + (k + 0.5) * cell_m_;
@@ -183,7 +270,11 @@ void FaceGrid::ForEachCell(const FaceGeom& f, double d, Visit&& visit) const {
       const double cy = min_[1] + (j + 0.5) * cell_m_;
       for (int64_t i = lo[0]; i <= hi[0]; ++i) {
         const double cx = min_[0] + (i + 0.5) * cell_m_;
-        if (std::abs(n[0] * cx + n[1] * cy + n[2] * cz - offset) <= reach) visit(uint64_t(i), uint64_t(j), uint64_t(k));
+        if (std::abs(n[0] * cx + n[1] * cy + n[2] * cz - offset) > slab) continue;
+        const double centre[3] = {cx, cy, cz};
+        double bary[3];
+        if (ClosestOnTriangle(centre, f.a, f.b, f.c, bary) > reach * reach) continue;
+        visit(uint64_t(i), uint64_t(j), uint64_t(k));
       }
     }
   }
@@ -192,11 +283,8 @@ void FaceGrid::ForEachCell(const FaceGeom& f, double d, Visit&& visit) const {
 Expected<FaceGrid> FaceGrid::Build(const std::vector<FaceGeom>& geom, const std::vector<uint32_t>& usable,
                                    double d) {
   FaceGrid grid;
-  if (usable.empty()) {
-    grid.n_[0] = grid.n_[1] = grid.n_[2] = 0;
-    grid.cell_begin_.assign(1, 0);
-    return grid;
-  }
+  grid.cell_begin_.assign(1, 0);
+  if (usable.empty()) return grid;  // n_ = 0: every point is outside
   double mn[3] = {std::numeric_limits<double>::infinity(), std::numeric_limits<double>::infinity(),
                   std::numeric_limits<double>::infinity()};
   double mx[3] = {-mn[0], -mn[1], -mn[2]};
@@ -220,12 +308,12 @@ Expected<FaceGrid> FaceGrid::Build(const std::vector<FaceGeom>& geom, const std:
     grid.min_[k] = mn[k] - d;
     extent = std::max(extent, mx[k] - mn[k] + 2 * d);
   }
-  // Cells of about half a mean edge keep ~5-8 candidate faces per point on a
-  // regular surface; never below max_distance (a face then spans few cells
-  // per axis) and never more than 2^21 cells per axis (the hash key).
-  double cell = std::max({d, 0.5 * mean_edge_m, extent / double((1 << kAxisBits) - 2)});
-  const size_t max_registrations = 48 * usable.size() + (size_t(1) << 20);
-  std::vector<uint32_t> per_face(usable.size());
+  // Cells of about half a mean edge keep a handful of candidate faces per
+  // point on a regular surface; never below max_distance (a face then spans
+  // few cells per axis) and never more than 2^21 cells per axis (the hash
+  // key). Grown if the registrations get out of hand (large faces).
+  double cell = std::max({d, kCellPerMeanEdge * mean_edge_m, extent / double((1 << kAxisBits) - 2)});
+  const size_t max_registrations = 32 * usable.size() + (size_t(1) << 20);
   size_t registrations = 0;
   for (;;) {
     grid.cell_m_ = cell;
@@ -235,12 +323,8 @@ Expected<FaceGrid> FaceGrid::Build(const std::vector<FaceGeom>& geom, const std:
     registrations = tbb::parallel_reduce(
         tbb::blocked_range<size_t>(0, usable.size(), 1024), size_t(0),
         [&](const tbb::blocked_range<size_t>& r, size_t sum) {
-          for (size_t u = r.begin(); u != r.end(); ++u) {
-            uint32_t count = 0;
-            grid.ForEachCell(geom[usable[u]], d, [&](uint64_t, uint64_t, uint64_t) { ++count; });
-            per_face[u] = count;
-            sum += count;
-          }
+          for (size_t u = r.begin(); u != r.end(); ++u)
+            grid.ForEachCell(geom[usable[u]], d, [&](uint64_t, uint64_t, uint64_t) { ++sum; });
           return sum;
         },
         std::plus<size_t>());
@@ -249,51 +333,35 @@ Expected<FaceGrid> FaceGrid::Build(const std::vector<FaceGeom>& geom, const std:
   }
   if (registrations >= kDropped) return Status::Invalid("point assignment: the face grid is too large");
 
-  // (cell key, face) pairs, sorted: faces ascending within a cell.
-  std::vector<size_t> first(usable.size() + 1, 0);
-  for (size_t u = 0; u < usable.size(); ++u) first[u + 1] = first[u] + per_face[u];
-  std::vector<std::pair<uint64_t, uint32_t>> pairs(registrations);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, usable.size(), 1024), [&](const tbb::blocked_range<size_t>& r) {
-    for (size_t u = r.begin(); u != r.end(); ++u) {
-      size_t at = first[u];
-      grid.ForEachCell(geom[usable[u]], d, [&](uint64_t i, uint64_t j, uint64_t k) {
-        pairs[at++] = {Key(i, j, k), usable[u]};
-      });
-    }
-  });
-  tbb::parallel_sort(pairs.begin(), pairs.end());
-  grid.faces_.resize(registrations);
-  for (size_t r = 0; r < registrations; ++r) grid.faces_[r] = pairs[r].second;
-  size_t occupied = 0;
-  for (size_t r = 0; r < registrations; ++r) occupied += (r == 0 || pairs[r].first != pairs[r - 1].first);
-  grid.occupied_ = occupied;
-
-  const double cells = double(grid.n_[0]) * double(grid.n_[1]) * double(grid.n_[2]);
-  grid.dense_ = cells <= std::max(4.0 * double(registrations), double(1 << 16));
-  const uint64_t mask21 = (uint64_t(1) << kAxisBits) - 1;
+  // Cell of every registration, in face order; then a counting sort, which
+  // keeps the faces of each cell ascending.
+  const double box_cells = double(grid.n_[0]) * double(grid.n_[1]) * double(grid.n_[2]);
+  grid.dense_ = box_cells <= std::max(double(registrations), double(1 << 16));
+  std::vector<uint32_t> cell_of_registration;
+  cell_of_registration.reserve(registrations);
+  uint32_t cells = 0;
   if (grid.dense_) {
-    grid.cell_begin_.assign(size_t(cells) + 1, 0);
-    // Counting: cell_begin_[c + 1] = faces in cells <= c.
-    for (const auto& [key, face] : pairs) {
-      const uint64_t i = key & mask21, j = (key >> kAxisBits) & mask21, k = key >> (2 * kAxisBits);
-      ++grid.cell_begin_[(k * grid.n_[1] + j) * grid.n_[0] + i + 1];
-    }
-    for (size_t c = 1; c < grid.cell_begin_.size(); ++c) grid.cell_begin_[c] += grid.cell_begin_[c - 1];
+    cells = uint32_t(box_cells);
   } else {
-    int bits = 4;
-    while ((uint64_t(1) << bits) < 2 * occupied) ++bits;
-    grid.slots_.assign(size_t(1) << bits, Slot{});
-    grid.mask_ = (uint64_t(1) << bits) - 1;
-    grid.shift_ = 64 - bits;
-    for (size_t r = 0; r < registrations;) {
-      size_t e = r + 1;
-      while (e < registrations && pairs[e].first == pairs[r].first) ++e;
-      uint64_t slot = grid.Hash(pairs[r].first);
-      while (grid.slots_[slot].key != kEmptyKey) slot = (slot + 1) & grid.mask_;
-      grid.slots_[slot] = Slot{pairs[r].first, uint32_t(r), uint32_t(e)};
-      r = e;
-    }
+    grid.Rehash(10);
   }
+  std::vector<uint32_t> first_registration(usable.size() + 1);
+  for (size_t u = 0; u < usable.size(); ++u) {
+    first_registration[u] = uint32_t(cell_of_registration.size());
+    grid.ForEachCell(geom[usable[u]], d, [&](uint64_t i, uint64_t j, uint64_t k) {
+      cell_of_registration.push_back(grid.dense_ ? uint32_t((k * grid.n_[1] + j) * grid.n_[0] + i)
+                                                 : grid.FindOrAdd(Key(i, j, k), &cells));
+    });
+  }
+  first_registration[usable.size()] = uint32_t(cell_of_registration.size());
+  grid.cell_begin_.assign(size_t(cells) + 1, 0);
+  for (uint32_t c : cell_of_registration) ++grid.cell_begin_[c + 1];
+  for (size_t c = 1; c < grid.cell_begin_.size(); ++c) grid.cell_begin_[c] += grid.cell_begin_[c - 1];
+  grid.faces_.resize(registrations);
+  std::vector<uint32_t> cursor(grid.cell_begin_.begin(), grid.cell_begin_.end() - 1);
+  for (size_t u = 0; u < usable.size(); ++u)
+    for (uint32_t r = first_registration[u]; r < first_registration[u + 1]; ++r)
+      grid.faces_[cursor[cell_of_registration[r]]++] = usable[u];
   return grid;
 }
 
@@ -384,17 +452,26 @@ struct PointArrays {
   // by an in-place heapsort, so no face needs memory proportional to its
   // point count.
   static constexpr size_t kGatherLimit = 1 << 14;
-  void SortFace(size_t begin, size_t end, std::vector<std::pair<SortKey, Point>>& buffer) const {
+  struct SortBuffer {
+    std::vector<Point> points;
+    std::vector<std::pair<uint64_t, uint32_t>> order;  // (s, t) packed, index
+  };
+  void SortFace(size_t begin, size_t end, SortBuffer& buffer) const {
     const size_t count = end - begin;
     if (count < 2) return;
     if (count <= kGatherLimit) {
-      buffer.clear();
-      for (size_t i = begin; i < end; ++i) {
-        const Point p = Load(i);
-        buffer.emplace_back(KeyOf(p), p);
+      buffer.points.resize(count);
+      buffer.order.resize(count);
+      for (size_t i = 0; i < count; ++i) {
+        const Point& p = buffer.points[i] = Load(begin + i);
+        buffer.order[i] = {uint64_t(Monotonic(p.st[0])) << 32 | Monotonic(p.st[1]), uint32_t(i)};
       }
-      std::sort(buffer.begin(), buffer.end(), [](const auto& x, const auto& y) { return x.first < y.first; });
-      for (size_t i = 0; i < count; ++i) Store(begin + i, buffer[i].second);
+      // (s, t) decides almost always; the full key only for equal ones.
+      std::sort(buffer.order.begin(), buffer.order.end(), [&](const auto& x, const auto& y) {
+        if (x.first != y.first) return x.first < y.first;
+        return KeyOf(buffer.points[x.second]) < KeyOf(buffer.points[y.second]);
+      });
+      for (size_t i = 0; i < count; ++i) Store(begin + i, buffer.points[buffer.order[i].second]);
       return;
     }
     auto less = [&](size_t i, size_t j) { return KeyOf(Load(begin + i)) < KeyOf(Load(begin + j)); };
@@ -448,7 +525,7 @@ void GroupByFace(PointCloud& cloud, const std::vector<uint64_t>& face_begin, siz
                  size_t assigned) {
   const PointArrays<kNormals, kColors> arrays{cloud.positions.data(), cloud.normals.data(), cloud.colors.data()};
   // Level 1: ranges of faces, the dropped points in a last bucket.
-  const size_t ranges = std::min<size_t>(1024, std::max<size_t>(face_count, 1));
+  const size_t ranges = std::min<size_t>(256, std::max<size_t>(face_count, 1));
   const size_t faces_per_range = (face_count + ranges - 1) / ranges;
   std::vector<size_t> starts(ranges + 1), ends(ranges + 1);
   for (size_t b = 0; b < ranges; ++b) {
@@ -462,7 +539,7 @@ void GroupByFace(PointCloud& cloud, const std::vector<uint64_t>& face_begin, siz
   });
   // Level 2 and the per-face order, range by range in parallel.
   using Arrays = PointArrays<kNormals, kColors>;
-  tbb::enumerable_thread_specific<std::vector<std::pair<typename Arrays::SortKey, typename Arrays::Point>>> buffers;
+  tbb::enumerable_thread_specific<typename Arrays::SortBuffer> buffers;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, ranges, 1), [&](const tbb::blocked_range<size_t>& r) {
     auto& buffer = buffers.local();
     for (size_t b = r.begin(); b != r.end(); ++b) {
@@ -547,6 +624,16 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
   PB_RETURN_IF_ERROR(grid_or.status());
   const FaceGrid& grid = *grid_or;
   usable = {};
+  std::vector<FaceBound> bounds(face_count);
+  for (size_t f = 0; f < face_count; ++f) {
+    if (geom[f].n[0] == 0 && geom[f].n[1] == 0 && geom[f].n[2] == 0) {
+      // Zero area: never in the grid; a bound no distance passes anyway.
+      bounds[f] = FaceBound{{0, 0, 0, -std::numeric_limits<float>::infinity()}, {}};
+    } else {
+      bounds[f] = MakeBound(geom[f]);
+    }
+  }
+  geom = {};
   progress(0.05);
 
   const double offset[3] = {cloud.origin[0] - mesh.origin[0], cloud.origin[1] - mesh.origin[1],
@@ -566,6 +653,8 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
   });
   auto assign_range = [&](size_t begin, size_t end) {
     Tally& tally = tallies.local();
+    uint32_t hint = kDropped;
+    FaceGrid::Cache cell_cache;
     for (size_t i = begin; i < end; ++i) {
       float* out = positions + 3 * i;
       const double q[3] = {offset[0] + out[0], offset[1] + out[1], offset[2] + out[2]};
@@ -584,41 +673,54 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
         test_angle = len > 0 && std::isfinite(len);
         min_dot = cos_max * len;
       }
-      const auto [cb, ce] = grid.CellOf(q);
+      const auto [cb, ce] = grid.CellOf(q, &cell_cache);
       uint32_t best = kDropped;
-      double best_d2 = max_d2, best_bary[3] = {0, 0, 0};
+      double best_d2 = max_d2;
       bool in_reach = false;
-      for (uint32_t c = cb; c < ce; ++c) {
-        const uint32_t f = cell_faces[c];
-        const FaceGeom& g = geom[f];
-        // Lower bound: distance to the face's bounding box.
-        double lb = 0;
-        for (int k = 0; k < 3; ++k) {
-          const double lo = std::min({g.a[k], g.b[k], g.c[k]});
-          const double hi = std::max({g.a[k], g.b[k], g.c[k]});
-          const double e = q[k] < lo ? lo - q[k] : (q[k] > hi ? q[k] - hi : 0);
-          lb += e * e;
+      // Candidates in any order: the winner is the least (distance, face),
+      // so a tie goes to the lower index. The previous point's face first:
+      // scan order is spatially coherent, and a near first answer lets the
+      // bound reject most of the others.
+      auto consider = [&](uint32_t f) {
+        const FaceBound& b = bounds[f];
+        const double h = b.plane[0] * q[0] + b.plane[1] * q[1] + b.plane[2] * q[2] - b.plane[3];
+        double out = 0;
+        for (int k = 0; k < 3; ++k)
+          out = std::max(out, b.edge[k][0] * q[0] + b.edge[k][1] * q[1] + b.edge[k][2] * q[2] - b.edge[k][3]);
+        const double lb = h * h + out * out;
+        if (lb > best_d2 || (lb == best_d2 && f > best)) return;
+        const bool angle_ok = !test_angle || pn[0] * b.plane[0] + pn[1] * b.plane[1] + pn[2] * b.plane[2] >= min_dot;
+        if (!angle_ok && (in_reach || best != kDropped)) return;
+        double d2 = lb;
+        if (out > 0) {
+          const uint32_t* v = &mesh.indices[3 * size_t(f)];
+          double bary[3];
+          d2 = ClosestOnTriangle(q, &mesh.positions[3 * size_t(v[0])], &mesh.positions[3 * size_t(v[1])],
+                                 &mesh.positions[3 * size_t(v[2])], bary);
         }
-        if (best == kDropped ? lb > max_d2 : lb >= best_d2) continue;
-        double bary[3];
-        if (test_angle && pn[0] * g.n[0] + pn[1] * g.n[1] + pn[2] * g.n[2] < min_dot) {
-          if (!in_reach && best == kDropped) in_reach = ClosestOnTriangle(q, g, bary) <= max_d2;
-          continue;
+        if (d2 > max_d2) return;
+        if (!angle_ok) {
+          in_reach = true;
+          return;
         }
-        const double d2 = ClosestOnTriangle(q, g, bary);
-        // Strictly nearer only: faces come in ascending index, so a tie
-        // keeps the lower index.
-        if (best == kDropped ? d2 <= max_d2 : d2 < best_d2) {
+        if (best == kDropped || d2 < best_d2 || (d2 == best_d2 && f < best)) {
           best = f;
           best_d2 = d2;
-          std::copy(bary, bary + 3, best_bary);
         }
-      }
+      };
+      const bool hint_here = hint != kDropped && cb < ce;
+      if (hint_here) consider(hint);
+      for (uint32_t c = cb; c < ce; ++c)
+        if (cell_faces[c] != hint || !hint_here) consider(cell_faces[c]);
+      hint = best != kDropped ? best : hint;
       if (best == kDropped) {
         ++(in_reach ? tally.wrong_angle : tally.too_far);
         continue;
       }
       const uint32_t* v = &mesh.indices[3 * size_t(best)];
+      double best_bary[3];
+      ClosestOnTriangle(q, &mesh.positions[3 * size_t(v[0])], &mesh.positions[3 * size_t(v[1])],
+                        &mesh.positions[3 * size_t(v[2])], best_bary);
       double u = 0, w = 0;
       for (int k = 0; k < 3; ++k) {
         u += best_bary[k] * mesh.uvs[2 * size_t(v[k])];
