@@ -198,6 +198,22 @@ TEST_F(ExportStagesTest, TextureWithoutUvsIsAClearError) {
   }
 }
 
+// In the cache an artifact's files are stored under their content digest,
+// without an extension: the format comes from the file's name.
+TEST_F(ExportStagesTest, TexturesStoredWithoutExtensionAreFoundByName) {
+  FakeContext ctx(dir_ / "run", nlohmann::json::object());
+  ctx.AddInput("mesh", "mesh", WriteMesh(true));
+  const std::string color = WriteImage("color.png", Image::PixelType::kU8);
+  const std::string digest_path = Input("cc492b343d6c22103572169cc620c18d");
+  std::filesystem::copy_file(color, digest_path);
+  ctx.AddInput("color", "image", std::map<std::string, std::string>{{"color.png", digest_path}});
+  const Status status = Run("export.gltf", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  auto model = ReadGlb(ctx.outputs_["model"]);
+  ASSERT_TRUE(model.ok());
+  EXPECT_EQ(model->base_color_png, FileBytes(color));
+}
+
 TEST_F(ExportStagesTest, BadTextureInputsAreClearErrors) {
   FakeContext ctx(dir_ / "run", nlohmann::json::object());
   ctx.AddInput("mesh", "mesh", WriteMesh(true));
