@@ -9,7 +9,15 @@
 //   kSplat: Gaussian-weighted mean of the samples whose footprint covers the
 //     texel, pull-push filling of texels no footprint covers.
 // Colors (sRGB values as stored) and world normals are interpolated alike;
-// normals are re-normalized. Positions are in texel space (bake_raster.h).
+// normals are re-normalized (a zero result takes the corners' interpolated
+// normal, then (0, 0, 1)). Positions are in texel space (bake_raster.h).
+// Samples are indexed corners 0-2, then the points in the order given;
+// "ties to the lower index" refers to that. Decisions the paper leaves open
+// (docs/bake-interpolation.md): kDelaunay averages samples at the same
+// position into one vertex, and a face with collinear UV corners takes the
+// nearest sample; points with a non-finite position are ignored; a face with
+// no points, in every mode, gets the barycentric interpolation of its corners
+// at BakeTexel::bary (what bake.vertex_colors writes).
 #pragma once
 
 #include <array>
@@ -35,11 +43,14 @@ struct TexelInterpolationOptions {
   float idw_power = 2;             // kIdw: weight = 1 / distance^power
   // kSplat: Gaussian sigma of a point's footprint, in texels (the caller
   // converts the scan's point spacing with the face's texel density); the
-  // footprint is cut at 2 sigma.
+  // footprint is cut at 2 sigma. Texels no footprint covers are filled by
+  // pull-push over the face's texel bounding box, the corners included.
   float splat_sigma_texels = 1;
 };
 
-// One per thread: keeps scratch buffers between faces.
+// One per thread: keeps scratch buffers between faces (CGAL's triangulation
+// frees and reallocates its few blocks per face). A moved-from interpolator
+// may be used again.
 class FaceInterpolator {
  public:
   FaceInterpolator();
