@@ -368,7 +368,7 @@ Expected<FaceGrid> FaceGrid::Build(const std::vector<FaceGeom>& geom, const std:
 // Per-thread tallies of the assignment pass; integers only, so the sums do
 // not depend on how the points were split between threads.
 struct Tally {
-  std::vector<uint64_t> face_counts;
+  std::vector<uint32_t> face_counts;  // < 2^32: the point count is checked
   size_t too_far = 0, wrong_angle = 0, non_finite = 0;
   uint64_t distance_nm = 0;
 };
@@ -579,6 +579,8 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
     return Status::Invalid("point assignment: mesh vertex " + std::to_string(bad / 2) + " has a non-finite uv");
   const size_t face_count = mesh.face_count();
   if (face_count >= kDropped) return Status::Invalid("point assignment: too many faces");
+  if (cloud.size() >= kDropped)
+    return Status::Invalid("point assignment: more than 2^32 - 2 points; split the cloud");
 
   // What the sort does not carry is released first.
   cloud.intensities = {};
