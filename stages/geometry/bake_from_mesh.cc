@@ -113,7 +113,7 @@ class RayScene {
     rtcCommitGeometry(geometry);
     rtcAttachGeometry(scene_, geometry);
     rtcReleaseGeometry(geometry);  // the scene holds it
-    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) return Failure("building the geometry");
+    if (Failed()) return Failure("building the geometry");
 
     // Embree's TBB tasks run in the caller's arena: this one caps them at
     // `threads` as the device config does.
@@ -123,13 +123,21 @@ class RayScene {
     } else {
       rtcCommitScene(scene_);
     }
-    if (rtcGetDeviceError(device_) != RTC_ERROR_NONE) return Failure("rtcCommitScene");
+    if (Failed()) return Failure("rtcCommitScene");
     return Status::Ok();
   }
 
   RTCScene scene() const { return scene_; }
 
  private:
+  // rtcGetDeviceError is per thread; the callback sees errors from any.
+  bool Failed() {
+    const RTCError code = rtcGetDeviceError(device_);
+    std::lock_guard<std::mutex> lock(mutex_);
+    if (code != RTC_ERROR_NONE && message_.empty()) message_ = EmbreeErrorName(code);
+    return !message_.empty();
+  }
+
   static void OnError(void* user, RTCError code, const char* message) {
     auto* self = static_cast<RayScene*>(user);
     std::lock_guard<std::mutex> lock(self->mutex_);
@@ -140,9 +148,10 @@ class RayScene {
   }
 
   Status Failure(const char* step) {
+    Failed();  // picks up this thread's error code when no message came
     std::lock_guard<std::mutex> lock(mutex_);
     return Status::Internal(std::string("bake from mesh: Embree failed in ") + step + ": " +
-                            (message_.empty() ? "no message" : message_));
+                            (message_.empty() ? "no error reported" : message_));
   }
 
   RTCDevice device_ = nullptr;
