@@ -17,6 +17,7 @@ modes=${4:-delaunay nearest idw splat}
 bin=build/pointbake
 [ -x "$bin" ] || { echo "build first: .ci/setup" >&2; exit 1; }
 work=${PB_BENCH_DIR:-$(mktemp -d)}
+mkdir -p "$work"
 [ -n "${PB_BENCH_DIR:-}" ] || trap 'rm -rf "$work"' EXIT
 {
   cat <<YAML
