@@ -26,6 +26,7 @@ struct TexelTriangle {
   Vec2 p[3];
   double sign = 1;   // +1 or -1: orientation of p in texel space
   double area2 = 0;  // twice the signed area
+  double min_x = 0, max_x = 0, min_y = 0, max_y = 0;  // bounding box
   int x0 = 0, y0 = 0, x1 = -1, y1 = -1;  // inclusive texel bounds, clipped
 
   bool degenerate() const { return x1 < x0 || y1 < y0; }
@@ -65,18 +66,15 @@ TexelTriangle MakeTexelTriangle(const Mesh& mesh, uint32_t face, int size) {
   }
   if (!(std::abs(tri.area2) > 1e-12 * extent2) || !std::isfinite(tri.area2)) return tri;
   tri.sign = tri.area2 > 0 ? 1.0 : -1.0;
-  double min_x = tri.p[0][0], max_x = min_x, min_y = tri.p[0][1], max_y = min_y;
-  for (int k = 1; k < 3; ++k) {
-    min_x = std::min(min_x, tri.p[k][0]);
-    max_x = std::max(max_x, tri.p[k][0]);
-    min_y = std::min(min_y, tri.p[k][1]);
-    max_y = std::max(max_y, tri.p[k][1]);
-  }
-  // Texels whose square [x, x+1) touches [min - 0, max]: conservative.
-  tri.x0 = std::max(0, int(std::floor(min_x)) - 1);
-  tri.y0 = std::max(0, int(std::floor(min_y)) - 1);
-  tri.x1 = std::min(size - 1, int(std::floor(max_x)) + 1);
-  tri.y1 = std::min(size - 1, int(std::floor(max_y)) + 1);
+  tri.min_x = std::min({tri.p[0][0], tri.p[1][0], tri.p[2][0]});
+  tri.max_x = std::max({tri.p[0][0], tri.p[1][0], tri.p[2][0]});
+  tri.min_y = std::min({tri.p[0][1], tri.p[1][1], tri.p[2][1]});
+  tri.max_y = std::max({tri.p[0][1], tri.p[1][1], tri.p[2][1]});
+  // Every texel whose square could touch the triangle (Classify decides).
+  tri.x0 = std::max(0, int(std::floor(tri.min_x)) - 1);
+  tri.y0 = std::max(0, int(std::floor(tri.min_y)) - 1);
+  tri.x1 = std::min(size - 1, int(std::floor(tri.max_x)) + 1);
+  tri.y1 = std::min(size - 1, int(std::floor(tri.max_y)) + 1);
   return tri;
 }
 
@@ -93,15 +91,9 @@ int Classify(const TexelTriangle& tri, int x, int y) {
   }
   if (inside) return 1;
   // The edge slack test alone accepts texels past a sharp vertex; the square
-  // must also overlap the triangle's bounding box.
-  double min_x = tri.p[0][0], max_x = min_x, min_y = tri.p[0][1], max_y = min_y;
-  for (int k = 1; k < 3; ++k) {
-    min_x = std::min(min_x, tri.p[k][0]);
-    max_x = std::max(max_x, tri.p[k][0]);
-    min_y = std::min(min_y, tri.p[k][1]);
-    max_y = std::max(max_y, tri.p[k][1]);
-  }
-  if (x + 1 < min_x || x > max_x || y + 1 < min_y || y > max_y) return 0;
+  // must also overlap the triangle's bounding box (with the edges, the
+  // separating axis test of a square and a triangle: exact).
+  if (x + 1 < tri.min_x || x > tri.max_x || y + 1 < tri.min_y || y > tri.max_y) return 0;
   return 2;
 }
 
