@@ -20,6 +20,7 @@
 #include "stages/geometry/bake.h"
 #include "stages/geometry/bake_from_mesh.h"
 #include "stages/geometry/bake_from_points.h"
+#include "stages/geometry/bake_truth.h"
 #include "stages/geometry/image.h"
 #include "stages/geometry/mesh_clean.h"
 #include "stages/geometry/mesh_decimate.h"
@@ -52,31 +53,6 @@ Mesh PoissonMesh(const PointCloud& cloud, int depth) {
   Mesh trimmed = TrimByDensity(std::move(out.mesh), out.densities, 0.01, nullptr);
   CleanReport report;
   return Take(CleanMesh(trimmed, CleanOptions{}, &report), "clean");
-}
-
-// Mean |baked - true albedo| (0..255) over texels whose centre lies on a face
-// within 1 cm of the true surface and outside openings.
-double ColorError(const SynthScene& scene, const BakeResult& result, int size) {
-  const BakeRaster raster = Take(BakeRaster::Build(result.mesh, size), "raster");
-  double sum = 0;
-  size_t count = 0;
-  std::vector<BakeTexel> texels;
-  for (uint32_t face = 0; face < result.mesh.face_count(); ++face) {
-    raster.TexelsOf(result.mesh, face, texels);
-    for (const BakeTexel& texel : texels) {
-      if (!raster.centre_inside(texel.x, texel.y)) continue;
-      const TexelFrame frame = FrameAt(result.mesh, face, texel.bary);
-      const SurfaceSample truth = SampleSurface(
-          scene, {result.mesh.origin[0] + frame.position[0], result.mesh.origin[1] + frame.position[1],
-                  result.mesh.origin[2] + frame.position[2]});
-      if (truth.in_opening || std::abs(truth.distance_m) > 0.01) continue;
-      for (int c = 0; c < 3; ++c) {
-        sum += std::abs(result.maps.color.at_u8(texel.x, texel.y, c) - 255.0 * truth.albedo[c]) / 3;
-      }
-      ++count;
-    }
-  }
-  return sum / double(std::max<size_t>(count, 1));
 }
 
 // The picture window: x in [x0, x0 + width_m], z in [z0, z0 + height_m] on
@@ -209,7 +185,8 @@ int Main(int argc, char** argv) {
 
   std::printf("| bake | mean abs. color error vs truth (0-255) | time |\n|---|---:|---:|\n");
   for (const Baked& b : baked) {
-    std::printf("| %s | %.2f | %.1f s |\n", b.name, ColorError(scene, b.result, size), b.seconds);
+    std::printf("| %s | %.2f | %.1f s |\n", b.name,
+                Take(ColorErrorAgainstTruth(scene, b.result), "error").mean_abs, b.seconds);
   }
 
   Vec3 min_m, max_m;

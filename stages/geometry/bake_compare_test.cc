@@ -13,6 +13,7 @@
 #include "stages/geometry/bake.h"
 #include "stages/geometry/bake_from_mesh.h"
 #include "stages/geometry/bake_from_points.h"
+#include "stages/geometry/bake_truth.h"
 #include "stages/geometry/mesh_clean.h"
 #include "stages/geometry/mesh_decimate.h"
 #include "stages/geometry/normals.h"
@@ -80,32 +81,12 @@ class BakeCompareTest : public ::testing::Test {
     fixture->low = std::move(*unwrapped);
   }
 
-  // Mean absolute difference (0..255, over channels) between the baked color
-  // and the true albedo at each comparable texel's position.
   static double ColorError(const BakeResult& result, size_t* compared = nullptr) {
-    auto raster = BakeRaster::Build(result.mesh, kSize);
-    EXPECT_TRUE(raster.ok());
-    double sum = 0;
-    size_t count = 0;
-    std::vector<BakeTexel> texels;
-    for (uint32_t face = 0; face < result.mesh.face_count(); ++face) {
-      raster->TexelsOf(result.mesh, face, texels);
-      for (const BakeTexel& texel : texels) {
-        if (!raster->centre_inside(texel.x, texel.y)) continue;
-        const TexelFrame frame = FrameAt(result.mesh, face, texel.bary);
-        const Vec3 point{result.mesh.origin[0] + frame.position[0],
-                         result.mesh.origin[1] + frame.position[1],
-                         result.mesh.origin[2] + frame.position[2]};
-        const SurfaceSample truth = SampleSurface(fixture->scene, point);
-        if (truth.in_opening || std::abs(truth.distance_m) > 0.01) continue;
-        for (int c = 0; c < 3; ++c) {
-          sum += std::abs(double(result.maps.color.at_u8(texel.x, texel.y, c)) - 255.0 * truth.albedo[c]) / 3;
-        }
-        ++count;
-      }
-    }
-    if (compared) *compared = count;
-    return count ? sum / double(count) : 1e9;
+    auto error = ColorErrorAgainstTruth(fixture->scene, result);
+    EXPECT_TRUE(error.ok());
+    if (!error.ok() || error->texels == 0) return 1e9;
+    if (compared) *compared = error->texels;
+    return error->mean_abs;
   }
 };
 
