@@ -84,13 +84,9 @@ Status Run(StageContext& ctx) {
   if (!points.cloud.has_colors()) {
     return Status::Invalid(points.path + ": " + kId + " needs a colored point cloud");
   }
-  double spacing_m = 0;
+  double spacing_m = InputPointsSpacing(ctx);
   std::string spacing_source = "meta";
-  const nlohmann::json& points_meta = ctx.input("points").meta;
-  if (points_meta.is_object() && points_meta.contains("spacing_m") && points_meta["spacing_m"].is_number()) {
-    spacing_m = points_meta["spacing_m"].get<double>();
-  }
-  if (!(spacing_m > 0) || !std::isfinite(spacing_m)) {
+  if (spacing_m == 0) {
     PB_PHASE(ctx, "spacing");
     auto measured = MedianSpacing(points.cloud);
     if (!measured.ok()) return measured.status().WithContext(points.path);

@@ -127,10 +127,7 @@ Status Run(StageContext& ctx) {
   const double cell_m =
       std::max({extent[0], extent[1], extent[2]}) * options.scale / std::ldexp(1.0, options.depth);
   poisson_meta["cell_m"] = cell_m;
-  const nlohmann::json& points_meta = ctx.input("points").meta;
-  if (points_meta.is_object() && points_meta.contains("spacing_m") &&
-      points_meta["spacing_m"].is_number()) {
-    const double spacing = points_meta["spacing_m"].get<double>();
+  if (const double spacing = InputPointsSpacing(ctx); spacing > 0) {
     if (cell_m < spacing) {
       std::fprintf(stderr,
                    "%s: depth %d makes %.1f mm cells, finer than the points' spacing %.1f mm: "
@@ -165,6 +162,7 @@ Status Run(StageContext& ctx) {
                        {"density_threshold", trimmed.threshold},
                        {"faces_trimmed", trimmed.faces_removed}});
   nlohmann::json meta = nlohmann::json::object();
+  const nlohmann::json& points_meta = ctx.input("points").meta;
   for (const char* key : {"spacing_m", "scene", "source"}) {
     if (points_meta.is_object() && points_meta.contains(key)) meta[key] = points_meta[key];
   }

@@ -1,5 +1,6 @@
 #include "stages/points/points_io.h"
 
+#include <cmath>
 #include <utility>
 
 #include "engine/base/env.h"
@@ -46,6 +47,13 @@ Status WriteOutputPoints(StageContext& ctx, const PointCloud& cloud, nlohmann::j
   }
   ctx.set_output_meta("points", std::move(meta));
   return Status::Ok();
+}
+
+double InputPointsSpacing(const StageContext& ctx) {
+  const nlohmann::json& meta = ctx.input("points").meta;
+  if (!meta.is_object() || !meta.contains("spacing_m") || !meta["spacing_m"].is_number()) return 0;
+  const double spacing_m = meta["spacing_m"].get<double>();
+  return spacing_m > 0 && std::isfinite(spacing_m) ? spacing_m : 0;
 }
 
 }  // namespace pb

@@ -29,6 +29,11 @@ Expected<InputPoints> ReadInputPoints(StageContext& ctx, std::string_view stage_
 // what earlier stages recorded survive unless changed).
 nlohmann::json InputPointsMetaWith(const StageContext& ctx, const nlohmann::json& changes);
 
+// The `spacing_m` the input "points" meta records (synth.scan,
+// points.spacing), or 0 when it has none or it is not a positive finite
+// number.
+double InputPointsSpacing(const StageContext& ctx);
+
 // Passes input "points" through unchanged as output "points" (a file copy,
 // no re-encoding) with `meta`: for stages that only measure.
 Status CopyInputPoints(StageContext& ctx, const std::string& input_path, nlohmann::json meta);
