@@ -2,6 +2,8 @@
 
 #include <stdlib.h>
 
+#include "stages/geometry/ply.h"
+
 namespace pb {
 
 Status FakeRegistry::Register(StageType type) {
@@ -71,6 +73,22 @@ Status StageTest::Run(const std::string& id, FakeContext& ctx) {
   const Status status = type->run(ctx);
   EXPECT_TRUE(ctx.open_phases_.empty());
   return status;
+}
+
+std::string StageTest::WriteInputMesh(const std::string& name, const Mesh& mesh) {
+  const std::filesystem::path dir = dir_ / "input" / name;
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "mesh.ply").string();
+  EXPECT_TRUE(WritePlyMesh(path, mesh).ok());
+  return path;
+}
+
+std::string StageTest::WriteInputPoints(const std::string& name, const PointCloud& cloud) {
+  const std::filesystem::path dir = dir_ / "input" / name;
+  std::filesystem::create_directories(dir);
+  const std::string path = (dir / "points.ply").string();
+  EXPECT_TRUE(WritePlyPoints(path, cloud).ok());
+  return path;
 }
 
 }  // namespace pb

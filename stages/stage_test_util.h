@@ -13,6 +13,8 @@
 #include <string_view>
 #include <vector>
 
+#include "stages/geometry/mesh.h"
+#include "stages/geometry/point_cloud.h"
 #include "stages/geometry/test_data.h"
 #include "engine/stage.h"
 
@@ -83,6 +85,10 @@ class StageTest : public testing::TempDirTest {
  protected:
   // Runs stage `id` in `ctx`; every phase it opened must be closed.
   Status Run(const std::string& id, FakeContext& ctx);
+  // Writes <dir>/input/<name>/mesh.ply (points.ply) and returns its path,
+  // for FakeContext::AddInput.
+  std::string WriteInputMesh(const std::string& name, const Mesh& mesh);
+  std::string WriteInputPoints(const std::string& name, const PointCloud& cloud);
 
   FakeRegistry registry_;
 };

@@ -23,22 +23,6 @@ class BakeStagesTest : public StageTest {
     RegisterBuiltinStages(registry_);
   }
 
-  std::string WriteMesh(const Mesh& mesh) {
-    const std::filesystem::path dir = dir_ / "input" / "mesh";
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / "mesh.ply").string();
-    EXPECT_TRUE(WritePlyMesh(path, mesh).ok());
-    return path;
-  }
-
-  std::string WritePoints(const PointCloud& cloud) {
-    const std::filesystem::path dir = dir_ / "input" / "points";
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / "points.ply").string();
-    EXPECT_TRUE(WritePlyPoints(path, cloud).ok());
-    return path;
-  }
-
   // The unit square at z = 0 around a georeferenced origin, uv = xy.
   static Mesh Square() {
     Mesh mesh;
@@ -89,7 +73,7 @@ TEST_F(BakeStagesTest, SchemasAreWellFormed) {
 
 TEST_F(BakeStagesTest, VertexColorsWritesMeshWithTangentsAndBothMaps) {
   FakeContext ctx(dir_, {{"size", 32}, {"gutter", 2}, {"normal_format", "png"}});
-  ctx.AddInput("mesh", "mesh", WriteMesh(Square()), {{"faces", 2}, {"uv", {{"charts", 1}}}});
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()), {{"faces", 2}, {"uv", {{"charts", 1}}}});
   const Status status = Run("bake.vertex_colors", ctx);
   ASSERT_TRUE(status.ok()) << status.message();
   auto mesh = ReadPlyMesh(ctx.files_.at("mesh/mesh.ply"));
@@ -118,8 +102,8 @@ TEST_F(BakeStagesTest, FromPointsBakesThePointsAndWritesExrOnRequest) {
                          {"max_angle_deg", 90.0},
                          {"idw_neighbors", 4},
                          {"splat_sigma", 1.0}});
-  ctx.AddInput("mesh", "mesh", WriteMesh(Square()));
-  ctx.AddInput("points", "points", WritePoints(Points()), {{"spacing_m", 1.0 / 64}});
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
+  ctx.AddInput("points", "points", WriteInputPoints("points", Points()), {{"spacing_m", 1.0 / 64}});
   const Status status = Run("bake.from_points", ctx);
   ASSERT_TRUE(status.ok()) << status.message();
   auto color = ReadPng(ctx.files_.at("color/color.png"));
@@ -139,8 +123,8 @@ TEST_F(BakeStagesTest, FromPointsMeasuresSpacingWhenTheMetaHasNone) {
   FakeContext ctx(dir_, {{"size", 16}, {"gutter", 0}, {"normal_format", "png"},
                          {"interpolation", "nearest"}, {"max_distance", 4.0},
                          {"max_angle_deg", 90.0}, {"idw_neighbors", 4}, {"splat_sigma", 1.0}});
-  ctx.AddInput("mesh", "mesh", WriteMesh(Square()));
-  ctx.AddInput("points", "points", WritePoints(Points()));
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
+  ctx.AddInput("points", "points", WriteInputPoints("points", Points()));
   ASSERT_TRUE(Run("bake.from_points", ctx).ok());
   EXPECT_EQ(ctx.meta_["color"]["bake"]["spacing_source"], "measured");
   EXPECT_NEAR(ctx.meta_["color"]["bake"]["spacing_m"].get<double>(), 1.0 / 64, 1e-4);
@@ -149,7 +133,7 @@ TEST_F(BakeStagesTest, FromPointsMeasuresSpacingWhenTheMetaHasNone) {
 TEST_F(BakeStagesTest, ErrorsNameTheStageAndFile) {
   {
     FakeContext ctx(dir_, {{"size", 16}});
-    ctx.AddInput("mesh", "mesh", WriteMesh(Square()));
+    ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
     const Status status = Run("bake.from_points", ctx);
     EXPECT_FALSE(status.ok());
     EXPECT_THAT(status.message(), HasSubstr("bake.from_points"));
@@ -158,7 +142,7 @@ TEST_F(BakeStagesTest, ErrorsNameTheStageAndFile) {
     Mesh no_uvs = Square();
     no_uvs.uvs.clear();
     FakeContext ctx(dir_, {{"size", 16}});
-    const std::string path = WriteMesh(no_uvs);
+    const std::string path = WriteInputMesh("mesh", no_uvs);
     ctx.AddInput("mesh", "mesh", path);
     const Status status = Run("bake.vertex_colors", ctx);
     EXPECT_FALSE(status.ok());
@@ -169,8 +153,8 @@ TEST_F(BakeStagesTest, ErrorsNameTheStageAndFile) {
     PointCloud gray = Points();
     gray.colors.clear();
     FakeContext ctx(dir_, {{"size", 16}});
-    ctx.AddInput("mesh", "mesh", WriteMesh(Square()));
-    const std::string path = WritePoints(gray);
+    ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
+    const std::string path = WriteInputPoints("points", gray);
     ctx.AddInput("points", "points", path);
     const Status status = Run("bake.from_points", ctx);
     EXPECT_FALSE(status.ok());

@@ -24,14 +24,6 @@ class FromMeshStageTest : public StageTest {
     RegisterBuiltinStages(registry_);
   }
 
-  std::string WriteMesh(const std::string& name, const Mesh& mesh) {
-    const std::filesystem::path dir = dir_ / "input" / name;
-    std::filesystem::create_directories(dir);
-    const std::string path = (dir / "mesh.ply").string();
-    EXPECT_TRUE(WritePlyMesh(path, mesh).ok());
-    return path;
-  }
-
   // The unit square at z = 0, two triangles, uvs = (x, y), gray vertex
   // colors, stored around a georeferenced origin.
   static Mesh Low() {
@@ -100,8 +92,8 @@ TEST_F(FromMeshStageTest, IsWellFormed) {
 
 TEST_F(FromMeshStageTest, BakesColorNormalAndMeshWithTangents) {
   FakeContext ctx(dir_ / "run", {{"size", 32}, {"gutter", 2}}, 2);
-  ctx.AddInput("mesh", "mesh", WriteMesh("low", Low()), {{"source", "test"}});
-  ctx.AddInput("source", "mesh", WriteMesh("high", High()));
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("low", Low()), {{"source", "test"}});
+  ctx.AddInput("source", "mesh", WriteInputMesh("high", High()));
   const Status status = Run("bake.from_mesh", ctx);
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io", "compute"}));
@@ -150,8 +142,8 @@ TEST_F(FromMeshStageTest, ExrNormalsAndASmallCage) {
   // A 1 cm cage does not reach the sheet 1.56 cm away: all fallback, the
   // low mesh's gray, flat float normals.
   FakeContext ctx(dir_ / "run", {{"size", 16}, {"normal_format", "exr"}, {"cage", 0.01}});
-  ctx.AddInput("mesh", "mesh", WriteMesh("low", Low()));
-  ctx.AddInput("source", "mesh", WriteMesh("high", High()));
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("low", Low()));
+  ctx.AddInput("source", "mesh", WriteInputMesh("high", High()));
   const Status status = Run("bake.from_mesh", ctx);
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(ctx.counters_["texels_hit"], 0);
@@ -169,7 +161,7 @@ TEST_F(FromMeshStageTest, ExrNormalsAndASmallCage) {
 }
 
 TEST_F(FromMeshStageTest, ClearErrors) {
-  const std::string low = WriteMesh("low", Low());
+  const std::string low = WriteInputMesh("low", Low());
   FakeContext no_source(dir_ / "a", {{"size", 16}});
   no_source.AddInput("mesh", "mesh", low);
   const Status missing = Run("bake.from_mesh", no_source);
@@ -181,7 +173,7 @@ TEST_F(FromMeshStageTest, ClearErrors) {
   uncolored.colors.clear();
   FakeContext no_colors(dir_ / "b", {{"size", 16}});
   no_colors.AddInput("mesh", "mesh", low);
-  no_colors.AddInput("source", "mesh", WriteMesh("uncolored", uncolored));
+  no_colors.AddInput("source", "mesh", WriteInputMesh("uncolored", uncolored));
   const Status colors = Run("bake.from_mesh", no_colors);
   EXPECT_EQ(colors.code(), Status::Code::kInvalid);
   EXPECT_THAT(colors.message(), HasSubstr("bake.from_mesh"));
@@ -189,14 +181,14 @@ TEST_F(FromMeshStageTest, ClearErrors) {
 
   FakeContext cage(dir_ / "c", {{"size", 16}, {"cage", 0}});
   cage.AddInput("mesh", "mesh", low);
-  cage.AddInput("source", "mesh", WriteMesh("high", High()));
+  cage.AddInput("source", "mesh", WriteInputMesh("high", High()));
   EXPECT_THAT(Run("bake.from_mesh", cage).message(), HasSubstr("'cage' must be > 0"));
 
   Mesh no_uvs = Low();
   no_uvs.uvs.clear();
   FakeContext uvs(dir_ / "d", {{"size", 16}});
-  uvs.AddInput("mesh", "mesh", WriteMesh("no_uvs", no_uvs));
-  uvs.AddInput("source", "mesh", WriteMesh("high", High()));
+  uvs.AddInput("mesh", "mesh", WriteInputMesh("no_uvs", no_uvs));
+  uvs.AddInput("source", "mesh", WriteInputMesh("high", High()));
   const Status uv_status = Run("bake.from_mesh", uvs);
   EXPECT_EQ(uv_status.code(), Status::Code::kInvalid);
   EXPECT_THAT(uv_status.message(), HasSubstr("uvs"));
