@@ -6,6 +6,7 @@
 #include "stages/mesh/mesh_stages.h"
 #include "stages/metrics/metrics_stages.h"
 #include "stages/points/points_stages.h"
+#include "stages/render/render_stages.h"
 #include "stages/synth/synth_stages.h"
 #include "stages/uv/uv_stages.h"
 
@@ -20,6 +21,7 @@ void RegisterBuiltinStages(StageRegistry& registry) {
   RegisterUvStages(registry);
   RegisterBakeStages(registry);
   RegisterExportStages(registry);
+  RegisterRenderStages(registry);
 }
 
 }  // namespace pb

@@ -1,0 +1,2 @@
+// Render: not written yet.
+#pragma once

@@ -1,0 +1,1 @@
+#include "stages/metrics/fps_model.h"

@@ -1,0 +1,2 @@
+// FPS model: not written yet.
+#pragma once

@@ -1,0 +1,1 @@
+// estimate.fps: not written yet.

@@ -1,0 +1,1 @@
+// estimate.fps tests: not written yet.

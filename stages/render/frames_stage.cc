@@ -1,0 +1,1 @@
+// render.frames: not written yet.

@@ -1,0 +1,1 @@
+// render.frames stage tests: not written yet.

@@ -1,0 +1,1 @@
+// Report tests: not written yet.
