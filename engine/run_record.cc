@@ -31,12 +31,18 @@ nlohmann::json StageRecordJson(const StageOutcome& o) {
 nlohmann::json RunRecordJson(const Workflow& wf, const std::vector<StageOutcome>& outcomes,
                              const nlohmann::json& run_info) {
   nlohmann::json stages = nlohmann::json::array();
-  for (const auto& o : outcomes) stages.push_back(StageRecordJson(o));
+  for (const auto& o : outcomes) {
+    stages.push_back(StageRecordJson(o));
+    auto node = wf.stages.find(o.id);
+    if (node != wf.stages.end() && !node->second.group.empty())
+      stages.back()["group"] = node->second.group;
+  }
   nlohmann::json j = run_info;
   j["format"] = "pointbake-run 1";
   j["workflow"] = wf.name;
   j["workflow_file"] = wf.file;
   j["stages"] = stages;
+  if (!wf.disabled.empty()) j["disabled_stages"] = wf.disabled;
   return j;
 }
 

@@ -2,7 +2,9 @@
 //   run.json    {"format": "pointbake-run 1", workflow, started, options,
 //               stages: [{stage, type, status (hit|ran|failed|skipped), key,
 //               start_s, end_s, wall_s, user_s, sys_s, peak_rss_bytes,
-//               read_bytes, write_bytes, counters, phases, error, cached_run}]}
+//               read_bytes, write_bytes, counters, phases, error, cached_run,
+//               group (the stage's `group:`, when it has one)}],
+//               disabled_stages: [ids left out by `when:`] (when any)}
 //   run.jsonl   one line per stage, same fields (for appending tools / jq)
 //   trace.json  Chrome trace events (chrome://tracing, Perfetto): one lane
 //               per parallel slot, phases nested in their stage

@@ -215,6 +215,8 @@ Status ApplySet(const std::string& set, json& stages) {
   if (!stage.is_object()) return Status::Invalid("--set " + set + ": stage is not a mapping");
   json* cur = &stage["with"];
   if (cur->is_null()) *cur = json::object();
+  if (!cur->is_object())
+    return Status::Invalid("--set " + set + ": stage '" + parts[0] + "' has no mapping of parameters");
   for (size_t i = 1; i + 1 < parts.size(); ++i) {
     json& next = (*cur)[parts[i]];
     if (next.is_null()) next = json::object();
@@ -316,9 +318,20 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     }
   }
 
+  // A whole `with: ${scene.KEY}` becomes the scene's mapping before --set
+  // applies, so overrides reach its parameters (e.g. --set scan.points=...).
+  json stages = doc.value["stages"];
+  std::set<std::string> with_from_scene;
+  for (auto& [id, spec] : stages.items()) {
+    if (!spec.contains("with") || !spec["with"].is_string()) continue;
+    std::set<std::string> unused;
+    SubstituteScene(spec["with"], "", doc, "/stages/" + PointerToken(id) + "/with", scene_ctx, unused,
+                    errors);
+    with_from_scene.insert(id);
+  }
+
   // --set overrides, applied to a copy of the stages; remember which
   // pointers they touched so errors point at the command line.
-  json stages = doc.value["stages"];
   std::map<std::string, std::string> set_by_pointer;
   for (const std::string& set : options.sets) {
     Status st = ApplySet(set, stages);
@@ -346,12 +359,39 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   std::vector<std::string> type_ids;
   for (const StageType* t : registry.All()) type_ids.push_back(t->id);
 
+  std::set<std::string> disabled;
   for (auto& [id, spec] : stages.items()) {
     const std::string sp = "/stages/" + PointerToken(id);
     StageNode node;
     node.id = id;
     node.pos = doc.KeyPositionOf(sp);
-    const std::string uses = spec["uses"].get<std::string>();
+    node.group = spec.value("group", "");
+    const size_t errors_before = errors.size();
+    std::set<std::string> from_scene;
+    if (spec.contains("when")) {
+      json when = spec["when"];
+      SubstituteScene(when, "", doc, sp + "/when", scene_ctx, from_scene, errors);
+      if (errors.size() != errors_before) continue;
+      if (!when.is_boolean()) {
+        errors.Add(doc.PositionOf(sp + "/when"), "stage '" + id + "': when: must be true or false, got " +
+                                                     when.dump() + " from the scene");
+        continue;
+      }
+      if (!when.get<bool>()) {
+        disabled.insert(id);
+        continue;
+      }
+    }
+    json uses_value = spec["uses"];
+    SubstituteScene(uses_value, "", doc, sp + "/uses", scene_ctx, from_scene, errors);
+    if (errors.size() != errors_before) continue;
+    if (!uses_value.is_string()) {
+      errors.Add(doc.PositionOf(sp + "/uses"),
+                 "stage '" + id + "': uses: the scene gives " + uses_value.dump() +
+                     ", not a stage type name");
+      continue;
+    }
+    const std::string uses = uses_value.get<std::string>();
     node.type = registry.Find(uses);
     if (!node.type) {
       errors.Add(doc.PositionOf(sp + "/uses"),
@@ -360,11 +400,18 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
       continue;
     }
     json with = spec.contains("with") ? spec["with"] : json::object();
-    std::set<std::string> from_scene;
-    const size_t errors_before = errors.size();
+    if (!with.is_object()) {
+      if (!with.is_string())  // an unresolved ${scene...} was reported above
+        errors.Add(doc.PositionOf(sp + "/with"), "stage '" + id + "': with: the scene gives " +
+                                                     with.dump() + ", not a mapping of parameters");
+      continue;
+    }
+    from_scene.clear();
     SubstituteScene(with, "", doc, sp + "/with", scene_ctx, from_scene, errors);
     // An unresolved ${...} would only add a confusing type error below.
     if (errors.size() != errors_before) continue;
+    // A whole `with:` taken from the scene makes every parameter a scene value.
+    const bool whole_with_from_scene = with_from_scene.count(id) > 0;
     if (std::optional<std::string> bad = FindNonFinite(with, "")) {
       errors.Add(pos_of(sp + "/with" + *bad),
                  "stage '" + id + "' (" + uses + "): must be a finite number (no .inf or .nan)");
@@ -382,19 +429,25 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     const json properties = param_schema.value("properties", json::object());
     for (auto& [name, prop] : properties.items()) {
       if (!prop.value("x-path", false) || !with.contains(name) || !with[name].is_string()) continue;
-      const bool scene_value = from_scene.count("/" + PointerToken(name)) > 0;
       // Paths typed on the command line are relative to where it was typed.
       const bool from_command_line =
           pos_of(sp + "/with/" + PointerToken(name)).file.rfind("<command line>", 0) == 0;
+      const bool scene_value =
+          !from_command_line &&
+          (whole_with_from_scene || from_scene.count("/" + PointerToken(name)) > 0);
       const std::string base = scene_value ? scene_ctx.dir : from_command_line ? "." : dir;
       const std::string abs = ResolvePath(base, with[name].get<std::string>());
       with[name] = abs;
       if (!Env::Default()->Exists(abs)) {
         const std::string pointer = sp + "/with/" + PointerToken(name);
-        errors.Add(pos_of(pointer), "stage '" + id + "': file not found: " + abs +
-                                        (scene_value ? " (from scene " + scene_ctx.file +
-                                                           "; edit its path there)"
-                                                     : ""));
+        std::string hint;
+        if (scene_value) {
+          hint = " (from scene " + scene_ctx.file + "; edit its path there";
+          if (scene_ctx.scene->contains("data_note") && (*scene_ctx.scene)["data_note"].is_string())
+            hint += ". The scene says: " + (*scene_ctx.scene)["data_note"].get<std::string>();
+          hint += ")";
+        }
+        errors.Add(pos_of(pointer), "stage '" + id + "': file not found: " + abs + hint);
       }
     }
     node.params = std::move(with);
@@ -435,6 +488,12 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     for (auto& [port, input] : node.inputs) {
       auto src = wf.stages.find(input.from_stage);
       if (src == wf.stages.end()) {
+        if (disabled.count(input.from_stage)) {
+          errors.Add(input.pos, "input '" + port + "' of stage '" + id + "' comes from stage '" +
+                                    input.from_stage + "', which its `when:` leaves out; give '" +
+                                    id + "' the same `when:`");
+          continue;
+        }
         // A stage that failed to resolve its type was reported already.
         if (!stages.contains(input.from_stage))
           errors.Add(input.pos, "input '" + port + "' of stage '" + id + "' names unknown stage '" +
@@ -472,6 +531,7 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
       const std::string port = text.substr(text.find('.') + 1);
       auto it = wf.stages.find(st);
       const SourcePos pos = doc.PositionOf("/outputs/" + PointerToken(name));
+      if (disabled.count(st)) continue;  // e.g. ground-truth outputs of a scanned scene
       if (it == wf.stages.end()) {
         if (!stages.contains(st))
           errors.Add(pos, "output '" + name + "' names unknown stage '" + st + "'" +
@@ -487,6 +547,7 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     }
   }
 
+  wf.disabled.assign(disabled.begin(), disabled.end());
   if (!errors.empty()) return errors.ToStatus();
 
   // Topological order (Kahn, ties by name) and cycle detection.

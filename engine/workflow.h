@@ -35,6 +35,7 @@ struct StageNode {
   std::map<std::string, InputRef> inputs;  // by input port
   std::vector<std::string> deps;           // distinct upstream stage ids, sorted
   SourcePos pos;                           // of the stage's key
+  std::string group;                       // `group:` (report grouping), or empty
 };
 
 struct Workflow {
@@ -45,6 +46,8 @@ struct Workflow {
   std::vector<std::string> plugins;  // absolute paths
   std::string salt;
   std::map<std::string, StageNode> stages;
+  // Stages left out because their `when:` was false (not in `stages`).
+  std::vector<std::string> disabled;
   std::vector<std::string> order;  // topological; ties broken by name
   // name -> (stage, port) copied to the output folder.
   std::map<std::string, std::pair<std::string, std::string>> outputs;

@@ -129,6 +129,102 @@ stages:
   EXPECT_EQ(ok->stages["src"].params["text"], "eye=[0,0,0]");
 }
 
+TEST_F(WorkflowTest, TheSceneNamesTheSourceStageAndWhenLeavesStagesOut) {
+  dir_.Write("scenes/synthetic.yaml", R"(name: synthetic
+truth: true
+source: { uses: t.text, with: { text: made, count: 2 } }
+)");
+  dir_.Write("scenes/scanned.yaml", R"(name: scanned
+truth: false
+data_note: "Ask the archive for scan.txt."
+source: { uses: t.file, with: { path: data/scan.txt } }
+)");
+  dir_.Write("scenes/data/scan.txt", "x");
+  const std::string text = R"(name: demo
+stages:
+  src: { uses: "${scene.source.uses}", with: "${scene.source.with}", group: input }
+  up: { uses: t.upper, in: { in: src.out }, group: bake }
+  truth: { uses: t.text, with: { text: truth }, when: "${scene.truth}", group: evaluation }
+  both: { uses: t.pair, in: { a: up.out, b: truth.out }, when: "${scene.truth}" }
+outputs: { result: up.out, truth: both.out }
+)";
+  auto synthetic = Load(text, LoadOptions{dir_.path() + "/scenes/synthetic.yaml", {}});
+  ASSERT_TRUE(synthetic.ok()) << synthetic.status().message();
+  EXPECT_EQ(synthetic->stages["src"].type->id, "t.text");
+  EXPECT_EQ(synthetic->stages["src"].params["count"], 2);
+  EXPECT_EQ(synthetic->stages["src"].group, "input");
+  EXPECT_EQ(synthetic->stages.size(), 4u);
+  EXPECT_TRUE(synthetic->disabled.empty());
+  EXPECT_EQ(synthetic->outputs.size(), 2u);
+
+  // --set reaches parameters that came from the scene as a whole mapping.
+  auto set = Load(text, LoadOptions{dir_.path() + "/scenes/synthetic.yaml", {"src.count=5"}});
+  ASSERT_TRUE(set.ok()) << set.status().message();
+  EXPECT_EQ(set->stages["src"].params["count"], 5);
+
+  auto scanned = Load(text, LoadOptions{dir_.path() + "/scenes/scanned.yaml", {}});
+  ASSERT_TRUE(scanned.ok()) << scanned.status().message();
+  EXPECT_EQ(scanned->stages["src"].type->id, "t.file");
+  // The scene's path is relative to the scene file.
+  EXPECT_EQ(scanned->stages["src"].params["path"], dir_.path() + "/scenes/data/scan.txt");
+  EXPECT_EQ(scanned->disabled, (std::vector<std::string>{"both", "truth"}));
+  EXPECT_EQ(scanned->stages.size(), 2u);
+  ASSERT_EQ(scanned->outputs.size(), 1u);
+  EXPECT_EQ(scanned->outputs.begin()->first, "result");
+
+  // A missing scan file: the error names the scene and repeats its note.
+  std::filesystem::remove(dir_.path() + "/scenes/data/scan.txt");
+  auto missing = Load(text, LoadOptions{dir_.path() + "/scenes/scanned.yaml", {}});
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("wf.yaml:3:"), std::string::npos) << missing.status().message();
+  EXPECT_NE(missing.status().message().find("file not found: " + dir_.path() + "/scenes/data/scan.txt"),
+            std::string::npos) << missing.status().message();
+  EXPECT_NE(missing.status().message().find("The scene says: Ask the archive for scan.txt."),
+            std::string::npos) << missing.status().message();
+}
+
+TEST_F(WorkflowTest, WhenAndSceneNamedStagesReportBadValues) {
+  dir_.Write("scene.yaml", "name: s\nparams: { flag: 3, kind: t.nope, with: 7 }\n");
+  auto not_bool = Load(R"(name: demo
+scene: scene.yaml
+stages:
+  src: { uses: t.text, when: "${scene.params.flag}" }
+)");
+  ASSERT_FALSE(not_bool.ok());
+  EXPECT_NE(not_bool.status().message().find("wf.yaml:4:"), std::string::npos) << not_bool.status().message();
+  EXPECT_NE(not_bool.status().message().find("when: must be true or false, got 3"), std::string::npos)
+      << not_bool.status().message();
+  auto unknown = Load(R"(name: demo
+scene: scene.yaml
+stages:
+  src: { uses: "${scene.params.kind}", with: "${scene.params.with}" }
+)");
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.status().message().find("unknown stage type 't.nope'"), std::string::npos)
+      << unknown.status().message();
+  auto not_map = Load(R"(name: demo
+scene: scene.yaml
+stages:
+  src: { uses: t.text, with: "${scene.params.with}" }
+)");
+  ASSERT_FALSE(not_map.ok());
+  EXPECT_NE(not_map.status().message().find("with: the scene gives 7, not a mapping"), std::string::npos)
+      << not_map.status().message();
+  // A stage that consumes a disabled stage must be disabled too.
+  auto dangling = Load(R"(name: demo
+stages:
+  src: { uses: t.text, when: false }
+  up: { uses: t.upper, in: { in: src.out } }
+)");
+  ASSERT_FALSE(dangling.ok());
+  EXPECT_NE(dangling.status().message().find("wf.yaml:4:"), std::string::npos) << dangling.status().message();
+  EXPECT_NE(dangling.status().message().find("which its `when:` leaves out"), std::string::npos)
+      << dangling.status().message();
+  auto bad_group = Load("name: demo\nstages:\n  src: { uses: t.text, group: baking }\n");
+  ASSERT_FALSE(bad_group.ok());
+  EXPECT_NE(bad_group.status().message().find("wf.yaml:3:"), std::string::npos) << bad_group.status().message();
+}
+
 TEST_F(WorkflowTest, PathsFromTheCommandLineAreRelativeToTheWorkingDirectory) {
   dir_.Write("sub/data.txt", "x");
   const std::string text = "name: demo\nstages:\n  f: { uses: t.file, with: { path: sub/data.txt } }\n";
