@@ -15,6 +15,7 @@
 #include "engine/key.h"
 #include "engine/progress.h"
 #include "engine/run_record.h"
+#include "engine/run_workflow.h"
 #include "engine/scheduler.h"
 #include "engine/workflow.h"
 
@@ -58,10 +59,6 @@ std::string DefaultCacheDir() {
   return ".pointbake-cache";
 }
 
-// Stages run the very binary that planned them, even if a rebuild replaced
-// the file meanwhile (new code under old keys would poison the cache).
-std::string SelfExe() { return "/proc/self/exe"; }
-
 int Fail(const Status& st) {
   std::fprintf(stderr, "%s\n", st.message().c_str());
   return 2;
@@ -72,13 +69,6 @@ Expected<Workflow> Load(const RunFlags& f, Registry& registry) {
   opts.scene_file = f.scene;
   opts.sets = f.sets;
   return LoadWorkflow(f.workflow, opts, registry);
-}
-
-std::string IsoNow() {
-  std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
 }
 
 int PrintPlan(const Workflow& wf, Cache& cache, bool explain) {
@@ -122,50 +112,91 @@ int CmdRun(const RunFlags& f, Registry& registry, bool explain_only) {
   if (explain_only || f.dry_run) return PrintPlan(*wf, **cache, explain_only);
 
   const std::string out_dir = f.out_dir.empty() ? "out/" + wf->name : f.out_dir;
-  Status st = Env::Default()->CreateDirs(out_dir + "/logs");
-  if (!st.ok()) return Fail(st);
-  RunOptions opts;
+  WorkflowRunOptions opts;
   opts.jobs = f.jobs;
   opts.mem_budget_bytes = mem;
   opts.keep_going = f.keep_going;
   opts.threads_per_stage = f.threads;
-  opts.log_dir = ResolvePath(".", out_dir + "/logs");
-  LocalProcessExecutor local(SelfExe());
-  InProcessExecutor in_process;
-  Executor& executor = f.in_process ? static_cast<Executor&>(in_process) : local;
-  ProgressPrinter printer(::isatty(2) != 0, f.quiet);
-  Scheduler scheduler(*wf, **cache, executor, &printer);
-  const std::string started = IsoNow();
-  const auto t0 = std::chrono::steady_clock::now();
-  std::vector<StageOutcome> outcomes = scheduler.Run(opts);
-  const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  nlohmann::json info = {{"started", started},
-                         {"total_wall_s", total_s},
-                         {"cache", (*cache)->dir()},
-                         {"options",
-                          {{"jobs", f.jobs}, {"mem_budget_bytes", mem}, {"keep_going", f.keep_going},
-                           {"sets", f.sets}, {"scene", wf->scene_file}}},
-                         {"host", {{"cores", std::thread::hardware_concurrency()}}}};
-  std::vector<std::string> written;
-  st = WriteRunOutputs(*wf, outcomes, info, **cache, out_dir, &written);
-  int ran = 0, hit = 0, failed = 0, skipped = 0;
-  for (const auto& o : outcomes) {
-    if (o.state == StageOutcome::State::kRan) ++ran;
-    if (o.state == StageOutcome::State::kHit) ++hit;
-    if (o.state == StageOutcome::State::kFailed) ++failed;
-    if (o.state == StageOutcome::State::kSkipped) ++skipped;
-  }
-  if (!st.ok()) {
-    std::fprintf(stderr, "writing outputs: %s\n", st.message().c_str());
+  opts.quiet = f.quiet;
+  opts.in_process = f.in_process;
+  opts.sets = f.sets;
+  const WorkflowRunSummary r = RunWorkflowInto(*wf, **cache, opts, out_dir);
+  if (!r.outputs.ok()) {
+    std::fprintf(stderr, "writing outputs: %s\n", r.outputs.message().c_str());
     return 2;
   }
   if (!f.quiet)
-    for (const auto& w : written) std::printf("output %s\n", w.c_str());
-  std::printf("%s: %zu stages, %d ran, %d cached, %d failed, %d not run in %s; record in %s/run.json\n",
-              wf->name.c_str(), outcomes.size(), ran, hit, failed, skipped,
-              FormatSeconds(total_s).c_str(), out_dir.c_str());
-  return failed > 0 || skipped > 0 ? 1 : 0;
+    for (const auto& w : r.written) std::printf("output %s\n", w.c_str());
+  std::printf("%s: %d stages, %d ran, %d cached, %d failed, %d not run in %s; record in %s/run.json\n",
+              wf->name.c_str(), r.stages, r.ran, r.hit, r.failed, r.skipped,
+              FormatSeconds(r.total_s).c_str(), out_dir.c_str());
+  return r.failed > 0 || r.skipped > 0 ? 1 : 0;
+}
+
+struct CampaignFlags {
+  std::string file;
+  RunFlags run;
+};
+
+// The demo campaign: configs/campaigns/demo.yaml under the working directory,
+// else in the source tree this binary was built from.
+std::string DemoCampaignFile() {
+  const std::string local = "configs/campaigns/demo.yaml";
+  if (Env::Default()->Exists(local)) return local;
+  return std::string(PB_SOURCE_DIR) + "/" + local;
+}
+
+int CmdCampaign(const CampaignFlags& f, Registry& registry, const CampaignReportWriter& report) {
+  for (const auto& [what, path] : {std::pair{"campaign", ResolvePath(".", f.file)},
+                                   std::pair{"--cache", ResolvePath(".", f.run.cache_dir)},
+                                   std::pair{"--out", ResolvePath(".", f.run.out_dir)}})
+    if (!IsValidUtf8(path))
+      return Fail(Status::Invalid(std::string(what) + " path is not valid UTF-8; rename the folder"));
+  if (!Env::Default()->Exists(f.file)) return Fail(Status::NotFound("campaign file not found: " + f.file));
+  Expected<Campaign> campaign = LoadCampaign(f.file, registry);
+  if (!campaign.ok()) return Fail(campaign.status());
+  uint64_t mem = 0;
+  if (!f.run.mem.empty()) {
+    Expected<uint64_t> parsed = ParseByteSize(f.run.mem);
+    if (!parsed.ok()) return Fail(parsed.status().WithContext("--mem"));
+    mem = *parsed;
+  }
+  Expected<std::unique_ptr<Cache>> cache =
+      Cache::Open(f.run.cache_dir.empty() ? DefaultCacheDir() : f.run.cache_dir);
+  if (!cache.ok()) return Fail(cache.status());
+  Expected<FileLock> shared = (*cache)->LockShared();
+  if (!shared.ok()) return Fail(shared.status());
+  CampaignOptions options;
+  options.out_dir = f.run.out_dir;
+  options.run.jobs = f.run.jobs;
+  options.run.mem_budget_bytes = mem;
+  options.run.keep_going = f.run.keep_going;
+  options.run.threads_per_stage = f.run.threads;
+  options.run.quiet = f.run.quiet;
+  std::printf("campaign %s: %zu runs into %s\n", campaign->name.c_str(), campaign->runs.size(),
+              (options.out_dir.empty() ? "out/" + campaign->name : options.out_dir).c_str());
+  const CampaignResult r = RunCampaign(*campaign, **cache, options, registry, report);
+  if (!r.report.ok()) {
+    std::fprintf(stderr, "writing the report: %s\n", r.report.message().c_str());
+    return 2;
+  }
+  std::printf("campaign %s: %d runs, %d failed; results in %s/campaign.json\n", campaign->name.c_str(),
+              r.runs, r.failed_runs, r.out_dir.c_str());
+  if (!r.report_dir.empty())
+    std::printf("report: %s/report.html (tables: %s/report.md, %s/results.csv)\n",
+                r.report_dir.c_str(), r.report_dir.c_str(), r.report_dir.c_str());
+  return r.failed_runs > 0 ? 1 : 0;
+}
+
+void AddCampaignOptions(CLI::App* cmd, CampaignFlags& f) {
+  cmd->add_option("-j,--jobs", f.run.jobs, "Stages run in parallel within a run")
+      ->check(CLI::Range(1, 256));
+  cmd->add_option("--mem", f.run.mem, "Memory budget for parallel stages, e.g. 16G");
+  cmd->add_option("--cache", f.run.cache_dir, "Cache folder (default $POINTBAKE_CACHE or ~/.cache/pointbake)");
+  cmd->add_option("--out", f.run.out_dir, "Output folder (default out/<campaign name>)");
+  cmd->add_option("--threads", f.run.threads, "Threads per stage (default: all cores)");
+  cmd->add_flag("--keep-going", f.run.keep_going, "After a failure, still run independent stages");
+  cmd->add_flag("-q,--quiet", f.run.quiet, "Print failures and summaries only");
 }
 
 // A scene names data, units, spacing, viewpoints or parameters; anything else
@@ -185,6 +216,10 @@ int CmdValidate(const std::vector<std::string>& files, const std::string& as, Re
     Status st;
     if (!doc.ok()) {
       st = doc.status();
+    } else if (as == "campaign" || (as.empty() && doc->value.is_object() &&
+                                    doc->value.contains("scenes") && doc->value.contains("workflows"))) {
+      Expected<Campaign> campaign = LoadCampaign(file, registry);
+      if (!campaign.ok()) st = campaign.status();
     } else if (as == "workflow" || (as.empty() && LooksLikeWorkflow(doc->value))) {
       Expected<Workflow> wf = LoadWorkflow(file, {}, registry);
       if (!wf.ok()) st = wf.status();
@@ -218,7 +253,8 @@ int CmdStages(const std::string& id, Registry& registry) {
 
 }  // namespace
 
-int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliCommand>& extra) {
+int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliCommand>& extra,
+            const CampaignReportWriter& report) {
   for (const std::string& e : registry.TakeErrors())
     std::fprintf(stderr, "internal error registering built-in stages: %s\n", e.c_str());
   // The hidden child-process entry point, kept out of CLI11 for speed.
@@ -239,12 +275,20 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
   run->add_flag("-q,--quiet", run_flags.quiet, "Print failures and the summary only");
   run->add_flag("--in-process", run_flags.in_process,
                 "Run stages inside this process (debugging; no per-stage memory figures)");
-  CLI::App* validate = app.add_subcommand("validate", "Check workflow and scene files, run nothing");
+  CampaignFlags campaign_flags, demo_flags;
+  campaign_flags.run.jobs = demo_flags.run.jobs = 2;
+  CLI::App* campaign = app.add_subcommand("campaign", "Run a campaign (scenes x workflows) and write its report");
+  campaign->add_option("FILE", campaign_flags.file, "Campaign YAML file")->required();
+  AddCampaignOptions(campaign, campaign_flags);
+  CLI::App* demo = app.add_subcommand(
+      "demo", "Run the demo campaign (synthetic scenes, the four workflows); report in out/demo/report/");
+  AddCampaignOptions(demo, demo_flags);
+  CLI::App* validate = app.add_subcommand("validate", "Check workflow, scene and campaign files, run nothing");
   std::vector<std::string> validate_files;
   validate->add_option("FILE", validate_files, "Workflow or scene files")->required();
   std::string validate_as;
   validate->add_option("--as", validate_as, "Check as this kind (default: decided by content)")
-      ->check(CLI::IsMember({"workflow", "scene"}));
+      ->check(CLI::IsMember({"workflow", "scene", "campaign"}));
   CLI::App* explain = app.add_subcommand("explain", "Per stage: cached or not, and what changed");
   AddRunOptions(explain, explain_flags);
   CLI::App* graph = app.add_subcommand("graph", "Print the workflow's DAG as Graphviz DOT");
@@ -276,6 +320,11 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
   }
 
   if (*run) return CmdRun(run_flags, registry, false);
+  if (*campaign) return CmdCampaign(campaign_flags, registry, report);
+  if (*demo) {
+    demo_flags.file = DemoCampaignFile();
+    return CmdCampaign(demo_flags, registry, report);
+  }
   if (*explain) return CmdRun(explain_flags, registry, true);
   if (*validate) return CmdValidate(validate_files, validate_as, registry);
   if (*stages) return CmdStages(stage_id, registry);

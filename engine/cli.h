@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/campaign.h"
 #include "engine/registry.h"
 
 namespace pb {
@@ -20,7 +21,10 @@ struct CliCommand {
   std::function<int(const std::vector<std::string>& args)> run;
 };
 
-// Exit status: 0 success, 1 a stage failed, 2 bad input or usage.
-int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliCommand>& extra = {});
+// Exit status: 0 success, 1 a stage (or a campaign run) failed, 2 bad input or
+// usage. `report` writes campaign reports (`campaign`, `demo`); without it
+// campaigns write their runs and campaign.json only.
+int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliCommand>& extra = {},
+            const CampaignReportWriter& report = {});
 
 }  // namespace pb

@@ -2,9 +2,13 @@
 #include "engine/cli.h"
 #include "stages/builtin.h"
 #include "stages/metrics/compare_command.h"
+#include "stages/report/report.h"
 
 int main(int argc, char** argv) {
   pb::Registry registry;
   pb::RegisterBuiltinStages(registry);
-  return pb::CliMain(argc, argv, registry, {pb::CompareCommand()});
+  return pb::CliMain(argc, argv, registry, {pb::CompareCommand()},
+                     [](const std::string& campaign_dir, const std::string& report_dir) {
+                       return pb::WriteCampaignReport(campaign_dir, report_dir);
+                     });
 }
