@@ -1,1 +1,344 @@
-// Report tests: not written yet.
+// Campaign report on a tiny campaign folder written by the test: one scene,
+// HPM + LPM (failed) + point transfer, with run records, tables and frames.
+#include "stages/report/report.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <fstream>
+#include <nlohmann/json.hpp>
+#include <sstream>
+
+#include "stages/geometry/frames.h"
+#include "stages/geometry/table.h"
+#include "stages/geometry/test_data.h"
+
+namespace pb {
+namespace {
+
+using Json = nlohmann::json;
+using ::testing::HasSubstr;
+using ::testing::Not;
+
+constexpr int kW = 64, kH = 48;
+
+std::string ReadText(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// A smooth RGB gradient; `square` paints a 16×16 white block at (sx, sy).
+Image TestFrame(int offset, bool square = false, int sx = 40, int sy = 8) {
+  Image image = Image::Make(kW, kH, 3, Image::PixelType::kU8);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x) {
+      image.at_u8(x, y, 0) = uint8_t(x * 3 + offset);
+      image.at_u8(x, y, 1) = uint8_t(y * 4);
+      image.at_u8(x, y, 2) = uint8_t(100 + offset);
+      if (square && x >= sx && x < sx + 16 && y >= sy && y < sy + 16)
+        for (int c = 0; c < 3; ++c) image.at_u8(x, y, c) = 255;
+    }
+  return image;
+}
+
+Table MetricsTable(const TableValue& psnr) {
+  Table t;
+  t.columns = {"frame", "psnr_db", "ssim_luma", "ssim_rgb", "ms_ssim_luma", "flip_mean"};
+  t.rows.push_back({std::string("front"), psnr, 0.9, 0.91, 0.95, 0.05});
+  t.rows.push_back({std::string("mean"), psnr, 0.9, 0.91, 0.95, 0.05});
+  return t;
+}
+
+Table FpsTable(int64_t triangles, int64_t texture_px, double fps) {
+  Table t;
+  t.columns = {"device", "triangles", "texture_width", "texture_height", "texture_bytes", "texture_budget_bytes",
+               "fits_texture_budget", "triangles_per_s", "refresh_hz", "fps"};
+  t.rows.push_back({std::string("quest2"), triangles, texture_px, texture_px, texture_px * texture_px * 4,
+                    int64_t(1) << 30, true, 1e9, 72.0, fps});
+  return t;
+}
+
+Json Stage(const std::string& id, const std::string& group, double wall_s, double io_s, double peak) {
+  Json phases = Json::array({{{"name", "compute"}, {"start_s", 0.0}, {"dur_s", wall_s - io_s}}});
+  if (io_s > 0) phases.push_back({{"name", "io"}, {"start_s", wall_s - io_s}, {"dur_s", io_s}});
+  return {{"stage", id}, {"type", "t"}, {"status", "ran"}, {"group", group}, {"wall_s", wall_s},
+          {"peak_rss_bytes", peak}, {"phases", phases}, {"counters", Json::object()}};
+}
+
+class ReportTest : public testing::TempDirTest {
+ protected:
+  std::string Campaign() const { return Path("campaign"); }
+  std::string RunDir(const std::string& workflow) const { return Path("campaign/runs/room/" + workflow); }
+
+  void WriteFrameSet(const std::string& dir, const Image& image) {
+    std::filesystem::create_directories(dir);
+    FrameSet set;
+    set.width = kW;
+    set.height = kH;
+    Frame frame;
+    frame.entry.name = "front";
+    frame.entry.file = "front.png";
+    frame.image = image;
+    set.frames.push_back(std::move(frame));
+    ASSERT_TRUE(WriteFrames(dir, set).ok());
+  }
+  void WriteJson(const std::string& path, const Json& j) {
+    std::filesystem::create_directories(std::filesystem::path(path).parent_path());
+    std::ofstream(path) << j.dump(2);
+  }
+
+  // workflows: name -> status; writes the campaign folder.
+  void WriteCampaign(bool lpm_ok = false, bool with_pt = true) {
+    Json runs = Json::array();
+    auto run = [&](const std::string& workflow, const std::string& status) {
+      Json r = {{"name", "room/" + workflow}, {"scene", "room"}, {"scene_file", "/x/room.yaml"},
+                {"workflow", workflow}, {"workflow_file", "/x/" + workflow + ".yaml"}, {"variant", ""},
+                {"sets", Json::array()}, {"dir", "runs/room/" + workflow}, {"status", status}};
+      if (status == "failed") r["error"] = "stage bake failed: out of memory, exit 137";
+      runs.push_back(r);
+    };
+    // Manifest order is not display order: the report sorts.
+    if (with_pt) run("point_transfer", "ok");
+    run("hpm", "ok");
+    run("lpm", lpm_ok ? "ok" : "failed");
+    WriteJson(Path("campaign/campaign.json"),
+              {{"format", "pointbake-campaign"}, {"version", 1}, {"name", "tiny"}, {"file", "/x/tiny.yaml"},
+               {"started", "2026-11-21T10:00:00Z"}, {"total_wall_s", 42.0},
+               {"host", {{"cores", 2}, {"memory_bytes", 25769803776.0}, {"cpu", "Test CPU"}}}, {"runs", runs}});
+
+    // HPM: high mesh 10 s of which 2 s io; bake a cache hit (4 s, 1 s io);
+    // export 1 s. Scan and render are not construction time.
+    Json bake_hit = {{"stage", "bake"}, {"type", "bake.from_mesh"}, {"status", "hit"}, {"group", "bake"},
+                     {"wall_s", 0.01}, {"cached_run", Stage("bake", "bake", 4, 1, 3e9)}};
+    WriteJson(RunDir("hpm") + "/run.json",
+              {{"format", "pointbake-run 1"}, {"workflow", "hpm"},
+               {"stages", {Stage("scan", "input", 5, 0, 1e8), Stage("poisson", "high_mesh", 10, 2, 2e9), bake_hit,
+                           Stage("export", "io", 1, 0, 1e8), Stage("render", "evaluation", 100, 0, 9e9)}}});
+    WriteFrameSet(RunDir("hpm") + "/frames", TestFrame(2));
+    WriteFrameSet(RunDir("hpm") + "/truth_frames", TestFrame(0));
+    WriteFrameSet(RunDir("hpm") + "/flip_truth", TestFrame(50));
+    ASSERT_TRUE(WriteTable(RunDir("hpm") + "/vs_truth.json", MetricsTable(35.0)).ok());
+    ASSERT_TRUE(WriteTable(RunDir("hpm") + "/fps.json", FpsTable(4000000, 0, 20.5)).ok());
+
+    if (with_pt) {
+      // Point transfer: normals 2 s (0.5 io), low mesh 1, uv 0.5, bake 1.5
+      // (0.25 io), export 0.5; the HPM reference chain is not its time.
+      WriteJson(RunDir("point_transfer") + "/run.json",
+                {{"format", "pointbake-run 1"}, {"workflow", "point_transfer"},
+                 {"stages", {Stage("scan", "input", 5, 0, 1e8), Stage("normals", "points", 2, 0.5, 1.5e9),
+                             Stage("decimate", "low_mesh", 1, 0, 5e8), Stage("unwrap", "uv", 0.5, 0, 4e8),
+                             Stage("bake", "bake", 1.5, 0.25, 1.2e9), Stage("export", "io", 0.5, 0, 1e8),
+                             Stage("hpm_poisson", "reference", 50, 0, 8e9), Stage("fps", "evaluation", 1, 0, 1e8)}}});
+      WriteFrameSet(RunDir("point_transfer") + "/frames", TestFrame(0, true));
+      WriteFrameSet(RunDir("point_transfer") + "/flip_truth", TestFrame(80));
+      WriteFrameSet(RunDir("point_transfer") + "/flip_hpm", TestFrame(90));
+      ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/vs_hpm.json", MetricsTable(30.0)).ok());
+      ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/vs_truth.json", MetricsTable(TableValue{})).ok());
+      ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/fps.json", FpsTable(240000, 2048, 72.0)).ok());
+    }
+    if (lpm_ok) {
+      WriteJson(RunDir("lpm") + "/run.json",
+                {{"format", "pointbake-run 1"}, {"workflow", "lpm"},
+                 {"stages", {Stage("decimate", "low_mesh", 1, 0, 5e8), Stage("bake", "bake", 1, 0, 5e8)}}});
+      WriteFrameSet(RunDir("lpm") + "/frames", TestFrame(0));
+    }
+  }
+
+  Json Results() { return Json::parse(ReadText(Path("report/results.json"))); }
+};
+
+TEST_F(ReportTest, GroupsTimesAndPeakRamAsTheContractSays) {
+  WriteCampaign();
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+  const Json r = Results();
+  EXPECT_EQ(r["format"], "pointbake-report");
+  EXPECT_EQ(r["campaign"]["name"], "tiny");
+  ASSERT_EQ(r["rows"].size(), 3u);
+  const Json& hpm = r["rows"][0];
+  const Json& lpm = r["rows"][1];
+  const Json& pt = r["rows"][2];
+  EXPECT_EQ(hpm["workflow"], "hpm");
+  EXPECT_EQ(lpm["workflow"], "lpm");
+  EXPECT_EQ(pt["workflow"], "point_transfer");
+  EXPECT_EQ(pt["display_name"], "Point transfer");
+
+  EXPECT_NEAR(hpm["time_s"]["high_mesh"].get<double>(), 8.0, 1e-9);
+  EXPECT_NEAR(hpm["time_s"]["bake"].get<double>(), 3.0, 1e-9);  // from cached_run, not the hit's 0.01
+  EXPECT_NEAR(hpm["time_s"]["io"].get<double>(), 4.0, 1e-9);    // 2 + 1 + 1
+  EXPECT_TRUE(hpm["time_s"]["points"].is_null());
+  EXPECT_TRUE(hpm["time_s"]["uv"].is_null());
+  EXPECT_NEAR(hpm["time_s"]["total"].get<double>(), 15.0, 1e-9);
+  EXPECT_EQ(hpm["peak_ram_bytes"].get<int64_t>(), 3000000000);  // render's 9e9 is evaluation
+
+  EXPECT_NEAR(pt["time_s"]["points"].get<double>(), 1.5, 1e-9);
+  EXPECT_NEAR(pt["time_s"]["low_mesh"].get<double>(), 1.0, 1e-9);
+  EXPECT_NEAR(pt["time_s"]["uv"].get<double>(), 0.5, 1e-9);
+  EXPECT_NEAR(pt["time_s"]["bake"].get<double>(), 1.25, 1e-9);
+  EXPECT_NEAR(pt["time_s"]["io"].get<double>(), 1.25, 1e-9);
+  EXPECT_NEAR(pt["time_s"]["total"].get<double>(), 5.5, 1e-9);
+  EXPECT_EQ(pt["peak_ram_bytes"].get<int64_t>(), 1500000000);  // reference chain's 8e9 left out
+  EXPECT_EQ(pt["faces"].get<int64_t>(), 240000);
+  EXPECT_EQ(pt["texture_size"]["width_px"].get<int64_t>(), 2048);
+  EXPECT_EQ(pt["fits"], true);
+  EXPECT_NEAR(pt["fps"].get<double>(), 72.0, 1e-9);
+  EXPECT_NEAR(pt["vs_hpm"]["psnr_db"].get<double>(), 30.0, 1e-9);
+  EXPECT_NEAR(pt["vs_hpm"]["ms_ssim_luma"].get<double>(), 0.95, 1e-9);
+  EXPECT_TRUE(pt["vs_truth"]["psnr_db"].is_null());  // infinite PSNR is null in the table
+  EXPECT_NEAR(pt["vs_truth"]["flip_mean"].get<double>(), 0.05, 1e-9);
+  EXPECT_TRUE(hpm["vs_hpm"]["psnr_db"].is_null());  // HPM has no comparison with itself
+
+  EXPECT_EQ(lpm["status"], "failed");
+  EXPECT_THAT(lpm["error"].get<std::string>(), HasSubstr("out of memory"));
+  EXPECT_TRUE(lpm["time_s"]["total"].is_null());
+  EXPECT_TRUE(lpm["peak_ram_bytes"].is_null());
+  EXPECT_TRUE(lpm["fps"].is_null());
+
+  // Speed-up of point transfer over HPM: 15 / 5.5; the failed LPM has none.
+  ASSERT_EQ(r["speedups"]["per_scene"].size(), 1u);
+  EXPECT_EQ(r["speedups"]["per_scene"][0]["workflow"], "hpm");
+  EXPECT_NEAR(r["speedups"]["per_scene"][0]["ratio"].get<double>(), 15.0 / 5.5, 1e-9);
+  ASSERT_EQ(r["speedups"]["geometric_mean"].size(), 1u);
+  EXPECT_NEAR(r["speedups"]["geometric_mean"][0]["ratio"].get<double>(), 15.0 / 5.5, 1e-9);
+}
+
+std::vector<std::string> SplitCsvLine(const std::string& line) {
+  std::vector<std::string> fields(1);
+  bool quoted = false;
+  for (size_t i = 0; i < line.size(); ++i) {
+    const char ch = line[i];
+    if (quoted && ch == '"' && i + 1 < line.size() && line[i + 1] == '"') fields.back() += '"', ++i;
+    else if (ch == '"') quoted = !quoted;
+    else if (ch == ',' && !quoted) fields.emplace_back();
+    else fields.back() += ch;
+  }
+  return fields;
+}
+
+TEST_F(ReportTest, CsvHasOneRowPerRunWithEmptyFieldsForUnknowns) {
+  WriteCampaign();
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+  std::istringstream csv(ReadText(Path("report/results.csv")));
+  std::vector<std::vector<std::string>> lines;
+  for (std::string line; std::getline(csv, line);) lines.push_back(SplitCsvLine(line));
+  ASSERT_EQ(lines.size(), 4u);
+  auto column = [&](const std::string& name) {
+    auto it = std::find(lines[0].begin(), lines[0].end(), name);
+    EXPECT_NE(it, lines[0].end()) << name;
+    return size_t(it - lines[0].begin());
+  };
+  for (const auto& l : lines) ASSERT_EQ(l.size(), lines[0].size());
+  EXPECT_EQ(lines[3][column("workflow")], "point_transfer");
+  EXPECT_EQ(std::stod(lines[3][column("time_total_s")]), 5.5);
+  EXPECT_EQ(lines[3][column("vs_truth_psnr_db")], "");
+  EXPECT_EQ(lines[3][column("fits_budget")], "true");
+  EXPECT_EQ(lines[2][column("status")], "failed");
+  EXPECT_EQ(lines[2][column("time_total_s")], "");
+  EXPECT_EQ(lines[2][column("error")], "stage bake failed: out of memory, exit 137");  // quoted comma
+}
+
+TEST_F(ReportTest, HtmlIsSelfContainedWithChartsAndFrames) {
+  WriteCampaign();
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+  const std::string html = ReadText(Path("report/report.html"));
+  EXPECT_THAT(html, Not(HasSubstr("src=\"http")));
+  EXPECT_THAT(html, Not(HasSubstr("href=")));
+  EXPECT_THAT(html, Not(HasSubstr("<script")));
+  EXPECT_THAT(html, Not(HasSubstr("url(")));
+  EXPECT_THAT(html, Not(HasSubstr("HDR-VDP")));
+  size_t images = 0, data_images = 0;
+  for (size_t at = html.find("<img "); at != std::string::npos; at = html.find("<img ", at + 1)) ++images;
+  for (size_t at = html.find("src=\"data:image/png;base64,"); at != std::string::npos;
+       at = html.find("src=\"data:image/png;base64,", at + 1))
+    ++data_images;
+  // Truth (frame + crop), HPM and point transfer (frame + crop + FLIP each).
+  EXPECT_EQ(images, 8u);
+  EXPECT_EQ(data_images, images);
+  size_t svgs = 0;
+  for (size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) ++svgs;
+  EXPECT_EQ(svgs, 2u);  // time bars and peak-RAM bars of the one scene
+  EXPECT_THAT(html, HasSubstr("Point transfer"));
+  EXPECT_THAT(html, HasSubstr("Ground truth"));
+  EXPECT_THAT(html, HasSubstr("run failed"));
+  EXPECT_THAT(html, HasSubstr("Test CPU"));
+  EXPECT_THAT(html, HasSubstr("2026-11-21T10:00:00Z"));
+  EXPECT_THAT(html, HasSubstr("exclude producing the scan"));
+  EXPECT_THAT(html, HasSubstr("2.73\xC3\x97 over HPM"));
+  // report.md links the same images, written beside it.
+  const std::string md = ReadText(Path("report/report.md"));
+  EXPECT_THAT(md, HasSubstr("](images/room__room_point_transfer__front_frame.png)"));
+  EXPECT_TRUE(std::filesystem::exists(Path("report/images/room__room_point_transfer__front_crop.png")));
+}
+
+TEST_F(ReportTest, CropIsWhereTransferAndLpmDifferMost) {
+  WriteCampaign(/*lpm_ok=*/true);
+  ReportOptions options;
+  options.crop_px = 16;
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report"), options).ok());
+  const std::string html = ReadText(Path("report/report.html"));
+  EXPECT_THAT(html, HasSubstr("Crop: 16\xC3\x97" "16 px at (40, 8)"));
+  // The crop is enlarged nearest-neighbor to about thumbnail_px: 16 * 20.
+  Expected<Image> crop = ReadPng(Path("report/images/room__room_point_transfer__front_crop.png"));
+  ASSERT_TRUE(crop.ok());
+  EXPECT_EQ(crop->width, 320);
+  EXPECT_EQ(crop->at_u8(5, 5, 0), 255);  // inside the white square
+}
+
+TEST_F(ReportTest, WithoutLpmTheCropIsTheFrameCentreAndThumbnailsAreBoxFiltered) {
+  WriteCampaign();
+  ReportOptions options;
+  options.crop_px = 16;
+  options.thumbnail_px = 32;
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report"), options).ok());
+  EXPECT_THAT(ReadText(Path("report/report.html")), HasSubstr("16 px at (24, 16)"));
+  Expected<Image> thumb = ReadPng(Path("report/images/room__room_hpm__front_frame.png"));
+  ASSERT_TRUE(thumb.ok());
+  EXPECT_EQ(thumb->width, 32);
+  EXPECT_EQ(thumb->height, 24);
+  // Pixel (0, 0) averages source 2×2 block: red 2,5,2,5 -> 3.5 -> 4 (rounded).
+  EXPECT_EQ(thumb->at_u8(0, 0, 0), 4);
+  EXPECT_EQ(thumb->at_u8(0, 0, 1), 2);  // green 0,0,4,4
+}
+
+TEST_F(ReportTest, OneSceneOneWorkflowWorksAndOutputIsDeterministic) {
+  WriteCampaign(false, /*with_pt=*/false);
+  // Keep only HPM in the manifest.
+  Json manifest = Json::parse(ReadText(Path("campaign/campaign.json")));
+  manifest["runs"] = Json::array({manifest["runs"][0]});
+  std::ofstream(Path("campaign/campaign.json")) << manifest.dump();
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("deep/new/report")).ok());
+  const std::string first = ReadText(Path("deep/new/report/report.html"));
+  EXPECT_THAT(first, HasSubstr("No speed-ups"));
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("deep/new/report")).ok());
+  EXPECT_EQ(ReadText(Path("deep/new/report/report.html")), first);
+  EXPECT_EQ(Json::parse(ReadText(Path("deep/new/report/results.json")))["rows"].size(), 1u);
+}
+
+TEST_F(ReportTest, ErrorsNameTheFile) {
+  WriteCampaign();
+  std::ofstream(RunDir("point_transfer") + "/run.json") << "{\"stages\": [";
+  Status s = WriteCampaignReport(Campaign(), Path("report"));
+  EXPECT_FALSE(s.ok());
+  EXPECT_THAT(s.message(), HasSubstr("runs/room/point_transfer/run.json"));
+
+  WriteCampaign();
+  Table no_mean = MetricsTable(1.0);
+  no_mean.rows.pop_back();
+  ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/vs_hpm.json", no_mean).ok());
+  s = WriteCampaignReport(Campaign(), Path("report"));
+  EXPECT_THAT(s.message(), HasSubstr("point_transfer/vs_hpm.json"));
+
+  std::ofstream(Path("campaign/campaign.json")) << "{\"format\": \"something-else\"}";
+  s = WriteCampaignReport(Campaign(), Path("report"));
+  EXPECT_EQ(s.code(), Status::Code::kCorrupt);
+  EXPECT_THAT(s.message(), HasSubstr("campaign/campaign.json"));
+
+  s = WriteCampaignReport(Path("nowhere"), Path("report"));
+  EXPECT_FALSE(s.ok());
+  EXPECT_THAT(s.message(), HasSubstr("nowhere/campaign.json"));
+}
+
+}  // namespace
+}  // namespace pb
