@@ -793,12 +793,14 @@ std::string Legend() {
 // ---- Tables (shared by Markdown and HTML) -----------------------------------
 
 struct TextTable {
+  size_t text_columns = 2;  // leading left-aligned columns; the rest are numbers
   std::vector<std::string> header;
   std::vector<std::vector<std::string>> rows;
 };
 
 TextTable TimesTable(const Campaign& c) {
   TextTable t;
+  t.text_columns = 3;
   t.header = {"Scene", "Workflow", "Status"};
   for (const char* g : kGroupTitles) t.header.push_back(std::string(g) + " s");
   t.header.push_back("Total s");
@@ -838,6 +840,7 @@ TextTable FpsTable(const Campaign& c) {
 
 TextTable SpeedUpTable(const Campaign& c, const std::vector<SpeedUp>& speedups, const std::vector<SpeedUpMean>& means) {
   TextTable t;
+  t.text_columns = 1;
   t.header = {"Versus"};
   for (const std::string& s : c.scenes) t.header.push_back(s);
   t.header.push_back("Geometric mean");
@@ -859,7 +862,7 @@ std::string MarkdownTable(const TextTable& t) {
   std::string md = "|";
   for (const std::string& h : t.header) md += " " + EscapeMd(h) + " |";
   md += "\n|";
-  for (size_t i = 0; i < t.header.size(); ++i) md += i < 2 ? " --- |" : " ---: |";
+  for (size_t i = 0; i < t.header.size(); ++i) md += i < t.text_columns ? " --- |" : " ---: |";
   md += "\n";
   for (const auto& row : t.rows) {
     md += "|";
@@ -871,11 +874,13 @@ std::string MarkdownTable(const TextTable& t) {
 
 std::string HtmlTable(const TextTable& t) {
   std::string html = "<table><thead><tr>";
-  for (const std::string& h : t.header) html += "<th>" + EscapeHtml(h) + "</th>";
+  for (size_t i = 0; i < t.header.size(); ++i)
+    html += (i < t.text_columns ? "<th class=\"l\">" : "<th>") + EscapeHtml(t.header[i]) + "</th>";
   html += "</tr></thead><tbody>";
   for (const auto& row : t.rows) {
     html += "<tr>";
-    for (size_t i = 0; i < row.size(); ++i) html += (i < 2 ? "<td class=\"l\">" : "<td>") + EscapeHtml(row[i]) + "</td>";
+    for (size_t i = 0; i < row.size(); ++i)
+      html += (i < t.text_columns ? "<td class=\"l\">" : "<td>") + EscapeHtml(row[i]) + "</td>";
     html += "</tr>";
   }
   return html + "</tbody></table>";
@@ -943,7 +948,7 @@ const char* kCss =
     "body{font-family:sans-serif;margin:24px;color:#222;background:#fff;max-width:1400px}"
     "h1{font-size:24px}h2{font-size:19px;margin-top:32px;border-bottom:1px solid #ccc}h3{font-size:16px}"
     "table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px solid #ccc;padding:3px 8px;"
-    "text-align:right}th{background:#f0f0f0}td.l{text-align:left}"
+    "text-align:right}th{background:#f0f0f0}td.l,th.l{text-align:left}"
     "svg.chart text{font-size:12px;fill:#222}svg.chart text.tick{fill:#555;font-size:11px}"
     ".legend span{margin-right:14px;font-size:13px}.legend i{display:inline-block;width:12px;height:12px;"
     "margin-right:4px;vertical-align:-1px}.frames{display:flex;flex-wrap:wrap;gap:12px}"
@@ -985,7 +990,8 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
       for (const FrameCell& cell : v.cells) {
         h += "<div class=\"cell\"><b>" + EscapeHtml(cell.title) + "</b>";
         if (!cell.note.empty()) h += "<div class=\"note\">" + EscapeHtml(cell.note) + "</div>";
-        h += Img(cell.thumb, cell.title) + Img(cell.crop, cell.title + " crop", "crop");
+        h += Img(cell.thumb, cell.title);
+        if (cell.crop) h += "<div>Crop</div>" + Img(cell.crop, cell.title + " crop", "crop");
         if (cell.flip) h += "<div>" + EscapeHtml(cell.flip_title) + "</div>" + Img(cell.flip, cell.flip_title);
         h += "</div>";
       }

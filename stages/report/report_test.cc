@@ -5,6 +5,7 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -314,6 +315,18 @@ TEST_F(ReportTest, OneSceneOneWorkflowWorksAndOutputIsDeterministic) {
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("deep/new/report")).ok());
   EXPECT_EQ(ReadText(Path("deep/new/report/report.html")), first);
   EXPECT_EQ(Json::parse(ReadText(Path("deep/new/report/results.json")))["rows"].size(), 1u);
+}
+
+// The report tools/check_report_html.sh opens in Chromium (ctest
+// report_html_chromium): written to $PB_REPORT_EXAMPLE_DIR/report when set.
+TEST_F(ReportTest, ExampleReportForTheBrowserCheck) {
+  WriteCampaign(/*lpm_ok=*/true);
+  const char* keep = std::getenv("PB_REPORT_EXAMPLE_DIR");
+  const std::string report = (keep && *keep ? std::string(keep) : Path("example")) + "/report";
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), report).ok());
+  const std::string html = ReadText(report + "/report.html");
+  EXPECT_THAT(html, HasSubstr("<svg"));
+  EXPECT_THAT(html, Not(HasSubstr("run failed")));
 }
 
 TEST_F(ReportTest, ErrorsNameTheFile) {
