@@ -1,1 +1,358 @@
-// render.frames: not written yet.
+// render.frames: draws a mesh (or the ground truth) from the scene's
+// viewpoints with the reference renderer (stages/geometry/render.h) and
+// writes a `frames` artifact (stages/geometry/frames.h).
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <optional>
+#include <set>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/stage.h"
+#include "stages/geometry/frames.h"
+#include "stages/geometry/image.h"
+#include "stages/geometry/ply.h"
+#include "stages/geometry/render.h"
+#include "stages/geometry/synth_scene.h"
+#include "stages/params.h"
+#include "stages/render/render_stages.h"
+
+namespace pb {
+namespace {
+
+constexpr const char* kId = "render.frames";
+
+// The viewpoint items repeat schemas/scene.schema.json so that a workflow
+// can pass `viewpoints: ${scene.viewpoints}` unchanged.
+constexpr const char* kSchema = R"({
+  "type": "object",
+  "additionalProperties": false,
+  "required": ["viewpoints"],
+  "properties": {
+    "viewpoints": {
+      "type": "array",
+      "minItems": 1,
+      "description": "Views to render, as a scene's `viewpoints` (pass ${scene.viewpoints}): eye and target in scene coordinates (meters), optional up (default [0, 0, 1]), vertical fov_deg (default 60) and name (default view<N>, N counted from 1).",
+      "items": {
+        "type": "object",
+        "required": ["eye", "target"],
+        "additionalProperties": false,
+        "properties": {
+          "name": { "type": "string", "description": "Frame name, unique; also the PNG's name." },
+          "eye": { "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": "Camera position, meters." },
+          "target": { "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": "Point looked at, meters." },
+          "up": { "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": "Up direction (default [0, 0, 1])." },
+          "fov_deg": { "type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 180, "description": "Vertical field of view, degrees (default 60)." }
+        }
+      }
+    },
+    "size": {
+      "type": "integer",
+      "minimum": 16,
+      "maximum": 8192,
+      "default": 1024,
+      "description": "Width and height of every frame, pixels."
+    },
+    "supersample": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 8,
+      "default": 2,
+      "description": "Samples per pixel along each axis for a mesh (2: 4 samples, box-averaged in linear light), the 4x anti-aliasing of a mobile GPU."
+    },
+    "truth_supersample": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 8,
+      "default": 4,
+      "description": "Samples per pixel along each axis for `truth` (4: 16 samples). The analytic albedo is point-sampled, not mip-filtered like a texture, and mortar joints are 10 mm (1 to 5 pixels at 1024 px): more samples make the reference the pixel's area average rather than an aliased pattern."
+    },
+    "lighting": {
+      "type": "string",
+      "enum": ["lambert", "unlit"],
+      "default": "lambert",
+      "description": "lambert: albedo * (ambient + diffuse * max(0, N.L)) with a headlight fixed to the viewer; unlit: albedo only."
+    },
+    "ambient": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.25,
+      "description": "Lambert: the ambient term (fraction of the albedo seen where the light does not reach)."
+    },
+    "diffuse": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.75,
+      "description": "Lambert: the weight of max(0, N.L). ambient + diffuse = 1 shows a surface facing the light at its albedo."
+    },
+    "background": {
+      "type": "array",
+      "items": { "type": "integer", "minimum": 0, "maximum": 255 },
+      "minItems": 3,
+      "maxItems": 3,
+      "default": [0, 0, 0],
+      "description": "sRGB color where no geometry is (alpha 0 there)."
+    }
+  }
+})";
+
+struct Options {
+  RenderOptions render;
+  int size = 1024;
+  int truth_supersample = 4;
+};
+
+Expected<std::array<double, 3>> Vector3(const nlohmann::json& item, const char* key, size_t index) {
+  const std::string where =
+      std::string(kId) + ": viewpoints[" + std::to_string(index) + "]." + key + ": ";
+  if (!item.contains(key)) return Status::Invalid(where + "missing");
+  const nlohmann::json& value = item[key];
+  if (!value.is_array() || value.size() != 3)
+    return Status::Invalid(where + "must be an array of 3 numbers");
+  std::array<double, 3> out{};
+  for (size_t k = 0; k < 3; ++k) {
+    if (!value[k].is_number()) return Status::Invalid(where + "must be an array of 3 numbers");
+    out[k] = value[k].get<double>();
+    if (!std::isfinite(out[k])) return Status::Invalid(where + "must be finite");
+  }
+  return out;
+}
+
+// Letters, digits, '-', '_' and '.' are kept; anything else becomes '_'.
+std::string FileStem(const std::string& name) {
+  std::string stem = name;
+  for (char& c : stem)
+    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
+  return stem;
+}
+
+struct View {
+  FrameEntry entry;
+  RenderCamera camera;
+};
+
+Expected<std::vector<View>> ReadViewpoints(const StageContext& ctx, int size) {
+  if (!ctx.params().contains("viewpoints"))
+    return Status::Invalid(std::string(kId) + ": parameter 'viewpoints' is missing");
+  const nlohmann::json& list = ctx.params()["viewpoints"];
+  if (!list.is_array() || list.empty())
+    return Status::Invalid(std::string(kId) + ": parameter 'viewpoints' must be a non-empty array");
+  std::vector<View> views;
+  std::set<std::string> names, files;
+  for (size_t i = 0; i < list.size(); ++i) {
+    const nlohmann::json& item = list[i];
+    const std::string where = std::string(kId) + ": viewpoints[" + std::to_string(i) + "]";
+    if (!item.is_object()) return Status::Invalid(where + ": must be an object");
+    for (const auto& [key, value] : item.items())
+      if (key != "name" && key != "eye" && key != "target" && key != "up" && key != "fov_deg")
+        return Status::Invalid(where + ": unknown key '" + key + "'");
+    View view;
+    view.camera.size = size;
+    std::string name = "view" + std::to_string(i + 1);
+    if (item.contains("name")) {
+      if (!item["name"].is_string() || item["name"].get<std::string>().empty())
+        return Status::Invalid(where + ".name: must be a non-empty string");
+      name = item["name"].get<std::string>();
+    }
+    if (!names.insert(name).second) return Status::Invalid(where + ": duplicate name '" + name + "'");
+    FrameViewpoint viewpoint;
+    PB_ASSIGN_OR_RETURN(viewpoint.eye, Vector3(item, "eye", i));
+    PB_ASSIGN_OR_RETURN(viewpoint.target, Vector3(item, "target", i));
+    view.camera.eye = viewpoint.eye;
+    view.camera.target = viewpoint.target;
+    if (item.contains("up")) {
+      PB_ASSIGN_OR_RETURN(view.camera.up, Vector3(item, "up", i));
+      viewpoint.up = view.camera.up;
+    }
+    if (item.contains("fov_deg")) {
+      if (!item["fov_deg"].is_number()) return Status::Invalid(where + ".fov_deg: must be a number");
+      view.camera.fov_deg = item["fov_deg"].get<double>();
+      if (!(view.camera.fov_deg > 0 && view.camera.fov_deg < 180))
+        return Status::Invalid(where + ".fov_deg: must be in (0, 180)");
+      viewpoint.fov_deg = view.camera.fov_deg;
+    }
+    std::string stem = FileStem(name);
+    std::string file = stem + ".png";
+    for (int k = 2; files.count(file) > 0; ++k) file = stem + "_" + std::to_string(k) + ".png";
+    files.insert(file);
+    view.entry = FrameEntry{name, file, viewpoint};
+    views.push_back(std::move(view));
+  }
+  return views;
+}
+
+Expected<Options> ReadOptions(const StageContext& ctx) {
+  Options options;
+  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", 1024, 16, 8192));
+  PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", 2, 1, 8));
+  PB_ASSIGN_OR_RETURN(const int64_t truth_supersample, IntegerParam(ctx, kId, "truth_supersample", 4, 1, 8));
+  PB_ASSIGN_OR_RETURN(const std::string lighting, StringParam(ctx, kId, "lighting", "lambert"));
+  PB_ASSIGN_OR_RETURN(options.render.ambient, NumberParam(ctx, kId, "ambient", 0.25));
+  PB_ASSIGN_OR_RETURN(options.render.diffuse, NumberParam(ctx, kId, "diffuse", 0.75));
+  if (lighting != "lambert" && lighting != "unlit")
+    return Status::Invalid(std::string(kId) + ": parameter 'lighting' must be 'lambert' or 'unlit', got '" +
+                           lighting + "'");
+  if (!(options.render.ambient >= 0) || !(options.render.diffuse >= 0))
+    return Status::Invalid(std::string(kId) + ": 'ambient' and 'diffuse' must be >= 0");
+  if (ctx.params().contains("background")) {
+    const nlohmann::json& bg = ctx.params()["background"];
+    if (!bg.is_array() || bg.size() != 3)
+      return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
+    for (size_t c = 0; c < 3; ++c) {
+      if (!bg[c].is_number_integer() || bg[c].get<int64_t>() < 0 || bg[c].get<int64_t>() > 255)
+        return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
+      options.render.background[c] = uint8_t(bg[c].get<int64_t>());
+    }
+  }
+  options.size = int(size);
+  options.render.supersample = int(supersample);
+  options.truth_supersample = int(truth_supersample);
+  options.render.lighting = lighting == "unlit" ? RenderLighting::kUnlit : RenderLighting::kLambert;
+  return options;
+}
+
+Expected<Mesh> ReadMesh(StageContext& ctx, const char* port) {
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, port, "mesh.ply"));
+  Expected<PlyMesh> read = ReadPlyMesh(path);
+  if (!read.ok()) return read.status().WithContext(std::string(kId) + ": input '" + port + "'");
+  return std::move(read->mesh);
+}
+
+Expected<MipTexture> ReadTexture(StageContext& ctx, const char* port, bool normal) {
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, port));
+  Expected<Image> image = ReadImage(path);
+  if (!image.ok()) return image.status().WithContext(std::string(kId) + ": input '" + port + "'");
+  Expected<MipTexture> texture = normal ? BuildNormalTexture(*image) : BuildColorTexture(*image);
+  if (!texture.ok()) return texture.status().WithContext(std::string(kId) + ": " + path);
+  return texture;
+}
+
+Status Run(StageContext& ctx) {
+  PB_ASSIGN_OR_RETURN(const Options options, ReadOptions(ctx));
+  PB_ASSIGN_OR_RETURN(const std::vector<View> views, ReadViewpoints(ctx, options.size));
+  const bool has_mesh = ctx.has_input("mesh"), has_truth = ctx.has_input("truth");
+  if (has_mesh == has_truth)
+    return Status::Invalid(std::string(kId) + ": connect exactly one of 'mesh' and 'truth' (got " +
+                           (has_mesh ? "both" : "neither") + ")");
+  if (has_truth && (ctx.has_input("color") || ctx.has_input("normal")))
+    return Status::Invalid(std::string(kId) + ": 'color' and 'normal' go with 'mesh', not 'truth'");
+  if (ctx.has_input("normal") && !ctx.has_input("color"))
+    return Status::Invalid(std::string(kId) + ": input 'normal' needs input 'color' (the mesh's uvs)");
+
+  Mesh mesh;
+  std::optional<SynthScene> scene;
+  std::optional<MipTexture> color, normal;
+  {
+    PB_PHASE(ctx, "io");
+    PB_ASSIGN_OR_RETURN(mesh, ReadMesh(ctx, has_mesh ? "mesh" : "truth"));
+    if (has_truth) {
+      const ArtifactView& truth = ctx.input("truth");
+      if (auto it = truth.files.find("scene.json"); it != truth.files.end()) {
+        Expected<SynthScene> read = ReadSynthScene(it->second);
+        if (!read.ok()) return read.status().WithContext(std::string(kId) + ": input 'truth'");
+        scene = std::move(*read);
+      }
+    }
+    if (ctx.has_input("color")) {
+      if (!mesh.has_uvs()) return Status::Invalid(std::string(kId) + ": input 'color' needs a mesh with uvs");
+      PB_ASSIGN_OR_RETURN(color, ReadTexture(ctx, "color", false));
+    }
+    if (ctx.has_input("normal")) {
+      if (!mesh.has_tangents())
+        return Status::Invalid(std::string(kId) + ": input 'normal' needs a mesh with tangents (a bake's mesh output)");
+      PB_ASSIGN_OR_RETURN(normal, ReadTexture(ctx, "normal", true));
+    }
+  }
+  ctx.progress(0.1);
+
+  RenderOptions render = options.render;
+  if (has_truth) render.supersample = options.truth_supersample;
+  const RenderMaterial material{color ? &*color : nullptr, normal ? &*normal : nullptr};
+  FrameSet frames;
+  frames.width = frames.height = options.size;
+  size_t covered_samples = 0;
+  {
+    PB_PHASE(ctx, "compute");
+    tbb::task_arena arena(std::max(1, ctx.threads()));
+    for (size_t i = 0; i < views.size(); ++i) {
+      Expected<Image> image = Status::Internal("not run");
+      RenderStats stats;
+      arena.execute([&] {
+        image = scene ? RenderSynthScene(*scene, views[i].camera, render, &stats)
+                      : RenderMesh(mesh, material, views[i].camera, render, &stats);
+      });
+      if (!image.ok())
+        return image.status().WithContext(std::string(kId) + ": viewpoint '" + views[i].entry.name + "'");
+      covered_samples += stats.covered_samples;
+      frames.frames.push_back(Frame{views[i].entry, std::move(*image)});
+      ctx.progress(0.1 + 0.8 * double(i + 1) / double(views.size()));
+    }
+  }
+  {
+    PB_PHASE(ctx, "io");
+    PB_RETURN_IF_ERROR(WriteFrames(frames, [&ctx](const std::string& file) {
+      return ctx.output_path("frames", file);
+    }));
+  }
+  const char* source = has_mesh ? "mesh" : scene ? "truth_analytic" : "truth_mesh";
+  const double pixels = double(views.size()) * options.size * options.size;
+  nlohmann::json meta = ctx.input(has_mesh ? "mesh" : "truth").meta;
+  if (!meta.is_object()) meta = nlohmann::json::object();
+  meta["kind"] = "frames";
+  meta["render"] = {{"source", source},
+                    {"size", options.size},
+                    {"supersample", render.supersample},
+                    {"lighting", render.lighting == RenderLighting::kUnlit ? "unlit" : "lambert"},
+                    {"ambient", render.ambient},
+                    {"diffuse", render.diffuse},
+                    {"textured", bool(color)},
+                    {"normal_mapped", bool(normal)},
+                    {"coverage", covered_samples / (pixels * render.supersample * render.supersample)}};
+  ctx.set_output_meta("frames", std::move(meta));
+  ctx.counter("frames", double(views.size()));
+  ctx.counter("triangles", scene ? 0.0 : double(mesh.face_count()));
+  ctx.counter("pixels", pixels);
+  ctx.progress(1.0);
+  return Status::Ok();
+}
+
+}  // namespace
+
+StageType FramesStage() {
+  StageType type;
+  type.id = kId;
+  type.version = 1;
+  type.summary = "Deterministic reference renders of a mesh or the ground truth from the scene's viewpoints";
+  type.doc =
+      "Draws `mesh` (with its color map `color` and tangent-space normal map `normal` when given; "
+      "else its vertex colors; else gray) or the ground truth `truth` from every viewpoint, as a "
+      "mobile GPU would (docs/render.md): perspective-correct UVs, trilinear mip-mapped sampling "
+      "of sRGB-decoded textures, tangent-space normal mapping with the mesh's tangents, no "
+      "back-face culling, a z-buffer with ties to the lower face index, `supersample`^2 samples "
+      "per pixel averaged in linear light, sRGB 8-bit RGBA output (alpha 255 where geometry "
+      "covers any sample). `lambert` lights with a headlight fixed to the viewer (slightly above "
+      "and left of the eye, behind it): albedo * (ambient + diffuse * max(0, N.L)), two-sided; "
+      "`unlit` shows the albedo. The bytes are the same for any thread count.\n\n"
+      "With `truth` holding scene.json (synth.scan), the analytic scene is ray cast through the "
+      "same sample grid with `truth_supersample`^2 samples (true albedo and true normal at each "
+      "hit, the same light and encoding); without scene.json the truth mesh is drawn with its "
+      "vertex colors. Exactly one of `mesh` and `truth`; `normal` needs `color`, `color` needs "
+      "uvs, `normal` needs tangents.\n\n"
+      "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>).\n\n"
+      "Counters: `frames`, `triangles` (faces drawn per frame; 0 for the analytic truth), "
+      "`pixels` (over all frames). Phases: `io`, `compute`.";
+  type.params_schema = kSchema;
+  type.inputs = {
+      {"mesh", "mesh", "The mesh to draw (mesh.ply; uvs and tangents for the maps).", true},
+      {"color", "image", "Color map, sRGB (color.png), addressed by the mesh's uvs.", true},
+      {"normal", "image", "Tangent-space normal map (normal.png 8-bit or normal.exr float).", true},
+      {"truth", "mesh", "Ground truth of synth.scan (mesh.ply + scene.json) instead of `mesh`.", true}};
+  type.outputs = {{"frames", "frames", "One 8-bit sRGB RGBA PNG per viewpoint, and frames.json.", false}};
+  type.run = &Run;
+  return type;
+}
+
+}  // namespace pb

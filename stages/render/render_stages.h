@@ -1,4 +1,5 @@
-// The render family: render.frames (a deterministic CPU reference renderer).
+// The render family: render.frames (a deterministic CPU reference renderer,
+// stages/geometry/render.h; docs/render.md).
 #pragma once
 
 #include "engine/stage.h"
@@ -6,5 +7,8 @@
 namespace pb {
 
 void RegisterRenderStages(StageRegistry& registry);
+
+// render.frames (frames_stage.cc).
+StageType FramesStage();
 
 }  // namespace pb
