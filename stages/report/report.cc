@@ -29,7 +29,8 @@
 namespace pb {
 namespace {
 
-using Json = nlohmann::json;
+// Ordered: results.json keeps the contract's key order.
+using Json = nlohmann::ordered_json;
 using Opt = std::optional<double>;
 
 // Construction-time groups (report.h), in the order of results.json.
@@ -600,8 +601,10 @@ Json IntJson(Opt v) { return v ? Json(int64_t(std::llround(*v))) : Json(nullptr)
 
 Json RowJson(const Row& r) {
   Json times = Json::object();
-  for (int g = 0; g < kGroupCount; ++g) times[kGroups[g]] = OptJson(r.time_s[g]);
-  times["total"] = OptJson(r.total_s);
+  // Microseconds are the clock's resolution; rounding hides summation noise.
+  auto micro = [](Opt v) { return v ? OptJson(std::round(*v * 1e6) / 1e6) : Json(nullptr); };
+  for (int g = 0; g < kGroupCount; ++g) times[kGroups[g]] = micro(r.time_s[g]);
+  times["total"] = micro(r.total_s);
   auto quality = [](const std::array<Opt, kQualityCount>& q) {
     Json j = Json::object();
     for (int i = 0; i < kQualityCount; ++i) j[kQualityColumns[i]] = OptJson(q[i]);

@@ -1,5 +1,6 @@
 // Campaign reports: <out>/report/ written from a finished campaign's folder
-// (results.csv, results.json, report.md, report.html). See docs/campaigns.md.
+// (results.csv, results.json, report.md, report.html). See docs/campaigns.md
+// and docs/report.md.
 //
 // Input, written by `pointbake campaign` (engine/campaign.h):
 //
@@ -60,21 +61,34 @@
 //                     triangles_per_s, refresh_hz, fps
 //     model.glb       the exported model
 //
-// Output, <report_dir>/ (written to temporary names, then renamed):
-//   results.json  {"format": "pointbake-report", "version": 1, "campaign",
-//                  "host", "rows": [one per run: scene, workflow, variant,
-//                  status, time_s: {points, high_mesh, low_mesh, uv, io, bake,
-//                  total}, peak_ram_bytes, faces, texture_size, fps, fits,
-//                  vs_hpm: {psnr_db, ssim_luma, ssim_rgb, ms_ssim_luma,
-//                  flip_mean}, vs_truth: {...}}]}; unknown values are null
-//   results.csv   the same rows flattened, one header line
-//   report.md     tables (times, RAM, quality, FPS, speed-ups)
+// Output, <report_dir>/ (written to temporary names, then renamed; details,
+// units and rules in docs/report.md):
+//   results.json  {"format": "pointbake-report", "version": 1,
+//                  "campaign": {name, file, started, total_wall_s},
+//                  "host": (copied from campaign.json),
+//                  "rows": [one per run, sorted by scene (manifest order),
+//                  then workflow (hpm, lpm, remeshing, point_transfer, others
+//                  alphabetically), then variant ("" first): name, scene,
+//                  workflow, variant, display_name, status, time_s: {points,
+//                  high_mesh, low_mesh, uv, io, bake, total} (a group no stage
+//                  of the run belongs to is null), peak_ram_bytes, faces,
+//                  texture_size: {width_px, height_px}, texture_bytes, fps,
+//                  fits, device, vs_hpm: {psnr_db, ssim_luma, ssim_rgb,
+//                  ms_ssim_luma, flip_mean}, vs_truth: {...}, error (failed
+//                  runs only)}],
+//                  "speedups": {"versus": "point_transfer", "per_scene":
+//                  [{scene, workflow, variant, ratio}], "geometric_mean":
+//                  [{workflow, variant, ratio, scenes}]}}
+//                  ratio = other run's total / point transfer's total (> 1:
+//                  point transfer is faster); unknown values are null
+//   results.csv   the same rows flattened, one header line; null = empty
+//   report.md     tables (times, RAM, quality, FPS, speed-ups), image links
 //   report.html   self-contained (inline CSS/SVG, images as data: URIs; no
-//                 network, no scripts needed): stacked time bars per scene,
+//                 network, no scripts): stacked time bars per scene,
 //                 peak-RAM bars, the quality and FPS tables, speed-up ratios,
 //                 and per scene the frames side by side (ground truth, each
 //                 workflow) with zoomed crops and FLIP maps
-//   images/       the thumbnails and crops report.md links to
+//   images/       the thumbnails, crops and FLIP maps report.md links to
 #pragma once
 
 #include <string>
@@ -96,7 +110,9 @@ struct ReportOptions {
 // Reads <campaign_dir>/campaign.json and the run folders it names and writes
 // the report into `report_dir` (created if missing). Runs that failed appear
 // with status "failed" and null figures. Errors (unreadable manifest,
-// malformed run.json or table) name the file.
+// malformed run.json or table) name the file; options out of range
+// (thumbnail_px < 16, crop_px < 4, max_viewpoints < 0) are Status::Invalid.
+// Deterministic: the same campaign folder gives byte-identical files.
 Status WriteCampaignReport(const std::string& campaign_dir, const std::string& report_dir,
                            const ReportOptions& options = {});
 
