@@ -78,6 +78,10 @@ Expected<CameraFrame> MakeFrame(const RenderCamera& camera, const std::array<dou
   if (!(options.supersample >= 1 && options.supersample <= 16))
     return Status::Invalid("render: supersample must be in [1, 16], got " +
                            std::to_string(options.supersample));
+  // The visibility buffer takes 8 bytes per sample: 2 GiB at the limit.
+  if (camera.size * options.supersample > 16384)
+    return Status::Invalid("render: size * supersample must be <= 16384 samples per axis, got " +
+                           std::to_string(camera.size) + " * " + std::to_string(options.supersample));
   if (!(camera.fov_deg > 0 && camera.fov_deg < 180))
     return Status::Invalid("render: fov_deg must be in (0, 180), got " + std::to_string(camera.fov_deg));
   if (!Finite(camera.eye) || !Finite(camera.target) || !Finite(camera.up))

@@ -102,7 +102,7 @@ struct RenderCamera {
 enum class RenderLighting { kLambert, kUnlit };
 
 struct RenderOptions {
-  int supersample = 2;  // samples per pixel per axis, [1, 16]
+  int supersample = 2;  // samples per pixel per axis, [1, 16]; size * supersample <= 16384
   RenderLighting lighting = RenderLighting::kLambert;
   double ambient = 0.25;  // lambert: albedo * (ambient + diffuse * max(0, N.L))
   double diffuse = 0.75;
