@@ -36,17 +36,22 @@ using Opt = std::optional<double>;
 // Construction-time groups (report.h), in the order of results.json.
 constexpr int kGroupCount = 6;
 constexpr int kIoGroup = 4;
-constexpr std::array<const char*, kGroupCount> kGroups = {"points", "high_mesh", "low_mesh", "uv", "io", "bake"};
-constexpr std::array<const char*, kGroupCount> kGroupTitles = {
-    "Normals (points)", "High-mesh construction", "Low-mesh construction", "UV unwrapping", "I/O", "Baking"};
+constexpr std::array<const char*, kGroupCount> kGroups = {"points", "high_mesh", "low_mesh",
+                                                          "uv",     "io",        "bake"};
+constexpr std::array<const char*, kGroupCount> kGroupTitles = {"Normals (points)",
+                                                               "High-mesh construction",
+                                                               "Low-mesh construction",
+                                                               "UV unwrapping",
+                                                               "I/O",
+                                                               "Baking"};
 constexpr std::array<const char*, kGroupCount> kGroupColors = {"#8c6bb1", "#d94801", "#fd8d3c",
                                                                "#41ab5d", "#969696", "#2171b5"};
 
 constexpr int kQualityCount = 5;
-constexpr std::array<const char*, kQualityCount> kQualityColumns = {"psnr_db", "ssim_luma", "ssim_rgb",
-                                                                    "ms_ssim_luma", "flip_mean"};
-constexpr std::array<const char*, kQualityCount> kQualityTitles = {"PSNR dB", "SSIM luma", "SSIM RGB",
-                                                                   "MS-SSIM", "FLIP"};
+constexpr std::array<const char*, kQualityCount> kQualityColumns = {
+    "psnr_db", "ssim_luma", "ssim_rgb", "ms_ssim_luma", "flip_mean"};
+constexpr std::array<const char*, kQualityCount> kQualityTitles = {"PSNR dB", "SSIM luma",
+                                                                   "SSIM RGB", "MS-SSIM", "FLIP"};
 const char* kDash = "\xE2\x80\x94";  // "—"
 
 struct Row {
@@ -77,8 +82,10 @@ int WorkflowRank(const std::string& workflow) {
 }
 
 std::string DisplayName(const std::string& workflow, const std::string& variant) {
-  static const std::map<std::string, std::string> names = {
-      {"hpm", "HPM"}, {"lpm", "LPM"}, {"remeshing", "Remeshing"}, {"point_transfer", "Point transfer"}};
+  static const std::map<std::string, std::string> names = {{"hpm", "HPM"},
+                                                           {"lpm", "LPM"},
+                                                           {"remeshing", "Remeshing"},
+                                                           {"point_transfer", "Point transfer"}};
   auto it = names.find(workflow);
   std::string name = it == names.end() ? workflow : it->second;
   return variant.empty() ? name : name + " (" + variant + ")";
@@ -124,8 +131,10 @@ Status ReadRunTimes(const std::string& path, Row& row) {
       const std::string status = stage.value("status", "");
       if (status == "skipped" || status == "pending") continue;
       const Json* figures = &stage;
-      if (status == "hit") figures = stage.contains("cached_run") && stage["cached_run"].is_object()
-                                         ? &stage["cached_run"] : nullptr;
+      if (status == "hit")
+        figures = stage.contains("cached_run") && stage["cached_run"].is_object()
+                      ? &stage["cached_run"]
+                      : nullptr;
       const Opt wall = figures ? JsonNumber(*figures, "wall_s") : std::nullopt;
       present[gi] = true;
       if (!wall) {
@@ -135,7 +144,8 @@ Status ReadRunTimes(const std::string& path, Row& row) {
       double io_s = 0;
       if (figures->contains("phases") && (*figures)["phases"].is_array())
         for (const Json& phase : (*figures)["phases"])
-          if (phase.is_object() && phase.value("name", "") == "io") io_s += JsonNumber(phase, "dur_s").value_or(0);
+          if (phase.is_object() && phase.value("name", "") == "io")
+            io_s += JsonNumber(phase, "dur_s").value_or(0);
       io_s = std::clamp(io_s, 0.0, std::max(*wall, 0.0));
       if (gi == kIoGroup) {
         sum[kIoGroup] += std::max(*wall, 0.0);
@@ -174,7 +184,8 @@ Status ReadQuality(const std::string& path, std::array<Opt, kQualityCount>& out)
   PB_ASSIGN_OR_RETURN(Table table, ReadTable(path));
   for (size_t r = 0; r < table.rows.size(); ++r) {
     const TableValue frame = table.get(r, "frame");
-    if (!std::holds_alternative<std::string>(frame) || std::get<std::string>(frame) != "mean") continue;
+    if (!std::holds_alternative<std::string>(frame) || std::get<std::string>(frame) != "mean")
+      continue;
     for (int q = 0; q < kQualityCount; ++q) out[q] = TableOpt(table, r, kQualityColumns[q]);
     return Status::Ok();
   }
@@ -203,10 +214,12 @@ Expected<Campaign> ReadCampaign(const std::string& campaign_dir) {
   Campaign c;
   try {
     if (!manifest.is_object() || manifest.value("format", "") != "pointbake-campaign")
-      return Status::Corrupt(path + ": not a campaign manifest (\"format\" is not \"pointbake-campaign\")");
+      return Status::Corrupt(
+          path + ": not a campaign manifest (\"format\" is not \"pointbake-campaign\")");
     if (manifest.value("version", 0) > 1)
       return Status::Unsupported(path + ": campaign format version " +
-                                 std::to_string(manifest.value("version", 0)) + " is newer than this reader (1)");
+                                 std::to_string(manifest.value("version", 0)) +
+                                 " is newer than this reader (1)");
     c.name = manifest.value("name", "");
     c.file = manifest.value("file", "");
     c.started = manifest.value("started", "");
@@ -216,16 +229,21 @@ Expected<Campaign> ReadCampaign(const std::string& campaign_dir) {
       return Status::Corrupt(path + ": no \"runs\" array");
     for (const Json& run : manifest["runs"]) {
       Row row;
-      for (auto [key, field] : {std::pair{"name", &row.name}, {"scene", &row.scene}, {"workflow", &row.workflow},
-                                {"dir", &row.dir}, {"status", &row.status}}) {
+      for (auto [key, field] : {std::pair{"name", &row.name},
+                                {"scene", &row.scene},
+                                {"workflow", &row.workflow},
+                                {"dir", &row.dir},
+                                {"status", &row.status}}) {
         if (!run.is_object() || !run.contains(key) || !run[key].is_string())
-          return Status::Corrupt(path + ": run " + std::to_string(c.rows.size()) + " has no string \"" + key + "\"");
+          return Status::Corrupt(path + ": run " + std::to_string(c.rows.size()) +
+                                 " has no string \"" + key + "\"");
         *field = run[key].get<std::string>();
       }
       row.variant = run.value("variant", "");
       row.error = run.value("error", "");
       row.run_dir = JoinPath(campaign_dir, row.dir);
-      if (std::find(c.scenes.begin(), c.scenes.end(), row.scene) == c.scenes.end()) c.scenes.push_back(row.scene);
+      if (std::find(c.scenes.begin(), c.scenes.end(), row.scene) == c.scenes.end())
+        c.scenes.push_back(row.scene);
       c.rows.push_back(std::move(row));
     }
   } catch (const Json::exception& e) {
@@ -238,7 +256,9 @@ Expected<Campaign> ReadCampaign(const std::string& campaign_dir) {
     PB_RETURN_IF_ERROR(ReadQuality(JoinPath(row.run_dir, "vs_truth.json"), row.vs_truth));
     PB_RETURN_IF_ERROR(ReadFps(JoinPath(row.run_dir, "fps.json"), row));
   }
-  auto scene_rank = [&](const std::string& s) { return std::find(c.scenes.begin(), c.scenes.end(), s) - c.scenes.begin(); };
+  auto scene_rank = [&](const std::string& s) {
+    return std::find(c.scenes.begin(), c.scenes.end(), s) - c.scenes.begin();
+  };
   std::stable_sort(c.rows.begin(), c.rows.end(), [&](const Row& a, const Row& b) {
     return std::make_tuple(scene_rank(a.scene), WorkflowRank(a.workflow), a.workflow, a.variant) <
            std::make_tuple(scene_rank(b.scene), WorkflowRank(b.workflow), b.workflow, b.variant);
@@ -263,7 +283,8 @@ struct SpeedUpMean {
 const Row* PointTransferRow(const Campaign& c, const std::string& scene) {
   const Row* found = nullptr;
   for (const Row& r : c.rows)
-    if (r.scene == scene && r.workflow == "point_transfer" && (!found || (r.variant.empty() && !found->variant.empty())))
+    if (r.scene == scene && r.workflow == "point_transfer" &&
+        (!found || (r.variant.empty() && !found->variant.empty())))
       found = &r;
   return found;
 }
@@ -330,12 +351,23 @@ std::string EscapeHtml(const std::string& s) {
   std::string out;
   for (char ch : s) {
     switch (ch) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      case '\'': out += "&#39;"; break;
-      default: out += ch;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      case '\'':
+        out += "&#39;";
+        break;
+      default:
+        out += ch;
     }
   }
   return out;
@@ -343,7 +375,8 @@ std::string EscapeHtml(const std::string& s) {
 std::string EscapeMd(const std::string& s) {
   std::string out;
   for (char ch : s) {
-    if (ch == '|' || ch == '*' || ch == '_' || ch == '`' || ch == '[' || ch == ']' || ch == '\\') out += '\\';
+    if (ch == '|' || ch == '*' || ch == '_' || ch == '`' || ch == '[' || ch == ']' || ch == '\\')
+      out += '\\';
     out += ch == '\n' ? ' ' : ch;
   }
   return out;
@@ -364,9 +397,12 @@ Image ToRgb8(const Image& in) {
       for (int c = 0; c < 3; ++c) {
         const int src = in.channels >= 3 ? c : 0;
         uint8_t v = 0;
-        if (in.type == Image::PixelType::kU8) v = in.at_u8(x, y, src);
-        else if (in.type == Image::PixelType::kU16) v = uint8_t(in.at_u16(x, y, src) >> 8);
-        else v = uint8_t(std::clamp(in.at_f32(x, y, src), 0.0f, 1.0f) * 255.0f + 0.5f);
+        if (in.type == Image::PixelType::kU8)
+          v = in.at_u8(x, y, src);
+        else if (in.type == Image::PixelType::kU16)
+          v = uint8_t(in.at_u16(x, y, src) >> 8);
+        else
+          v = uint8_t(std::clamp(in.at_f32(x, y, src), 0.0f, 1.0f) * 255.0f + 0.5f);
         out.at_u8(x, y, c) = v;
       }
   return out;
@@ -381,9 +417,11 @@ Image BoxDownscale(const Image& in, int max_side) {
   const int h = std::max(1, int(int64_t(in.height) * max_side / longest));
   Image out = Image::Make(w, h, 3, Image::PixelType::kU8);
   for (int y = 0; y < h; ++y) {
-    const int y0 = int(int64_t(y) * in.height / h), y1 = std::max(y0 + 1, int(int64_t(y + 1) * in.height / h));
+    const int y0 = int(int64_t(y) * in.height / h),
+              y1 = std::max(y0 + 1, int(int64_t(y + 1) * in.height / h));
     for (int x = 0; x < w; ++x) {
-      const int x0 = int(int64_t(x) * in.width / w), x1 = std::max(x0 + 1, int(int64_t(x + 1) * in.width / w));
+      const int x0 = int(int64_t(x) * in.width / w),
+                x1 = std::max(x0 + 1, int(int64_t(x + 1) * in.width / w));
       std::array<uint32_t, 3> sum{};
       for (int sy = y0; sy < y1; ++sy)
         for (int sx = x0; sx < x1; ++sx)
@@ -407,14 +445,19 @@ CropWindow ChooseCrop(const Image* a, const Image* b, int width, int height, int
   w.size = std::max(1, std::min({crop_px, width, height}));
   w.x = (width - w.size) / 2;
   w.y = (height - w.size) / 2;
-  if (!a || !b || a->width != b->width || a->height != b->height || a->width != width || a->height != height) return w;
+  if (!a || !b || a->width != b->width || a->height != b->height || a->width != width ||
+      a->height != height)
+    return w;
   // Integral image of the per-pixel difference.
   std::vector<uint64_t> integral(size_t(width + 1) * size_t(height + 1), 0);
-  auto at = [&](int x, int y) -> uint64_t& { return integral[size_t(y) * size_t(width + 1) + size_t(x)]; };
+  auto at = [&](int x, int y) -> uint64_t& {
+    return integral[size_t(y) * size_t(width + 1) + size_t(x)];
+  };
   for (int y = 0; y < height; ++y) {
     uint64_t row = 0;
     for (int x = 0; x < width; ++x) {
-      for (int c = 0; c < 3; ++c) row += uint64_t(std::abs(int(a->at_u8(x, y, c)) - int(b->at_u8(x, y, c))));
+      for (int c = 0; c < 3; ++c)
+        row += uint64_t(std::abs(int(a->at_u8(x, y, c)) - int(b->at_u8(x, y, c))));
       at(x + 1, y + 1) = at(x + 1, y) + row;
     }
   }
@@ -422,7 +465,8 @@ CropWindow ChooseCrop(const Image* a, const Image* b, int width, int height, int
   uint64_t best = 0;
   for (int y = 0; y + w.size <= height; y += step)
     for (int x = 0; x + w.size <= width; x += step) {
-      const uint64_t s = at(x + w.size, y + w.size) - at(x, y + w.size) - at(x + w.size, y) + at(x, y);
+      const uint64_t s =
+          at(x + w.size, y + w.size) - at(x, y + w.size) - at(x + w.size, y) + at(x, y);
       if (s > best) {
         best = s;
         w.x = x;
@@ -437,14 +481,17 @@ Image CropEnlarge(const Image& in, const CropWindow& w, int scale) {
   Image out = Image::Make(w.size * scale, w.size * scale, 3, Image::PixelType::kU8);
   for (int y = 0; y < out.height; ++y)
     for (int x = 0; x < out.width; ++x)
-      for (int c = 0; c < 3; ++c) out.at_u8(x, y, c) = in.at_u8(w.x + x / scale, w.y + y / scale, c);
+      for (int c = 0; c < 3; ++c)
+        out.at_u8(x, y, c) = in.at_u8(w.x + x / scale, w.y + y / scale, c);
   return out;
 }
 
 // A 2-pixel yellow outline of the crop window, in thumbnail coordinates.
 void MarkWindow(Image& thumb, const CropWindow& w, int full_width, int full_height) {
-  const int x0 = w.x * thumb.width / full_width, x1 = std::min(thumb.width - 1, (w.x + w.size) * thumb.width / full_width);
-  const int y0 = w.y * thumb.height / full_height, y1 = std::min(thumb.height - 1, (w.y + w.size) * thumb.height / full_height);
+  const int x0 = w.x * thumb.width / full_width,
+            x1 = std::min(thumb.width - 1, (w.x + w.size) * thumb.width / full_width);
+  const int y0 = w.y * thumb.height / full_height,
+            y1 = std::min(thumb.height - 1, (w.y + w.size) * thumb.height / full_height);
   auto put = [&](int x, int y) {
     if (x < 0 || y < 0 || x >= thumb.width || y >= thumb.height) return;
     thumb.at_u8(x, y, 0) = 255, thumb.at_u8(x, y, 1) = 221, thumb.at_u8(x, y, 2) = 0;
@@ -460,7 +507,8 @@ std::string Base64(const std::vector<uint8_t>& bytes) {
   std::string out;
   out.reserve((bytes.size() + 2) / 3 * 4);
   for (size_t i = 0; i < bytes.size(); i += 3) {
-    const uint32_t n = uint32_t(bytes[i]) << 16 | (i + 1 < bytes.size() ? uint32_t(bytes[i + 1]) << 8 : 0) |
+    const uint32_t n = uint32_t(bytes[i]) << 16 |
+                       (i + 1 < bytes.size() ? uint32_t(bytes[i + 1]) << 8 : 0) |
                        (i + 2 < bytes.size() ? uint32_t(bytes[i + 2]) : 0);
     out += table[(n >> 18) & 63];
     out += table[(n >> 12) & 63];
@@ -478,19 +526,22 @@ struct ReportImage {
   int width = 0, height = 0;
 };
 
-Expected<ReportImage> SaveImage(const std::string& report_dir, const std::string& name, const Image& image) {
+Expected<ReportImage> SaveImage(const std::string& report_dir, const std::string& name,
+                                const Image& image) {
   PB_ASSIGN_OR_RETURN(std::vector<uint8_t> png, EncodePng(image));
-  ReportImage out{"images/" + name + ".png", "data:image/png;base64," + Base64(png), image.width, image.height};
-  PB_RETURN_IF_ERROR(Env::Default()->WriteFileAtomic(JoinPath(report_dir, out.file),
-                                                     std::string_view(reinterpret_cast<const char*>(png.data()), png.size())));
+  ReportImage out{"images/" + name + ".png", "data:image/png;base64," + Base64(png), image.width,
+                  image.height};
+  PB_RETURN_IF_ERROR(Env::Default()->WriteFileAtomic(
+      JoinPath(report_dir, out.file),
+      std::string_view(reinterpret_cast<const char*>(png.data()), png.size())));
   return out;
 }
 
 // ---- The side-by-side frames ---------------------------------------------
 
 struct FrameCell {
-  std::string title;     // column title
-  std::string note;      // why there is no image ("run failed", "no frames")
+  std::string title;  // column title
+  std::string note;   // why there is no image ("run failed", "no frames")
   std::optional<ReportImage> thumb, crop, flip;
   std::string flip_title;
 };
@@ -512,7 +563,8 @@ Expected<std::optional<FrameSet>> MaybeReadFrames(const std::string& dir) {
   return std::optional<FrameSet>(std::move(set));
 }
 
-Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& scene, const std::string& report_dir,
+Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& scene,
+                                       const std::string& report_dir,
                                        const ReportOptions& options) {
   struct Column {
     std::string title, note, flip_title;
@@ -556,9 +608,11 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
   for (const Column& col : columns) {
     if (!col.row || !col.frames) continue;
     if (col.row == pt) pt_frames = &*col.frames;
-    if (col.row->workflow == "lpm" && !lpm_frames && col.row->variant.empty()) lpm_frames = &*col.frames;
+    if (col.row->workflow == "lpm" && !lpm_frames && col.row->variant.empty())
+      lpm_frames = &*col.frames;
   }
-  const int view_count = std::min<int>(std::max(0, options.max_viewpoints), int(first->frames.size()));
+  const int view_count =
+      std::min<int>(std::max(0, options.max_viewpoints), int(first->frames.size()));
   for (int v = 0; v < view_count; ++v) {
     const std::string view = first->frames[size_t(v)].entry.name;
     ViewSection section{view, {}, {}};
@@ -567,25 +621,30 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
       return f ? std::optional<Image>(ToRgb8(f->image)) : std::nullopt;
     };
     const std::optional<Image> pt_rgb = rgb_of(pt_frames), lpm_rgb = rgb_of(lpm_frames);
-    section.window = ChooseCrop(pt_rgb ? &*pt_rgb : nullptr, lpm_rgb ? &*lpm_rgb : nullptr, first->width,
-                                first->height, options.crop_px);
+    section.window = ChooseCrop(pt_rgb ? &*pt_rgb : nullptr, lpm_rgb ? &*lpm_rgb : nullptr,
+                                first->width, first->height, options.crop_px);
     const int scale = std::max(1, options.thumbnail_px / section.window.size);
     for (size_t k = 0; k < columns.size(); ++k) {
       const Column& col = columns[k];
       FrameCell cell{col.title, col.note, std::nullopt, std::nullopt, std::nullopt, col.flip_title};
-      const std::string base = Slug(scene) + "__" + Slug(col.row ? col.row->name : "truth") + "__" + Slug(view);
+      const std::string base =
+          Slug(scene) + "__" + Slug(col.row ? col.row->name : "truth") + "__" + Slug(view);
       std::optional<Image> rgb = rgb_of(col.frames ? &*col.frames : nullptr);
       if (col.frames && !rgb) cell.note = "no frame \"" + view + "\"";
       if (rgb) {
-        const CropWindow w = ChooseCrop(nullptr, nullptr, rgb->width, rgb->height, section.window.size);
-        const CropWindow use = rgb->width == first->width && rgb->height == first->height ? section.window : w;
+        const CropWindow w =
+            ChooseCrop(nullptr, nullptr, rgb->width, rgb->height, section.window.size);
+        const CropWindow use =
+            rgb->width == first->width && rgb->height == first->height ? section.window : w;
         Image thumb = BoxDownscale(*rgb, options.thumbnail_px);
         MarkWindow(thumb, use, rgb->width, rgb->height);
         PB_ASSIGN_OR_RETURN(cell.thumb, SaveImage(report_dir, base + "_frame", thumb));
-        PB_ASSIGN_OR_RETURN(cell.crop, SaveImage(report_dir, base + "_crop", CropEnlarge(*rgb, use, scale)));
+        PB_ASSIGN_OR_RETURN(cell.crop,
+                            SaveImage(report_dir, base + "_crop", CropEnlarge(*rgb, use, scale)));
       }
       if (std::optional<Image> flip = rgb_of(col.flip ? &*col.flip : nullptr)) {
-        PB_ASSIGN_OR_RETURN(cell.flip, SaveImage(report_dir, base + "_flip", BoxDownscale(*flip, options.thumbnail_px)));
+        PB_ASSIGN_OR_RETURN(cell.flip, SaveImage(report_dir, base + "_flip",
+                                                 BoxDownscale(*flip, options.thumbnail_px)));
       }
       section.cells.push_back(std::move(cell));
     }
@@ -633,21 +692,30 @@ Json RowJson(const Row& r) {
   return j;
 }
 
-Json ResultsJson(const Campaign& c, const std::vector<SpeedUp>& speedups, const std::vector<SpeedUpMean>& means) {
+Json ResultsJson(const Campaign& c, const std::vector<SpeedUp>& speedups,
+                 const std::vector<SpeedUpMean>& means) {
   Json rows = Json::array();
   for (const Row& r : c.rows) rows.push_back(RowJson(r));
   Json per_scene = Json::array(), mean = Json::array();
   for (const SpeedUp& s : speedups)
-    per_scene.push_back({{"scene", s.scene}, {"workflow", s.workflow}, {"variant", s.variant}, {"ratio", s.ratio}});
+    per_scene.push_back(
+        {{"scene", s.scene}, {"workflow", s.workflow}, {"variant", s.variant}, {"ratio", s.ratio}});
   for (const SpeedUpMean& m : means)
-    mean.push_back({{"workflow", m.workflow}, {"variant", m.variant}, {"ratio", m.ratio}, {"scenes", m.scenes}});
+    mean.push_back({{"workflow", m.workflow},
+                    {"variant", m.variant},
+                    {"ratio", m.ratio},
+                    {"scenes", m.scenes}});
   return {{"format", "pointbake-report"},
           {"version", 1},
           {"campaign",
-           {{"name", c.name}, {"file", c.file}, {"started", c.started}, {"total_wall_s", OptJson(c.total_wall_s)}}},
+           {{"name", c.name},
+            {"file", c.file},
+            {"started", c.started},
+            {"total_wall_s", OptJson(c.total_wall_s)}}},
           {"host", c.host},
           {"rows", rows},
-          {"speedups", {{"versus", "point_transfer"}, {"per_scene", per_scene}, {"geometric_mean", mean}}}};
+          {"speedups",
+           {{"versus", "point_transfer"}, {"per_scene", per_scene}, {"geometric_mean", mean}}}};
 }
 
 std::string CsvField(const Json& v) {
@@ -662,8 +730,8 @@ std::string CsvField(const Json& v) {
 std::string ResultsCsv(const Campaign& c) {
   std::vector<std::string> header = {"name", "scene", "workflow", "variant", "status"};
   for (const char* g : kGroups) header.push_back(std::string("time_") + g + "_s");
-  for (const char* h : {"time_total_s", "peak_ram_bytes", "faces", "texture_width_px", "texture_height_px",
-                        "texture_bytes", "fps", "fits_budget", "device"})
+  for (const char* h : {"time_total_s", "peak_ram_bytes", "faces", "texture_width_px",
+                        "texture_height_px", "texture_bytes", "fps", "fits_budget", "device"})
     header.push_back(h);
   for (const char* prefix : {"vs_hpm_", "vs_truth_"})
     for (const char* q : kQualityColumns) header.push_back(prefix + std::string(q));
@@ -677,8 +745,9 @@ std::string ResultsCsv(const Campaign& c) {
     for (const char* g : kGroups) values.push_back(j["time_s"][g]);
     const Json& tex = j["texture_size"];
     for (const Json& v : {j["time_s"]["total"], j["peak_ram_bytes"], j["faces"],
-                          tex.is_null() ? Json(nullptr) : tex["width_px"], tex.is_null() ? Json(nullptr) : tex["height_px"],
-                          j["texture_bytes"], j["fps"], j["fits"], j["device"]})
+                          tex.is_null() ? Json(nullptr) : tex["width_px"],
+                          tex.is_null() ? Json(nullptr) : tex["height_px"], j["texture_bytes"],
+                          j["fps"], j["fits"], j["device"]})
       values.push_back(v);
     for (const char* key : {"vs_hpm", "vs_truth"})
       for (const char* q : kQualityColumns) values.push_back(j[key][q]);
@@ -709,7 +778,8 @@ struct Bar {
 };
 
 // Horizontal bars with an x axis in `unit`; `scale` divides raw values.
-std::string SvgBars(const std::vector<Bar>& bars, const std::string& unit, double scale, const std::string& title) {
+std::string SvgBars(const std::vector<Bar>& bars, const std::string& unit, double scale,
+                    const std::string& title) {
   const double label_w = 190, plot_w = 460, row_h = 26, top = 8, width = 760;
   double max = 0;
   for (const Bar& b : bars) {
@@ -719,33 +789,34 @@ std::string SvgBars(const std::vector<Bar>& bars, const std::string& unit, doubl
   }
   const double step = NiceStep(max), axis_max = std::max(step, std::ceil(max / step - 1e-9) * step);
   const double height = top + row_h * double(bars.size()) + 34;
-  std::string svg = "<svg class=\"chart\" role=\"img\" width=\"" + Num(width) +
-                    "\" height=\"" + Num(height) + "\" viewBox=\"0 0 " + Num(width) + " " + Num(height) + "\"><title>" +
-                    EscapeHtml(title) + "</title>";
+  std::string svg = "<svg class=\"chart\" role=\"img\" width=\"" + Num(width) + "\" height=\"" +
+                    Num(height) + "\" viewBox=\"0 0 " + Num(width) + " " + Num(height) +
+                    "\"><title>" + EscapeHtml(title) + "</title>";
   const double axis_y = top + row_h * double(bars.size());
   for (double t = 0; t <= axis_max + step * 1e-6; t += step) {
     const double x = label_w + plot_w * t / axis_max;
-    svg += "<line x1=\"" + Num(x) + "\" y1=\"" + Num(top) + "\" x2=\"" + Num(x) + "\" y2=\"" + Num(axis_y + 4) +
-           "\" stroke=\"#ddd\"/>";
-    svg += "<text x=\"" + Num(x) + "\" y=\"" + Num(axis_y + 17) + "\" text-anchor=\"middle\" class=\"tick\">" +
-           Printf(step < 1 ? "%.2g" : "%.0f", t) + "</text>";
+    svg += "<line x1=\"" + Num(x) + "\" y1=\"" + Num(top) + "\" x2=\"" + Num(x) + "\" y2=\"" +
+           Num(axis_y + 4) + "\" stroke=\"#ddd\"/>";
+    svg += "<text x=\"" + Num(x) + "\" y=\"" + Num(axis_y + 17) +
+           "\" text-anchor=\"middle\" class=\"tick\">" + Printf(step < 1 ? "%.2g" : "%.0f", t) +
+           "</text>";
   }
-  svg += "<line x1=\"" + Num(label_w) + "\" y1=\"" + Num(axis_y) + "\" x2=\"" + Num(label_w + plot_w) + "\" y2=\"" +
-         Num(axis_y) + "\" stroke=\"#333\"/>";
+  svg += "<line x1=\"" + Num(label_w) + "\" y1=\"" + Num(axis_y) + "\" x2=\"" +
+         Num(label_w + plot_w) + "\" y2=\"" + Num(axis_y) + "\" stroke=\"#333\"/>";
   svg += "<text x=\"" + Num(label_w + plot_w / 2) + "\" y=\"" + Num(axis_y + 31) +
          "\" text-anchor=\"middle\" class=\"axis\">" + EscapeHtml(unit) + "</text>";
   for (size_t i = 0; i < bars.size(); ++i) {
     const Bar& b = bars[i];
     const double y = top + row_h * double(i);
-    svg += "<text x=\"" + Num(label_w - 8) + "\" y=\"" + Num(y + row_h * 0.65) + "\" text-anchor=\"end\">" +
-           EscapeHtml(b.label) + "</text>";
+    svg += "<text x=\"" + Num(label_w - 8) + "\" y=\"" + Num(y + row_h * 0.65) +
+           "\" text-anchor=\"end\">" + EscapeHtml(b.label) + "</text>";
     double x = label_w;
     for (const auto& [group, value] : b.segments) {
       const double w = plot_w * value / scale / axis_max;
       if (w <= 0) continue;
       const char* color = group >= 0 ? kGroupColors[size_t(group)] : "#6a51a3";
-      svg += "<rect x=\"" + Num(x) + "\" y=\"" + Num(y + 4) + "\" width=\"" + Printf("%.2f", w) + "\" height=\"" +
-             Num(row_h - 8) + "\" fill=\"" + color + "\"><title>" +
+      svg += "<rect x=\"" + Num(x) + "\" y=\"" + Num(y + 4) + "\" width=\"" + Printf("%.2f", w) +
+             "\" height=\"" + Num(row_h - 8) + "\" fill=\"" + color + "\"><title>" +
              EscapeHtml((group >= 0 ? std::string(kGroupTitles[size_t(group)]) + ": " : "") +
                         Printf("%.3g", value / scale) + " " + unit) +
              "</title></rect>";
@@ -761,7 +832,8 @@ std::string TimeChart(const Campaign& c, const std::string& scene) {
   std::vector<Bar> bars;
   for (const Row& r : c.rows) {
     if (r.scene != scene) continue;
-    Bar b{DisplayName(r), {}, r.ok() ? (r.total_s ? FmtSeconds(r.total_s) + " s" : kDash) : "failed"};
+    Bar b{
+        DisplayName(r), {}, r.ok() ? (r.total_s ? FmtSeconds(r.total_s) + " s" : kDash) : "failed"};
     for (int g = 0; g < kGroupCount; ++g)
       if (r.time_s[size_t(g)]) b.segments.push_back({g, *r.time_s[size_t(g)]});
     bars.push_back(std::move(b));
@@ -788,8 +860,8 @@ std::string RamChart(const Campaign& c, const std::string& scene) {
 std::string Legend() {
   std::string html = "<div class=\"legend\">";
   for (int g = 0; g < kGroupCount; ++g)
-    html += std::string("<span><i style=\"background:") + kGroupColors[size_t(g)] + "\"></i>" + kGroupTitles[size_t(g)] +
-            "</span>";
+    html += std::string("<span><i style=\"background:") + kGroupColors[size_t(g)] + "\"></i>" +
+            kGroupTitles[size_t(g)] + "</span>";
   return html + "</div>";
 }
 
@@ -833,15 +905,17 @@ TextTable QualityTable(const Campaign& c, bool vs_truth) {
 
 TextTable FpsTable(const Campaign& c) {
   TextTable t;
-  t.header = {"Scene", "Workflow", "Faces", "Texture", "Texture MiB", "Fits budget", "FPS", "Device"};
+  t.header = {"Scene",       "Workflow",    "Faces", "Texture",
+              "Texture MiB", "Fits budget", "FPS",   "Device"};
   for (const Row& r : c.rows)
     t.rows.push_back({r.scene, DisplayName(r), FmtFixed(r.faces, "%.0f"), FmtTexture(r),
-                      r.texture_bytes ? Printf("%.1f", *r.texture_bytes / (1024.0 * 1024)) : kDash, FmtFits(r),
-                      FmtFixed(r.fps, "%.1f"), r.device.empty() ? kDash : r.device});
+                      r.texture_bytes ? Printf("%.1f", *r.texture_bytes / (1024.0 * 1024)) : kDash,
+                      FmtFits(r), FmtFixed(r.fps, "%.1f"), r.device.empty() ? kDash : r.device});
   return t;
 }
 
-TextTable SpeedUpTable(const Campaign& c, const std::vector<SpeedUp>& speedups, const std::vector<SpeedUpMean>& means) {
+TextTable SpeedUpTable(const Campaign& c, const std::vector<SpeedUp>& speedups,
+                       const std::vector<SpeedUpMean>& means) {
   TextTable t;
   t.text_columns = 1;
   t.header = {"Versus"};
@@ -852,10 +926,12 @@ TextTable SpeedUpTable(const Campaign& c, const std::vector<SpeedUp>& speedups, 
     for (const std::string& scene : c.scenes) {
       std::string cell = kDash;
       for (const SpeedUp& s : speedups)
-        if (s.scene == scene && s.workflow == m.workflow && s.variant == m.variant) cell = FmtRatio(s.ratio);
+        if (s.scene == scene && s.workflow == m.workflow && s.variant == m.variant)
+          cell = FmtRatio(s.ratio);
       cells.push_back(cell);
     }
-    cells.push_back(FmtRatio(m.ratio) + " (" + std::to_string(m.scenes) + (m.scenes == 1 ? " scene)" : " scenes)"));
+    cells.push_back(FmtRatio(m.ratio) + " (" + std::to_string(m.scenes) +
+                    (m.scenes == 1 ? " scene)" : " scenes)"));
     t.rows.push_back(cells);
   }
   return t;
@@ -903,29 +979,36 @@ std::string HostLine(const Campaign& c) {
 
 const char* kTimesNote =
     "Times are construction times, grouped as in the paper's Fig. 7 (plus the normals of the point "
-    "preparation). They exclude producing the scan (group input), evaluation (rendering, metrics, FPS "
-    "estimate) and the HPM reference chain inside other workflows. A stage's \"io\" phase counts as I/O; "
+    "preparation). They exclude producing the scan (group input), evaluation (rendering, metrics, "
+    "FPS "
+    "estimate) and the HPM reference chain inside other workflows. A stage's \"io\" phase counts "
+    "as I/O; "
     "cache hits count with the figures of the run that computed them.";
 
 std::string SpeedUpSentence(const std::vector<SpeedUpMean>& means) {
-  if (means.empty()) return "No speed-ups: the campaign has no point-transfer run with another workflow to compare.";
+  if (means.empty())
+    return "No speed-ups: the campaign has no point-transfer run with another workflow to compare.";
   std::string s = "Point transfer's speed-up: ";
   for (size_t i = 0; i < means.size(); ++i) {
     if (i) s += i + 1 == means.size() ? " and " : ", ";
     s += FmtRatio(means[i].ratio) + " over " + DisplayName(means[i].workflow, means[i].variant);
   }
-  return s + " (the other workflow's total construction time divided by point transfer's, geometric mean "
-             "over scenes; above 1\xC3\x97 point transfer is faster).";
+  return s +
+         " (the other workflow's total construction time divided by point transfer's, geometric "
+         "mean "
+         "over scenes; above 1\xC3\x97 point transfer is faster).";
 }
 
-std::string ReportMarkdown(const Campaign& c, const TextTable& times, const TextTable& vs_hpm, const TextTable& vs_truth,
-                           const TextTable& fps, const TextTable& speed, const std::string& speed_sentence,
+std::string ReportMarkdown(const Campaign& c, const TextTable& times, const TextTable& vs_hpm,
+                           const TextTable& vs_truth, const TextTable& fps, const TextTable& speed,
+                           const std::string& speed_sentence,
                            const std::vector<SceneImages>& images) {
   std::string md = "# Campaign report: " + EscapeMd(c.name) + "\n\n";
   md += "- Started: " + (c.started.empty() ? std::string(kDash) : c.started) + "\n";
   md += "- Machine: " + EscapeMd(HostLine(c)) + "\n";
   md += "- Campaign file: " + (c.file.empty() ? std::string(kDash) : "`" + c.file + "`") + "\n\n";
-  md += kTimesNote + std::string("\n\n## Construction time and peak RAM\n\n") + MarkdownTable(times);
+  md +=
+      kTimesNote + std::string("\n\n## Construction time and peak RAM\n\n") + MarkdownTable(times);
   md += "\n## Speed-ups of point transfer\n\n" + speed_sentence + "\n\n" + MarkdownTable(speed);
   md += "\n## Quality against HPM\n\n" + MarkdownTable(vs_hpm);
   md += "\n## Quality against ground truth\n\n" + MarkdownTable(vs_truth);
@@ -949,53 +1032,67 @@ std::string ReportMarkdown(const Campaign& c, const TextTable& times, const Text
 
 const char* kCss =
     "body{font-family:sans-serif;margin:24px;color:#222;background:#fff;max-width:1400px}"
-    "h1{font-size:24px}h2{font-size:19px;margin-top:32px;border-bottom:1px solid #ccc}h3{font-size:16px}"
-    "table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px solid #ccc;padding:3px 8px;"
+    "h1{font-size:24px}h2{font-size:19px;margin-top:32px;border-bottom:1px solid "
+    "#ccc}h3{font-size:16px}"
+    "table{border-collapse:collapse;margin:8px 0;font-size:13px}th,td{border:1px solid "
+    "#ccc;padding:3px 8px;"
     "text-align:right}th{background:#f0f0f0}td.l,th.l{text-align:left}"
     "svg.chart text{font-size:12px;fill:#222}svg.chart text.tick{fill:#555;font-size:11px}"
-    ".legend span{margin-right:14px;font-size:13px}.legend i{display:inline-block;width:12px;height:12px;"
+    ".legend span{margin-right:14px;font-size:13px}.legend "
+    "i{display:inline-block;width:12px;height:12px;"
     "margin-right:4px;vertical-align:-1px}.frames{display:flex;flex-wrap:wrap;gap:12px}"
     ".cell{border:1px solid #ddd;padding:6px;font-size:12px}.cell img{display:block;margin-top:4px}"
     ".crop{image-rendering:pixelated}.note{color:#a00}.meta{font-size:14px}";
 
-std::string Img(const std::optional<ReportImage>& image, const std::string& alt, const char* cls = "") {
+std::string Img(const std::optional<ReportImage>& image, const std::string& alt,
+                const char* cls = "") {
   if (!image) return "";
   return "<img class=\"" + std::string(cls) + "\" alt=\"" + EscapeHtml(alt) + "\" width=\"" +
-         std::to_string(image->width) + "\" height=\"" + std::to_string(image->height) + "\" src=\"" +
-         image->data_uri + "\">";
+         std::to_string(image->width) + "\" height=\"" + std::to_string(image->height) +
+         "\" src=\"" + image->data_uri + "\">";
 }
 
-std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTable& vs_hpm, const TextTable& vs_truth,
-                       const TextTable& fps, const TextTable& speed, const std::string& speed_sentence,
-                       const std::vector<SceneImages>& images, const ReportOptions& options) {
-  std::string h = "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>pointbake report: " +
-                  EscapeHtml(c.name) + "</title><style>" + kCss + "</style></head><body>\n";
+std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTable& vs_hpm,
+                       const TextTable& vs_truth, const TextTable& fps, const TextTable& speed,
+                       const std::string& speed_sentence, const std::vector<SceneImages>& images,
+                       const ReportOptions& options) {
+  std::string h =
+      "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>pointbake report: " +
+      EscapeHtml(c.name) + "</title><style>" + kCss + "</style></head><body>\n";
   h += "<h1>Campaign report: " + EscapeHtml(c.name) + "</h1><div class=\"meta\"><p>Started " +
-       EscapeHtml(c.started.empty() ? kDash : c.started) + (c.total_wall_s ? ", campaign wall time " + FmtSeconds(c.total_wall_s) + " s" : "") +
-       ". Machine: " + EscapeHtml(HostLine(c)) + ".</p><p>" + EscapeHtml(kTimesNote) + "</p></div>\n";
+       EscapeHtml(c.started.empty() ? kDash : c.started) +
+       (c.total_wall_s ? ", campaign wall time " + FmtSeconds(c.total_wall_s) + " s" : "") +
+       ". Machine: " + EscapeHtml(HostLine(c)) + ".</p><p>" + EscapeHtml(kTimesNote) +
+       "</p></div>\n";
   h += "<h2>Construction time</h2>" + Legend();
-  for (const std::string& scene : c.scenes) h += "<h3>" + EscapeHtml(scene) + "</h3>" + TimeChart(c, scene);
+  for (const std::string& scene : c.scenes)
+    h += "<h3>" + EscapeHtml(scene) + "</h3>" + TimeChart(c, scene);
   h += "\n<h2>Peak RAM</h2>";
-  for (const std::string& scene : c.scenes) h += "<h3>" + EscapeHtml(scene) + "</h3>" + RamChart(c, scene);
-  h += "\n<h2>Speed-ups of point transfer</h2><p>" + EscapeHtml(speed_sentence) + "</p>" + HtmlTable(speed);
+  for (const std::string& scene : c.scenes)
+    h += "<h3>" + EscapeHtml(scene) + "</h3>" + RamChart(c, scene);
+  h += "\n<h2>Speed-ups of point transfer</h2><p>" + EscapeHtml(speed_sentence) + "</p>" +
+       HtmlTable(speed);
   h += "\n<h2>Times and peak RAM</h2>" + HtmlTable(times);
   h += "\n<h2>Quality against HPM</h2>" + HtmlTable(vs_hpm);
   h += "\n<h2>Quality against ground truth</h2>" + HtmlTable(vs_truth);
   h += "\n<h2>Faces, textures and FPS estimate</h2>" + HtmlTable(fps);
   for (const SceneImages& s : images) {
     for (const ViewSection& v : s.views) {
-      h += "\n<h2>" + EscapeHtml(s.scene) + ", view " + EscapeHtml(v.view) + "</h2><p>Crop: " +
-           std::to_string(v.window.size) + "\xC3\x97" + std::to_string(v.window.size) + " px at (" +
-           std::to_string(v.window.x) + ", " + std::to_string(v.window.y) +
-           "), where point transfer and LPM differ most (the frame centre without both), enlarged " +
-           std::to_string(std::max(1, options.thumbnail_px / v.window.size)) +
-           "\xC3\x97 (nearest neighbor); yellow box in the frames.</p><div class=\"frames\">";
+      h +=
+          "\n<h2>" + EscapeHtml(s.scene) + ", view " + EscapeHtml(v.view) +
+          "</h2><p>Crop: " + std::to_string(v.window.size) + "\xC3\x97" +
+          std::to_string(v.window.size) + " px at (" + std::to_string(v.window.x) + ", " +
+          std::to_string(v.window.y) +
+          "), where point transfer and LPM differ most (the frame centre without both), enlarged " +
+          std::to_string(std::max(1, options.thumbnail_px / v.window.size)) +
+          "\xC3\x97 (nearest neighbor); yellow box in the frames.</p><div class=\"frames\">";
       for (const FrameCell& cell : v.cells) {
         h += "<div class=\"cell\"><b>" + EscapeHtml(cell.title) + "</b>";
         if (!cell.note.empty()) h += "<div class=\"note\">" + EscapeHtml(cell.note) + "</div>";
         h += Img(cell.thumb, cell.title);
         if (cell.crop) h += "<div>Crop</div>" + Img(cell.crop, cell.title + " crop", "crop");
-        if (cell.flip) h += "<div>" + EscapeHtml(cell.flip_title) + "</div>" + Img(cell.flip, cell.flip_title);
+        if (cell.flip)
+          h += "<div>" + EscapeHtml(cell.flip_title) + "</div>" + Img(cell.flip, cell.flip_title);
         h += "</div>";
       }
       h += "</div>";
@@ -1009,7 +1106,8 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
 Status WriteCampaignReport(const std::string& campaign_dir, const std::string& report_dir,
                            const ReportOptions& options) {
   if (options.thumbnail_px < 16 || options.crop_px < 4 || options.max_viewpoints < 0)
-    return Status::Invalid("report options: thumbnail_px must be >= 16, crop_px >= 4, max_viewpoints >= 0");
+    return Status::Invalid(
+        "report options: thumbnail_px must be >= 16, crop_px >= 4, max_viewpoints >= 0");
   PB_ASSIGN_OR_RETURN(Campaign campaign, ReadCampaign(campaign_dir));
   Env* env = Env::Default();
   PB_RETURN_IF_ERROR(env->CreateDirs(JoinPath(report_dir, "images")));
@@ -1026,11 +1124,14 @@ Status WriteCampaignReport(const std::string& campaign_dir, const std::string& r
   const std::string sentence = SpeedUpSentence(means);
   PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(report_dir, "results.json"),
                                           ResultsJson(campaign, speedups, means).dump(2) + "\n"));
-  PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(report_dir, "results.csv"), ResultsCsv(campaign)));
-  PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(report_dir, "report.md"),
-                                          ReportMarkdown(campaign, times, vs_hpm, vs_truth, fps, speed, sentence, images)));
-  return env->WriteFileAtomic(JoinPath(report_dir, "report.html"),
-                              ReportHtml(campaign, times, vs_hpm, vs_truth, fps, speed, sentence, images, options));
+  PB_RETURN_IF_ERROR(
+      env->WriteFileAtomic(JoinPath(report_dir, "results.csv"), ResultsCsv(campaign)));
+  PB_RETURN_IF_ERROR(env->WriteFileAtomic(
+      JoinPath(report_dir, "report.md"),
+      ReportMarkdown(campaign, times, vs_hpm, vs_truth, fps, speed, sentence, images)));
+  return env->WriteFileAtomic(
+      JoinPath(report_dir, "report.html"),
+      ReportHtml(campaign, times, vs_hpm, vs_truth, fps, speed, sentence, images, options));
 }
 
 }  // namespace pb

@@ -55,24 +55,37 @@ Table MetricsTable(const TableValue& psnr) {
 
 Table FpsTable(int64_t triangles, int64_t texture_px, double fps) {
   Table t;
-  t.columns = {"device", "triangles", "texture_width", "texture_height", "texture_bytes", "texture_budget_bytes",
-               "fits_texture_budget", "triangles_per_s", "refresh_hz", "fps"};
-  t.rows.push_back({std::string("quest2"), triangles, texture_px, texture_px, texture_px * texture_px * 4,
-                    int64_t(1) << 30, true, 1e9, 72.0, fps});
+  t.columns = {"device",
+               "triangles",
+               "texture_width",
+               "texture_height",
+               "texture_bytes",
+               "texture_budget_bytes",
+               "fits_texture_budget",
+               "triangles_per_s",
+               "refresh_hz",
+               "fps"};
+  t.rows.push_back({std::string("quest2"), triangles, texture_px, texture_px,
+                    texture_px * texture_px * 4, int64_t(1) << 30, true, 1e9, 72.0, fps});
   return t;
 }
 
-Json Stage(const std::string& id, const std::string& group, double wall_s, double io_s, double peak) {
+Json Stage(const std::string& id, const std::string& group, double wall_s, double io_s,
+           double peak) {
   Json phases = Json::array({{{"name", "compute"}, {"start_s", 0.0}, {"dur_s", wall_s - io_s}}});
   if (io_s > 0) phases.push_back({{"name", "io"}, {"start_s", wall_s - io_s}, {"dur_s", io_s}});
-  return {{"stage", id}, {"type", "t"}, {"status", "ran"}, {"group", group}, {"wall_s", wall_s},
-          {"peak_rss_bytes", peak}, {"phases", phases}, {"counters", Json::object()}};
+  return {{"stage", id},      {"type", "t"},
+          {"status", "ran"},  {"group", group},
+          {"wall_s", wall_s}, {"peak_rss_bytes", peak},
+          {"phases", phases}, {"counters", Json::object()}};
 }
 
 class ReportTest : public testing::TempDirTest {
  protected:
   std::string Campaign() const { return Path("campaign"); }
-  std::string RunDir(const std::string& workflow) const { return Path("campaign/runs/room/" + workflow); }
+  std::string RunDir(const std::string& workflow) const {
+    return Path("campaign/runs/room/" + workflow);
+  }
 
   void WriteFrameSet(const std::string& dir, const Image& image) {
     std::filesystem::create_directories(dir);
@@ -95,9 +108,15 @@ class ReportTest : public testing::TempDirTest {
   void WriteCampaign(bool lpm_ok = false, bool with_pt = true) {
     Json runs = Json::array();
     auto run = [&](const std::string& workflow, const std::string& status) {
-      Json r = {{"name", "room/" + workflow}, {"scene", "room"}, {"scene_file", "/x/room.yaml"},
-                {"workflow", workflow}, {"workflow_file", "/x/" + workflow + ".yaml"}, {"variant", ""},
-                {"sets", Json::array()}, {"dir", "runs/room/" + workflow}, {"status", status}};
+      Json r = {{"name", "room/" + workflow},
+                {"scene", "room"},
+                {"scene_file", "/x/room.yaml"},
+                {"workflow", workflow},
+                {"workflow_file", "/x/" + workflow + ".yaml"},
+                {"variant", ""},
+                {"sets", Json::array()},
+                {"dir", "runs/room/" + workflow},
+                {"status", status}};
       if (status == "failed") r["error"] = "stage bake failed: out of memory, exit 137";
       runs.push_back(r);
     };
@@ -106,18 +125,27 @@ class ReportTest : public testing::TempDirTest {
     run("hpm", "ok");
     run("lpm", lpm_ok ? "ok" : "failed");
     WriteJson(Path("campaign/campaign.json"),
-              {{"format", "pointbake-campaign"}, {"version", 1}, {"name", "tiny"}, {"file", "/x/tiny.yaml"},
-               {"started", "2026-11-21T10:00:00Z"}, {"total_wall_s", 42.0},
-               {"host", {{"cores", 2}, {"memory_bytes", 25769803776.0}, {"cpu", "Test CPU"}}}, {"runs", runs}});
+              {{"format", "pointbake-campaign"},
+               {"version", 1},
+               {"name", "tiny"},
+               {"file", "/x/tiny.yaml"},
+               {"started", "2026-11-21T10:00:00Z"},
+               {"total_wall_s", 42.0},
+               {"host", {{"cores", 2}, {"memory_bytes", 25769803776.0}, {"cpu", "Test CPU"}}},
+               {"runs", runs}});
 
     // HPM: high mesh 10 s of which 2 s io; bake a cache hit (4 s, 1 s io);
     // export 1 s. Scan and render are not construction time.
-    Json bake_hit = {{"stage", "bake"}, {"type", "bake.from_mesh"}, {"status", "hit"}, {"group", "bake"},
-                     {"wall_s", 0.01}, {"cached_run", Stage("bake", "bake", 4, 1, 3e9)}};
-    WriteJson(RunDir("hpm") + "/run.json",
-              {{"format", "pointbake-run 1"}, {"workflow", "hpm"},
-               {"stages", {Stage("scan", "input", 5, 0, 1e8), Stage("poisson", "high_mesh", 10, 2, 2e9), bake_hit,
-                           Stage("export", "io", 1, 0, 1e8), Stage("render", "evaluation", 100, 0, 9e9)}}});
+    Json bake_hit = {{"stage", "bake"}, {"type", "bake.from_mesh"},
+                     {"status", "hit"}, {"group", "bake"},
+                     {"wall_s", 0.01},  {"cached_run", Stage("bake", "bake", 4, 1, 3e9)}};
+    WriteJson(
+        RunDir("hpm") + "/run.json",
+        {{"format", "pointbake-run 1"},
+         {"workflow", "hpm"},
+         {"stages",
+          {Stage("scan", "input", 5, 0, 1e8), Stage("poisson", "high_mesh", 10, 2, 2e9), bake_hit,
+           Stage("export", "io", 1, 0, 1e8), Stage("render", "evaluation", 100, 0, 9e9)}}});
     WriteFrameSet(RunDir("hpm") + "/frames", TestFrame(2));
     WriteFrameSet(RunDir("hpm") + "/truth_frames", TestFrame(0));
     WriteFrameSet(RunDir("hpm") + "/flip_truth", TestFrame(50));
@@ -128,22 +156,29 @@ class ReportTest : public testing::TempDirTest {
       // Point transfer: normals 2 s (0.5 io), low mesh 1, uv 0.5, bake 1.5
       // (0.25 io), export 0.5; the HPM reference chain is not its time.
       WriteJson(RunDir("point_transfer") + "/run.json",
-                {{"format", "pointbake-run 1"}, {"workflow", "point_transfer"},
-                 {"stages", {Stage("scan", "input", 5, 0, 1e8), Stage("normals", "points", 2, 0.5, 1.5e9),
-                             Stage("decimate", "low_mesh", 1, 0, 5e8), Stage("unwrap", "uv", 0.5, 0, 4e8),
-                             Stage("bake", "bake", 1.5, 0.25, 1.2e9), Stage("export", "io", 0.5, 0, 1e8),
-                             Stage("hpm_poisson", "reference", 50, 0, 8e9), Stage("fps", "evaluation", 1, 0, 1e8)}}});
+                {{"format", "pointbake-run 1"},
+                 {"workflow", "point_transfer"},
+                 {"stages",
+                  {Stage("scan", "input", 5, 0, 1e8), Stage("normals", "points", 2, 0.5, 1.5e9),
+                   Stage("decimate", "low_mesh", 1, 0, 5e8), Stage("unwrap", "uv", 0.5, 0, 4e8),
+                   Stage("bake", "bake", 1.5, 0.25, 1.2e9), Stage("export", "io", 0.5, 0, 1e8),
+                   Stage("hpm_poisson", "reference", 50, 0, 8e9),
+                   Stage("fps", "evaluation", 1, 0, 1e8)}}});
       WriteFrameSet(RunDir("point_transfer") + "/frames", TestFrame(0, true));
       WriteFrameSet(RunDir("point_transfer") + "/flip_truth", TestFrame(80));
       WriteFrameSet(RunDir("point_transfer") + "/flip_hpm", TestFrame(90));
       ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/vs_hpm.json", MetricsTable(30.0)).ok());
-      ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/vs_truth.json", MetricsTable(TableValue{})).ok());
-      ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/fps.json", FpsTable(240000, 2048, 72.0)).ok());
+      ASSERT_TRUE(
+          WriteTable(RunDir("point_transfer") + "/vs_truth.json", MetricsTable(TableValue{})).ok());
+      ASSERT_TRUE(
+          WriteTable(RunDir("point_transfer") + "/fps.json", FpsTable(240000, 2048, 72.0)).ok());
     }
     if (lpm_ok) {
       WriteJson(RunDir("lpm") + "/run.json",
-                {{"format", "pointbake-run 1"}, {"workflow", "lpm"},
-                 {"stages", {Stage("decimate", "low_mesh", 1, 0, 5e8), Stage("bake", "bake", 1, 0, 5e8)}}});
+                {{"format", "pointbake-run 1"},
+                 {"workflow", "lpm"},
+                 {"stages",
+                  {Stage("decimate", "low_mesh", 1, 0, 5e8), Stage("bake", "bake", 1, 0, 5e8)}}});
       WriteFrameSet(RunDir("lpm") + "/frames", TestFrame(0));
     }
   }
@@ -167,8 +202,9 @@ TEST_F(ReportTest, GroupsTimesAndPeakRamAsTheContractSays) {
   EXPECT_EQ(pt["display_name"], "Point transfer");
 
   EXPECT_NEAR(hpm["time_s"]["high_mesh"].get<double>(), 8.0, 1e-9);
-  EXPECT_NEAR(hpm["time_s"]["bake"].get<double>(), 3.0, 1e-9);  // from cached_run, not the hit's 0.01
-  EXPECT_NEAR(hpm["time_s"]["io"].get<double>(), 4.0, 1e-9);    // 2 + 1 + 1
+  EXPECT_NEAR(hpm["time_s"]["bake"].get<double>(), 3.0,
+              1e-9);                                          // from cached_run, not the hit's 0.01
+  EXPECT_NEAR(hpm["time_s"]["io"].get<double>(), 4.0, 1e-9);  // 2 + 1 + 1
   EXPECT_TRUE(hpm["time_s"]["points"].is_null());
   EXPECT_TRUE(hpm["time_s"]["uv"].is_null());
   EXPECT_NEAR(hpm["time_s"]["total"].get<double>(), 15.0, 1e-9);
@@ -210,10 +246,14 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
   bool quoted = false;
   for (size_t i = 0; i < line.size(); ++i) {
     const char ch = line[i];
-    if (quoted && ch == '"' && i + 1 < line.size() && line[i + 1] == '"') fields.back() += '"', ++i;
-    else if (ch == '"') quoted = !quoted;
-    else if (ch == ',' && !quoted) fields.emplace_back();
-    else fields.back() += ch;
+    if (quoted && ch == '"' && i + 1 < line.size() && line[i + 1] == '"')
+      fields.back() += '"', ++i;
+    else if (ch == '"')
+      quoted = !quoted;
+    else if (ch == ',' && !quoted)
+      fields.emplace_back();
+    else
+      fields.back() += ch;
   }
   return fields;
 }
@@ -237,7 +277,8 @@ TEST_F(ReportTest, CsvHasOneRowPerRunWithEmptyFieldsForUnknowns) {
   EXPECT_EQ(lines[3][column("fits_budget")], "true");
   EXPECT_EQ(lines[2][column("status")], "failed");
   EXPECT_EQ(lines[2][column("time_total_s")], "");
-  EXPECT_EQ(lines[2][column("error")], "stage bake failed: out of memory, exit 137");  // quoted comma
+  EXPECT_EQ(lines[2][column("error")],
+            "stage bake failed: out of memory, exit 137");  // quoted comma
 }
 
 TEST_F(ReportTest, HtmlIsSelfContainedWithChartsAndFrames) {
@@ -250,7 +291,8 @@ TEST_F(ReportTest, HtmlIsSelfContainedWithChartsAndFrames) {
   EXPECT_THAT(html, Not(HasSubstr("url(")));
   EXPECT_THAT(html, Not(HasSubstr("HDR-VDP")));
   size_t images = 0, data_images = 0;
-  for (size_t at = html.find("<img "); at != std::string::npos; at = html.find("<img ", at + 1)) ++images;
+  for (size_t at = html.find("<img "); at != std::string::npos; at = html.find("<img ", at + 1))
+    ++images;
   for (size_t at = html.find("src=\"data:image/png;base64,"); at != std::string::npos;
        at = html.find("src=\"data:image/png;base64,", at + 1))
     ++data_images;
@@ -258,7 +300,8 @@ TEST_F(ReportTest, HtmlIsSelfContainedWithChartsAndFrames) {
   EXPECT_EQ(images, 8u);
   EXPECT_EQ(data_images, images);
   size_t svgs = 0;
-  for (size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1)) ++svgs;
+  for (size_t at = html.find("<svg"); at != std::string::npos; at = html.find("<svg", at + 1))
+    ++svgs;
   EXPECT_EQ(svgs, 2u);  // time bars and peak-RAM bars of the one scene
   EXPECT_THAT(html, HasSubstr("Point transfer"));
   EXPECT_THAT(html, HasSubstr("Ground truth"));
@@ -270,7 +313,8 @@ TEST_F(ReportTest, HtmlIsSelfContainedWithChartsAndFrames) {
   // report.md links the same images, written beside it.
   const std::string md = ReadText(Path("report/report.md"));
   EXPECT_THAT(md, HasSubstr("](images/room__room_point_transfer__front_frame.png)"));
-  EXPECT_TRUE(std::filesystem::exists(Path("report/images/room__room_point_transfer__front_crop.png")));
+  EXPECT_TRUE(
+      std::filesystem::exists(Path("report/images/room__room_point_transfer__front_crop.png")));
 }
 
 TEST_F(ReportTest, CropIsWhereTransferAndLpmDifferMost) {
@@ -279,7 +323,8 @@ TEST_F(ReportTest, CropIsWhereTransferAndLpmDifferMost) {
   options.crop_px = 16;
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report"), options).ok());
   const std::string html = ReadText(Path("report/report.html"));
-  EXPECT_THAT(html, HasSubstr("Crop: 16\xC3\x97" "16 px at (40, 8)"));
+  EXPECT_THAT(html, HasSubstr("Crop: 16\xC3\x97"
+                              "16 px at (40, 8)"));
   // The crop is enlarged nearest-neighbor to about thumbnail_px: 16 * 20.
   Expected<Image> crop = ReadPng(Path("report/images/room__room_point_transfer__front_crop.png"));
   ASSERT_TRUE(crop.ok());
