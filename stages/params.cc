@@ -1,6 +1,8 @@
 #include "stages/params.h"
 
+#include <cctype>
 #include <cmath>
+#include <cstring>
 
 namespace pb {
 namespace {
@@ -91,6 +93,31 @@ Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view st
     if (named != view.files.end()) return named->second;
   }
   return view.file();
+}
+
+std::string InputFileName(const StageContext& ctx, std::string_view port, const std::string& path) {
+  for (const auto& [file_name, file_path] : ctx.input(port).files)
+    if (file_path == path) return file_name;
+  return path;
+}
+
+Expected<Image> ReadInputImage(const StageContext& ctx, std::string_view stage_id,
+                               std::string_view port) {
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, stage_id, port));
+  const std::string context = std::string(stage_id) + ": input '" + std::string(port) + "'";
+  std::string name = InputFileName(ctx, port, path);
+  for (char& c : name) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  auto ends_with = [&](const char* ext) {
+    const size_t n = std::strlen(ext);
+    return name.size() >= n && name.compare(name.size() - n, n, ext) == 0;
+  };
+  Expected<Image> image = ends_with(".png")   ? ReadPng(path)
+                          : ends_with(".exr") ? ReadExr(path)
+                                              : Expected<Image>(Status::Unsupported(
+                                                    path + ": unsupported image file '" + name +
+                                                    "' (supported: .png, .exr)"));
+  if (!image.ok()) return image.status().WithContext(context);
+  return image;
 }
 
 }  // namespace pb

@@ -13,6 +13,7 @@
 
 #include "engine/base/status.h"
 #include "engine/stage.h"
+#include "stages/geometry/image.h"
 
 namespace pb {
 
@@ -37,5 +38,15 @@ Expected<int64_t> IntegerParam(const StageContext& ctx, std::string_view stage_i
 // Status::Invalid if the input is missing or empty.
 Expected<std::string> InputFilePath(const StageContext& ctx, std::string_view stage_id,
                                     std::string_view port, std::string_view preferred_file = "");
+
+// The artifact's own name of input file `path` (e.g. "color.png"): in the
+// cache, files are stored under their content digest without an extension,
+// so formats must be decided from this name, not from the path.
+std::string InputFileName(const StageContext& ctx, std::string_view port, const std::string& path);
+
+// Reads input `port`'s image (PNG or OpenEXR, by the artifact's file name);
+// errors name the stage and port.
+Expected<Image> ReadInputImage(const StageContext& ctx, std::string_view stage_id,
+                               std::string_view port);
 
 }  // namespace pb

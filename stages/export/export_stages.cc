@@ -56,13 +56,7 @@ Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_v
   if (!ctx.has_input(port)) return std::vector<uint8_t>{};
   PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, stage_id, port));
   const std::string context = std::string(stage_id) + ": input '" + std::string(port) + "'";
-  // The artifact's file name, not its path: in the cache, files are stored
-  // under their content digest without an extension.
-  std::string name = path;
-  for (const auto& [file_name, file_path] : ctx.input(port).files) {
-    if (file_path == path) name = file_name;
-  }
-  const std::string extension = LowerExtension(name);
+  const std::string extension = LowerExtension(InputFileName(ctx, port, path));
   if (extension == ".png") {
     std::ifstream in(path, std::ios::binary);
     if (!in) return Status::Errno(path, "open").WithContext(context);
@@ -82,7 +76,8 @@ Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_v
     if (!image.ok()) return image.status().WithContext(context);
     return EncodePng(ToEightBit(*image, normal_map));
   }
-  return Status::Unsupported(context + ": " + name + ": expected a .png or .exr image");
+  return Status::Unsupported(context + ": " + InputFileName(ctx, port, path) +
+                             ": expected a .png or .exr image");
 }
 
 std::vector<PortSpec> ExportInputPorts() {

@@ -222,11 +222,10 @@ Expected<Mesh> ReadMesh(StageContext& ctx, const char* port) {
 }
 
 Expected<MipTexture> ReadTexture(StageContext& ctx, const char* port, bool normal) {
-  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, kId, port));
-  Expected<Image> image = ReadImage(path);
-  if (!image.ok()) return image.status().WithContext(std::string(kId) + ": input '" + port + "'");
-  Expected<MipTexture> texture = normal ? BuildNormalTexture(*image) : BuildColorTexture(*image);
-  if (!texture.ok()) return texture.status().WithContext(std::string(kId) + ": " + path);
+  PB_ASSIGN_OR_RETURN(const Image image, ReadInputImage(ctx, kId, port));
+  Expected<MipTexture> texture = normal ? BuildNormalTexture(image) : BuildColorTexture(image);
+  if (!texture.ok())
+    return texture.status().WithContext(std::string(kId) + ": input '" + port + "'");
   return texture;
 }
 
