@@ -27,7 +27,7 @@ namespace pb {
 //   points -> points.ply  (binary little-endian PLY, see stages/geometry/ply.h)
 //   mesh   -> mesh.ply    (binary PLY with optional UVs, colors, tangents)
 //   image  -> image.png (8/16-bit) or image.exr (float)
-//   frames -> frame_NNN.png, one per viewpoint
+//   frames -> frames.json + one PNG per viewpoint (stages/geometry/frames.h)
 //   table  -> table.json
 //   model  -> an exported model: model.glb, or model.obj + model.mtl + PNGs
 //   any    -> accepted by inputs that take every type (tests, exports)
