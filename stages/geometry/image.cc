@@ -2,6 +2,7 @@
 #include "stages/geometry/image.h"
 
 #include <png.h>
+#include <zlib.h>
 
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
@@ -86,6 +87,17 @@ bool PngReadRows(png_structp png, png_infop info, png_bytepp rows) {
   return true;
 }
 
+// Encoder settings of both writers: the Sub filter on every row and zlib's
+// run-length strategy. On baked 4096^2 maps this encodes 5x faster than
+// libpng's default (adaptive choice among all five filters per row, deflate
+// level 6: 2.05 + 3.29 CPU-s for a color + normal map, 0.60 + 0.48 s now)
+// for files 4-5 % larger (docs/bake.md). Lossless either way: the decoded
+// pixels are the same.
+void PngSetFastEncoding(png_structp png) {
+  png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
+  png_set_compression_strategy(png, Z_RLE);
+}
+
 bool PngWriteAll(png_structp png, png_infop info, FILE* file, const Image* image, png_bytepp rows) {
   if (setjmp(png_jmpbuf(png))) return false;
   static const int kColorTypes[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
@@ -95,6 +107,7 @@ bool PngWriteAll(png_structp png, png_infop info, FILE* file, const Image* image
                static_cast<png_uint_32>(image->height),
                image->type == Image::PixelType::kU16 ? 16 : 8, kColorTypes[image->channels - 1],
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  PngSetFastEncoding(png);
   png_write_info(png, info);
   if (image->type == Image::PixelType::kU16 && std::endian::native == std::endian::little) {
     png_set_swap(png);
@@ -122,6 +135,7 @@ bool PngWriteAllToVector(png_structp png, png_infop info, std::vector<uint8_t>* 
                static_cast<png_uint_32>(image->height),
                image->type == Image::PixelType::kU16 ? 16 : 8, kColorTypes[image->channels - 1],
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
+  PngSetFastEncoding(png);
   png_write_info(png, info);
   if (image->type == Image::PixelType::kU16 && std::endian::native == std::endian::little) {
     png_set_swap(png);
