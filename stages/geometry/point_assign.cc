@@ -43,6 +43,7 @@
 #include <tbb/parallel_reduce.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
+#include <tbb/task_group.h>
 
 namespace pb {
 namespace {
@@ -402,8 +403,11 @@ struct PointArrays {
 
   // In-place American flag sort of [begin, end) into buckets of
   // bucket_of(face); bucket b starts at starts[b] - the caller's counts.
-  template <typename BucketOf>
-  void FlagSort(std::vector<size_t> next, const std::vector<size_t>& ends, BucketOf&& bucket_of) const {
+  // Buckets are completed in order: once done(b) is called, bucket b holds
+  // its points and the sort never touches it again.
+  template <typename BucketOf, typename Done>
+  void FlagSort(std::vector<size_t> next, const std::vector<size_t>& ends, BucketOf&& bucket_of,
+                Done&& done) const {
     for (size_t b = 0; b < ends.size(); ++b) {
       while (next[b] < ends[b]) {
         Point p = Load(next[b]);
@@ -417,6 +421,7 @@ struct PointArrays {
         }
         Store(next[b]++, p);
       }
+      done(b);
     }
   }
 
@@ -534,27 +539,32 @@ void GroupByFace(PointCloud& cloud, const std::vector<uint64_t>& face_begin, siz
   }
   starts[ranges] = assigned;
   ends[ranges] = cloud.size();
-  arrays.FlagSort(starts, ends, [&](uint32_t face) {
-    return face == kDropped ? ranges : size_t(face) / faces_per_range;
-  });
-  // Level 2 and the per-face order, range by range in parallel.
+  // Level 2 and the per-face order of each range as a task as soon as level
+  // 1 has filled the range: level 1 is sequential, and ranges complete in
+  // order, so the other threads sort while this one still distributes.
   using Arrays = PointArrays<kNormals, kColors>;
   tbb::enumerable_thread_specific<typename Arrays::SortBuffer> buffers;
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, ranges, 1), [&](const tbb::blocked_range<size_t>& r) {
+  auto sort_range = [&](size_t b) {
     auto& buffer = buffers.local();
-    for (size_t b = r.begin(); b != r.end(); ++b) {
-      const size_t first_face = std::min(face_count, b * faces_per_range);
-      const size_t last_face = std::min(face_count, (b + 1) * faces_per_range);
-      if (first_face == last_face) continue;
-      std::vector<size_t> next(last_face - first_face), face_end(last_face - first_face);
-      for (size_t f = first_face; f < last_face; ++f) {
-        next[f - first_face] = face_begin[f];
-        face_end[f - first_face] = face_begin[f + 1];
-      }
-      arrays.FlagSort(next, face_end, [&](uint32_t face) { return size_t(face) - first_face; });
-      for (size_t f = first_face; f < last_face; ++f) arrays.SortFace(face_begin[f], face_begin[f + 1], buffer);
+    const size_t first_face = std::min(face_count, b * faces_per_range);
+    const size_t last_face = std::min(face_count, (b + 1) * faces_per_range);
+    if (first_face == last_face) return;
+    std::vector<size_t> next(last_face - first_face), face_end(last_face - first_face);
+    for (size_t f = first_face; f < last_face; ++f) {
+      next[f - first_face] = face_begin[f];
+      face_end[f - first_face] = face_begin[f + 1];
     }
-  });
+    arrays.FlagSort(next, face_end, [&](uint32_t face) { return size_t(face) - first_face; },
+                    [](size_t) {});
+    for (size_t f = first_face; f < last_face; ++f) arrays.SortFace(face_begin[f], face_begin[f + 1], buffer);
+  };
+  tbb::task_group sorts;
+  arrays.FlagSort(
+      starts, ends, [&](uint32_t face) { return face == kDropped ? ranges : size_t(face) / faces_per_range; },
+      [&](size_t b) {
+        if (b < ranges) sorts.run([&sort_range, b] { sort_range(b); });
+      });
+  sorts.wait();
 }
 
 }  // namespace
