@@ -689,6 +689,15 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
       uint32_t best = kDropped;
       double best_d2 = max_d2;
       bool in_reach = false;
+      // The bound comes from float planes and lines, so it can exceed the
+      // distance ClosestOnTriangle gives by rounding (~1e-7 of the
+      // coordinates); a face is skipped only when its bound is beyond the
+      // best distance plus a margin far above that. Skipping on the bound
+      // alone made the winner of near-ties depend on the order the faces
+      // were considered in, which depends on the previous point, i.e. on
+      // how the points were split between threads.
+      const double slack_m = 1e-6 * (1 + std::abs(q[0]) + std::abs(q[1]) + std::abs(q[2]));
+      double skip_d2 = (d + 2 * slack_m) * (d + 2 * slack_m);
       // Candidates in any order: the winner is the least (distance, face),
       // so a tie goes to the lower index. The previous point's face first:
       // scan order is spatially coherent, and a near first answer lets the
@@ -700,7 +709,7 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
         for (int k = 0; k < 3; ++k)
           out = std::max(out, b.edge[k][0] * q[0] + b.edge[k][1] * q[1] + b.edge[k][2] * q[2] - b.edge[k][3]);
         const double lb = h * h + out * out;
-        if (lb > best_d2 || (lb == best_d2 && f > best)) return;
+        if (lb > skip_d2) return;
         const bool angle_ok = !test_angle || pn[0] * b.plane[0] + pn[1] * b.plane[1] + pn[2] * b.plane[2] >= min_dot;
         if (!angle_ok && (in_reach || best != kDropped)) return;
         double d2 = lb;
@@ -718,6 +727,8 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
         if (best == kDropped || d2 < best_d2 || (d2 == best_d2 && f < best)) {
           best = f;
           best_d2 = d2;
+          const double reach = std::sqrt(d2) + 2 * slack_m;
+          skip_d2 = reach * reach;
         }
       };
       const bool hint_here = hint != kDropped && cb < ce;
