@@ -194,6 +194,20 @@ TEST_F(RenderStagesTest, ClearErrors) {
               ctx.AddInput("normal", "image", WriteImage("n.png", Checker(4)));
             }).find("'normal' needs input 'color'"),
             std::string::npos);
+  Mesh bare = Quad();
+  bare.uvs.clear();
+  bare.tangents.clear();
+  const std::string bare_path = WriteInputMesh("bare", bare);
+  EXPECT_NE(error(Params(Viewpoints()), [&](FakeContext& ctx) {
+              ctx.AddInput("mesh", "mesh", bare_path);
+              ctx.AddInput("color", "image", WriteImage("c.png", Checker(4)));
+            }).find("'color' needs a mesh with uvs"),
+            std::string::npos);
+  EXPECT_NE(error(Params(Viewpoints()), [&](FakeContext& ctx) {
+              ctx.AddInput("truth", "mesh", mesh_path);
+              ctx.AddInput("color", "image", WriteImage("c.png", Checker(4)));
+            }).find("go with 'mesh', not 'truth'"),
+            std::string::npos);
   nlohmann::json short_eye = Viewpoints();
   short_eye[1]["eye"] = {1.0, 2.0};
   EXPECT_NE(error(Params(short_eye), mesh_only).find("viewpoints[1].eye: must be an array of 3 numbers"),
