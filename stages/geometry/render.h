@@ -107,7 +107,7 @@ struct RenderOptions {
   double ambient = 0.25;  // lambert: albedo * (ambient + diffuse * max(0, N.L))
   double diffuse = 0.75;
   // Direction toward the light in the camera frame (x right, y up, z
-  // forward); need not be unit. Default: from behind the viewer, ~17 degrees
+  // forward); need not be unit. Default: from behind the viewer, 16 degrees
   // off the view axis, up and to the left.
   std::array<double, 3> light_camera{-0.15, 0.25, -1.0};
   std::array<uint8_t, 3> background{0, 0, 0};  // sRGB
