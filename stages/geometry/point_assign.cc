@@ -692,11 +692,11 @@ Expected<MappedPoints> AssignPointsToFaces(const Mesh& mesh, PointCloud&& cloud,
       // The bound comes from float planes and lines, so it can exceed the
       // distance ClosestOnTriangle gives by rounding (~1e-7 of the
       // coordinates); a face is skipped only when its bound is beyond the
-      // best distance plus a margin far above that. Skipping on the bound
+      // best distance plus a margin several times that. Skipping on the bound
       // alone made the winner of near-ties depend on the order the faces
       // were considered in, which depends on the previous point, i.e. on
       // how the points were split between threads.
-      const double slack_m = 1e-6 * (1 + std::abs(q[0]) + std::abs(q[1]) + std::abs(q[2]));
+      const double slack_m = 2.5e-7 * (1 + std::abs(q[0]) + std::abs(q[1]) + std::abs(q[2]));
       double skip_d2 = (d + 2 * slack_m) * (d + 2 * slack_m);
       // Candidates in any order: the winner is the least (distance, face),
       // so a tie goes to the lower index. The previous point's face first:
