@@ -163,7 +163,18 @@ std::array<float, 3> Lerp(const std::array<float, 3>& a, const std::array<float,
   return {a[0] + (b[0] - a[0]) * f, a[1] + (b[1] - a[1]) * f, a[2] + (b[2] - a[2]) * f};
 }
 
-std::array<float, 3> SampleBilinear(const MipTexture::Level& level, double u, double v) {
+// Texel `index` (x + y * width) of `level`, channel by channel.
+std::array<float, 3> Texel(const MipTexture& texture, int level, size_t index) {
+  if (level == 0 && !texture.level0_bytes.empty()) {
+    const uint8_t* p = &texture.level0_bytes[index * 3];
+    return {texture.byte_value[p[0]], texture.byte_value[p[1]], texture.byte_value[p[2]]};
+  }
+  const float* p = &texture.levels[level].rgb[index * 3];
+  return {p[0], p[1], p[2]};
+}
+
+std::array<float, 3> SampleBilinear(const MipTexture& texture, int level_index, double u, double v) {
+  const MipTexture::Level& level = texture.levels[level_index];
   double s = u * level.width - 0.5, t = (1.0 - v) * level.height - 0.5;
   // Clamp to edge; NaN goes to the edge too.
   if (!(s >= -1)) s = -1;
@@ -174,10 +185,7 @@ std::array<float, 3> SampleBilinear(const MipTexture::Level& level, double u, do
   const float fx = float(s - fs), fy = float(t - ft);
   const int x0 = std::clamp(int(fs), 0, level.width - 1), x1 = std::clamp(int(fs) + 1, 0, level.width - 1);
   const int y0 = std::clamp(int(ft), 0, level.height - 1), y1 = std::clamp(int(ft) + 1, 0, level.height - 1);
-  auto texel = [&](int x, int y) {
-    const float* p = &level.rgb[(size_t(y) * level.width + x) * 3];
-    return std::array<float, 3>{p[0], p[1], p[2]};
-  };
+  auto texel = [&](int x, int y) { return Texel(texture, level_index, size_t(y) * level.width + x); };
   return Lerp(Lerp(texel(x0, y0), texel(x1, y0), fx), Lerp(texel(x0, y1), texel(x1, y1), fx), fy);
 }
 
@@ -194,43 +202,58 @@ std::array<float, 3> SampleTrilinear(const MipTexture& texture, const std::array
   if (lod > max_lod) lod = max_lod;
   const int level = int(std::floor(lod));
   const float fraction = float(lod - level);
-  std::array<float, 3> c = SampleBilinear(texture.levels[level], uv[0], uv[1]);
+  std::array<float, 3> c = SampleBilinear(texture, level, uv[0], uv[1]);
   if (fraction > 0 && level + 1 < int(texture.levels.size()))
-    c = Lerp(c, SampleBilinear(texture.levels[level + 1], uv[0], uv[1]), fraction);
+    c = Lerp(c, SampleBilinear(texture, level + 1, uv[0], uv[1]), fraction);
   return c;
 }
 
-template <typename DecodeTexel>
-Expected<MipTexture> BuildTexture(const Image& image, const DecodeTexel& decode) {
+// Level 0 from `image`: 8-bit maps keep their bytes (RGB, gray replicated)
+// and decode through `byte_value` per fetch; other types are decoded once by
+// `decode(image, sample index)`. Then the mip chain.
+template <typename DecodeSample>
+Expected<MipTexture> BuildTexture(const Image& image, const std::array<float, 256>& byte_value,
+                                  const DecodeSample& decode) {
   if (image.width <= 0 || image.height <= 0 || image.channels < 1 || image.channels > 4 ||
       image.data.size() != image.sample_count() * image.bytes_per_sample())
     return Status::Invalid("render: texture is empty or malformed");
   MipTexture texture;
-  MipTexture::Level level0{image.width, image.height, std::vector<float>(size_t(image.width) * image.height * 3)};
+  const bool bytes = image.type == Image::PixelType::kU8;
+  const size_t texels = size_t(image.width) * image.height;
+  MipTexture::Level level0{image.width, image.height, {}};
+  if (bytes) {
+    texture.byte_value = byte_value;
+    texture.level0_bytes.resize(texels * 3);
+  } else {
+    level0.rgb.resize(texels * 3);
+  }
   const int channels = image.channels;
   tbb::parallel_for(0, image.height, [&](int y) {
     for (int x = 0; x < image.width; ++x) {
-      float* out = &level0.rgb[(size_t(y) * image.width + x) * 3];
+      const size_t out = (size_t(y) * image.width + x) * 3;
       for (int c = 0; c < 3; ++c) {
-        const int source = channels >= 3 ? c : 0;  // gray (+ alpha) replicated
-        out[c] = decode(image, image.sample_index(x, y, source));
+        const size_t sample = image.sample_index(x, y, channels >= 3 ? c : 0);  // gray replicated
+        if (bytes)
+          texture.level0_bytes[out + c] = image.u8()[sample];
+        else
+          level0.rgb[out + c] = decode(image, sample);
       }
     }
   });
   texture.levels.push_back(std::move(level0));
   while (texture.levels.back().width > 1 || texture.levels.back().height > 1) {
-    const MipTexture::Level& prev = texture.levels.back();
-    MipTexture::Level next{std::max(1, prev.width / 2), std::max(1, prev.height / 2), {}};
+    const int prev_index = int(texture.levels.size()) - 1;
+    const int prev_width = texture.levels.back().width, prev_height = texture.levels.back().height;
+    MipTexture::Level next{std::max(1, prev_width / 2), std::max(1, prev_height / 2), {}};
     next.rgb.resize(size_t(next.width) * next.height * 3);
     tbb::parallel_for(0, next.height, [&](int y) {
-      const int y0 = std::min(2 * y, prev.height - 1), y1 = std::min(2 * y + 1, prev.height - 1);
+      const int y0 = std::min(2 * y, prev_height - 1), y1 = std::min(2 * y + 1, prev_height - 1);
       for (int x = 0; x < next.width; ++x) {
-        const int x0 = std::min(2 * x, prev.width - 1), x1 = std::min(2 * x + 1, prev.width - 1);
-        for (int c = 0; c < 3; ++c) {
-          auto at = [&](int xx, int yy) { return prev.rgb[(size_t(yy) * prev.width + xx) * 3 + c]; };
-          next.rgb[(size_t(y) * next.width + x) * 3 + c] =
-              (at(x0, y0) + at(x1, y0) + at(x0, y1) + at(x1, y1)) * 0.25f;
-        }
+        const int x0 = std::min(2 * x, prev_width - 1), x1 = std::min(2 * x + 1, prev_width - 1);
+        auto at = [&](int xx, int yy) { return Texel(texture, prev_index, size_t(yy) * prev_width + xx); };
+        const auto a = at(x0, y0), b = at(x1, y0), c = at(x0, y1), d = at(x1, y1);
+        for (int k = 0; k < 3; ++k)
+          next.rgb[(size_t(y) * next.width + x) * 3 + k] = (a[k] + b[k] + c[k] + d[k]) * 0.25f;
       }
     });
     texture.levels.push_back(std::move(next));
@@ -362,30 +385,28 @@ uint8_t LinearToSrgbByte(double linear) {
 }
 
 Expected<MipTexture> BuildColorTexture(const Image& image) {
+  const std::array<float, 256>& srgb = Srgb().decode;
   if (image.type == Image::PixelType::kU16) {
     std::vector<float> table(65536);
     for (int i = 0; i < 65536; ++i) table[i] = float(SrgbDecodeExact(i / 65535.0));
-    return BuildTexture(image, [&](const Image& im, size_t i) { return table[im.u16()[i]]; });
+    return BuildTexture(image, srgb, [&](const Image& im, size_t i) { return table[im.u16()[i]]; });
   }
-  if (image.type == Image::PixelType::kF32)
-    return BuildTexture(image, [](const Image& im, size_t i) { return im.f32()[i]; });
-  const SrgbTables& srgb = Srgb();
-  return BuildTexture(image, [&](const Image& im, size_t i) { return srgb.decode[im.u8()[i]]; });
+  return BuildTexture(image, srgb, [](const Image& im, size_t i) { return im.f32()[i]; });
 }
 
 Expected<MipTexture> BuildNormalTexture(const Image& image) {
+  std::array<float, 256> unit{};
+  for (int i = 0; i < 256; ++i) {
+    const int c = i - 128;
+    unit[i] = c >= 0 ? float(c) / 127.0f : float(c) / 128.0f;
+  }
   if (image.type == Image::PixelType::kU16) {
-    return BuildTexture(image, [](const Image& im, size_t i) {
+    return BuildTexture(image, unit, [](const Image& im, size_t i) {
       const int c = int(im.u16()[i]) - 32768;
       return c >= 0 ? float(c) / 32767.0f : float(c) / 32768.0f;
     });
   }
-  if (image.type == Image::PixelType::kF32)
-    return BuildTexture(image, [](const Image& im, size_t i) { return im.f32()[i]; });
-  return BuildTexture(image, [](const Image& im, size_t i) {
-    const int c = int(im.u8()[i]) - 128;
-    return c >= 0 ? float(c) / 127.0f : float(c) / 128.0f;
-  });
+  return BuildTexture(image, unit, [](const Image& im, size_t i) { return im.f32()[i]; });
 }
 
 Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, const RenderCamera& camera,

@@ -113,8 +113,11 @@ struct RenderOptions {
   std::array<uint8_t, 3> background{0, 0, 0};  // sRGB
 };
 
-// A texture and its mip chain, linear float RGB (3 floats per texel, row 0
-// at the top). Level 0 is the image.
+// A texture and its mip chain: linear float RGB (3 floats per texel, row 0
+// at the top). Level 0 of an 8-bit image stays bytes (3 per texel), decoded
+// per fetch through `byte_value` (the same floats as decoding it up front,
+// at a quarter of the memory: 8192^2 takes 201 MB + 268 MB of mips);
+// levels[0].rgb is empty then.
 struct MipTexture {
   struct Level {
     int width = 0;
@@ -122,6 +125,8 @@ struct MipTexture {
     std::vector<float> rgb;
   };
   std::vector<Level> levels;
+  std::vector<uint8_t> level0_bytes;
+  std::array<float, 256> byte_value{};
 };
 
 // Color map: kU8 / kU16 are sRGB-decoded, kF32 taken as linear; gray is

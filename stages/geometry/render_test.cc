@@ -166,6 +166,30 @@ TEST(RenderTest, TexturedQuadHeadOnReproducesItsTexture) {
   EXPECT_GE(double(exact), 0.99 * size * size * 3);
 }
 
+// 8-bit maps keep level 0 as bytes and decode per fetch: the picture must
+// be the one of the same map decoded up front (a float image of the decoded
+// values), for color and normal maps.
+TEST(RenderTest, EightBitMapsRenderAsTheirDecodedFloatImages) {
+  const Mesh sheet = BentSheet();
+  const Image color8 = NoiseTexture(32, 3), normal8 = NoiseTexture(32, 4);
+  Image color32 = Image::Make(32, 32, 3, Image::PixelType::kF32), normal32 = color32;
+  for (size_t i = 0; i < color8.data.size(); ++i) {
+    color32.f32()[i] = SrgbByteToLinear(color8.data[i]);
+    const int c = int(normal8.data[i]) - 128;
+    normal32.f32()[i] = c >= 0 ? float(c) / 127.0f : float(c) / 128.0f;
+  }
+  const MipTexture c8 = BuildColorTexture(color8).value(), n8 = BuildNormalTexture(normal8).value();
+  const MipTexture c32 = BuildColorTexture(color32).value(), n32 = BuildNormalTexture(normal32).value();
+  EXPECT_FALSE(c8.level0_bytes.empty());
+  EXPECT_TRUE(c32.level0_bytes.empty());
+  ASSERT_EQ(c8.levels.size(), 6u);  // 32, 16, 8, 4, 2, 1
+  EXPECT_EQ(c8.levels[1].rgb, c32.levels[1].rgb);
+  EXPECT_EQ(n8.levels[5].rgb, n32.levels[5].rgb);
+  const Image a = RenderMesh(sheet, {&c8, &n8}, SheetCamera(sheet, 64), RenderOptions{}).value();
+  const Image b = RenderMesh(sheet, {&c32, &n32}, SheetCamera(sheet, 64), RenderOptions{}).value();
+  EXPECT_EQ(a.data, b.data);
+}
+
 TEST(RenderTest, FlatNormalMapGivesTheSameBytesAsNone) {
   const Mesh sheet = BentSheet();
   const MipTexture color = BuildColorTexture(NoiseTexture(32, 7)).value();
