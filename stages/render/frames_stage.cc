@@ -247,7 +247,6 @@ Status Run(StageContext& ctx) {
   std::optional<MipTexture> color, normal;
   {
     PB_PHASE(ctx, "io");
-    PB_ASSIGN_OR_RETURN(mesh, ReadMesh(ctx, has_mesh ? "mesh" : "truth"));
     if (has_truth) {
       const ArtifactView& truth = ctx.input("truth");
       if (auto it = truth.files.find("scene.json"); it != truth.files.end()) {
@@ -255,6 +254,10 @@ Status Run(StageContext& ctx) {
         if (!read.ok()) return read.status().WithContext(std::string(kId) + ": input 'truth'");
         scene = std::move(*read);
       }
+    }
+    // The analytic truth needs no mesh (a paper-size truth mesh.ply is large).
+    if (!scene) {
+      PB_ASSIGN_OR_RETURN(mesh, ReadMesh(ctx, has_mesh ? "mesh" : "truth"));
     }
     if (ctx.has_input("color")) {
       if (!mesh.has_uvs()) return Status::Invalid(std::string(kId) + ": input 'color' needs a mesh with uvs");
