@@ -45,7 +45,7 @@ const std::vector<BadCase>& Cases() {
       {"param_out_of_range.yaml", 11, 14, "stage 'down' (points.downsample): must be > 0, got -0.5"},
       {"scene_missing_key.yaml", 12, 14, "has no key 'nokey'"},
       {"scene_without_scene.yaml", 11, 14, "the workflow names no scene"},
-      {"with_is_list.yaml", 6, 11, "expected an object, got an array"},
+      {"with_is_list.yaml", 6, 11, "expected an object or a string, got an array"},
       {"bad_set.yaml", 0, 0, "--set nosuch.voxel=0.1: no stage 'nosuch' in the workflow",
        {"--set", "nosuch.voxel=0.1"}},
   };
