@@ -3,11 +3,12 @@
 #include "stages/builtin.h"
 #include "stages/metrics/compare_command.h"
 #include "stages/report/report.h"
+#include "stages/report/report_command.h"
 
 int main(int argc, char** argv) {
   pb::Registry registry;
   pb::RegisterBuiltinStages(registry);
-  return pb::CliMain(argc, argv, registry, {pb::CompareCommand()},
+  return pb::CliMain(argc, argv, registry, {pb::CompareCommand(), pb::ReportCommand()},
                      [](const std::string& campaign_dir, const std::string& report_dir) {
                        return pb::WriteCampaignReport(campaign_dir, report_dir);
                      });
