@@ -85,7 +85,7 @@ int main(int argc, char** argv) {
     Paste(canvas, top[i], i * (tile_w + gap), 0);
     Paste(canvas, bottom[i], i * (tile_w + gap), tile_h + gap);
   }
-  const pb::Status st = pb::WritePng(out, canvas);
+  const pb::Status st = pb::WritePng(out, canvas, pb::PngEncoding::kSmall);
   if (!st.ok()) {
     std::fprintf(stderr, "%s\n", st.message().c_str());
     return 1;

@@ -87,18 +87,20 @@ bool PngReadRows(png_structp png, png_infop info, png_bytepp rows) {
   return true;
 }
 
-// Encoder settings of both writers: the Sub filter on every row and zlib's
-// run-length strategy. On baked 4096^2 maps this encodes 5x faster than
-// libpng's default (adaptive choice among all five filters per row, deflate
-// level 6: 2.05 + 3.29 CPU-s for a color + normal map, 0.60 + 0.48 s now)
-// for files 4-5 % larger (docs/bake.md). Lossless either way: the decoded
-// pixels are the same.
-void PngSetFastEncoding(png_structp png) {
+// Encoder settings of both writers. kFast: the Sub filter on every row and
+// zlib's run-length strategy. On baked 4096^2 maps this encodes 5x faster
+// than libpng's default (adaptive choice among all five filters per row,
+// deflate level 6: 2.05 + 3.29 CPU-s for a color + normal map, 0.60 + 0.48 s
+// now) for files 4-5 % larger (docs/bake.md). kSmall keeps libpng's default.
+// Lossless either way: the decoded pixels are the same.
+void PngSetEncoding(png_structp png, PngEncoding encoding) {
+  if (encoding == PngEncoding::kSmall) return;
   png_set_filter(png, PNG_FILTER_TYPE_BASE, PNG_FILTER_SUB);
   png_set_compression_strategy(png, Z_RLE);
 }
 
-bool PngWriteAll(png_structp png, png_infop info, FILE* file, const Image* image, png_bytepp rows) {
+bool PngWriteAll(png_structp png, png_infop info, FILE* file, const Image* image, png_bytepp rows,
+                 PngEncoding encoding) {
   if (setjmp(png_jmpbuf(png))) return false;
   static const int kColorTypes[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
                                     PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
@@ -107,7 +109,7 @@ bool PngWriteAll(png_structp png, png_infop info, FILE* file, const Image* image
                static_cast<png_uint_32>(image->height),
                image->type == Image::PixelType::kU16 ? 16 : 8, kColorTypes[image->channels - 1],
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  PngSetFastEncoding(png);
+  PngSetEncoding(png, encoding);
   png_write_info(png, info);
   if (image->type == Image::PixelType::kU16 && std::endian::native == std::endian::little) {
     png_set_swap(png);
@@ -126,7 +128,7 @@ extern "C" void PngAppendToVector(png_structp png, png_bytep data, png_size_t le
 extern "C" void PngFlushNothing(png_structp) {}
 
 bool PngWriteAllToVector(png_structp png, png_infop info, std::vector<uint8_t>* out,
-                         const Image* image, png_bytepp rows) {
+                         const Image* image, png_bytepp rows, PngEncoding encoding) {
   if (setjmp(png_jmpbuf(png))) return false;
   static const int kColorTypes[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
                                     PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
@@ -135,7 +137,7 @@ bool PngWriteAllToVector(png_structp png, png_infop info, std::vector<uint8_t>* 
                static_cast<png_uint_32>(image->height),
                image->type == Image::PixelType::kU16 ? 16 : 8, kColorTypes[image->channels - 1],
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  PngSetFastEncoding(png);
+  PngSetEncoding(png, encoding);
   png_write_info(png, info);
   if (image->type == Image::PixelType::kU16 && std::endian::native == std::endian::little) {
     png_set_swap(png);
@@ -177,8 +179,9 @@ struct ImageFormat {
   Expected<Image> (*read)(const std::string&);
   Status (*write)(const std::string&, const Image&);
 };
+Status WriteFastPng(const std::string& path, const Image& image) { return WritePng(path, image); }
 constexpr ImageFormat kImageFormats[] = {
-    {".png", &ReadPng, &WritePng},
+    {".png", &ReadPng, &WriteFastPng},
     {".exr", &ReadExr, &WriteExr},
 };
 
@@ -237,7 +240,7 @@ Expected<Image> ReadPng(const std::string& path) {
   return image;
 }
 
-Status WritePng(const std::string& path, const Image& image) {
+Status WritePng(const std::string& path, const Image& image, PngEncoding encoding) {
   if (image.type == Image::PixelType::kF32) {
     return Status::Invalid(path + ": PNG holds 8/16-bit samples; write float images as .exr");
   }
@@ -264,14 +267,14 @@ Status WritePng(const std::string& path, const Image& image) {
   // libpng takes non-const rows but does not modify them when writing.
   png_bytep base = const_cast<png_bytep>(image.data.data());
   for (int y = 0; y < image.height; ++y) rows[y] = base + y * row_bytes;
-  if (!PngWriteAll(png, info, file.get(), &image, rows.data())) {
+  if (!PngWriteAll(png, info, file.get(), &image, rows.data(), encoding)) {
     return Status::Io(path + ": writing PNG: " + error.message);
   }
   if (file.Close() != 0) return Status::Errno(path, "close");
   return Status::Ok();
 }
 
-Expected<std::vector<uint8_t>> EncodePng(const Image& image) {
+Expected<std::vector<uint8_t>> EncodePng(const Image& image, PngEncoding encoding) {
   if (image.type == Image::PixelType::kF32) {
     return Status::Invalid("encoding PNG: PNG holds 8/16-bit samples, not float");
   }
@@ -296,7 +299,7 @@ Expected<std::vector<uint8_t>> EncodePng(const Image& image) {
   std::vector<png_bytep> rows(image.height);
   png_bytep base = const_cast<png_bytep>(image.data.data());
   for (int y = 0; y < image.height; ++y) rows[y] = base + y * row_bytes;
-  if (!PngWriteAllToVector(png, info, &bytes, &image, rows.data())) {
+  if (!PngWriteAllToVector(png, info, &bytes, &image, rows.data(), encoding)) {
     return Status::Internal(std::string("encoding PNG: ") + error.message);
   }
   return bytes;

@@ -61,10 +61,18 @@ struct Image {
 // (palette and low bit depths expand to 8-bit; transparency to alpha). 16-bit
 // files give kU16, all others kU8. Writing takes kU8 or kU16.
 Expected<Image> ReadPng(const std::string& path);
-Status WritePng(const std::string& path, const Image& image);
+// kFast (default): the Sub filter on every row and zlib's run-length
+// strategy, 5x faster than libpng's default on baked maps for files 4-5 %
+// larger. kSmall: libpng's default (adaptive filter per row, deflate level
+// 6), up to 2x smaller on photographic images such as rendered frames; for
+// pictures that are kept (reports, docs). Both are lossless.
+enum class PngEncoding { kFast, kSmall };
+Status WritePng(const std::string& path, const Image& image,
+                PngEncoding encoding = PngEncoding::kFast);
 // The bytes of the PNG file WritePng would write (e.g. to embed in a .glb).
 // Status::Invalid for kF32 or a malformed image.
-Expected<std::vector<uint8_t>> EncodePng(const Image& image);
+Expected<std::vector<uint8_t>> EncodePng(const Image& image,
+                                         PngEncoding encoding = PngEncoding::kFast);
 
 // OpenEXR: reads the data window of a scanline or tiled file (channels
 // R,G,B[,A] or Y[,A], any stored pixel type) as kF32. Writing takes kF32,

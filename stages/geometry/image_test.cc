@@ -31,6 +31,30 @@ TEST_F(ImageTest, Png8BitAllChannelCounts) {
   }
 }
 
+// A rendered-looking image: smooth shading plus texture-like detail.
+TEST_F(ImageTest, PngEncodingsDecodeAlikeAndSmallIsSmaller) {
+  Image image = Image::Make(256, 256, 3, Image::PixelType::kU8);
+  for (int y = 0; y < 256; ++y)
+    for (int x = 0; x < 256; ++x)
+      for (int c = 0; c < 3; ++c)
+        image.u8()[image.sample_index(x, y, c)] =
+            static_cast<uint8_t>((x / 2 + y / 3 + 40 * c + ((x * 7 + y * 13) % 11) + (x * y) % 5) & 255);
+  auto fast = EncodePng(image, PngEncoding::kFast);
+  auto small = EncodePng(image, PngEncoding::kSmall);
+  ASSERT_TRUE(fast.ok() && small.ok());
+  EXPECT_LT(small->size(), fast->size());
+  for (const auto& [name, bytes] : {std::pair{"fast.png", *fast}, std::pair{"small.png", *small}}) {
+    std::ofstream(Path(name), std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+    auto read = ReadPng(Path(name));
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    EXPECT_EQ(read->data, image.data) << name;
+  }
+  // WritePng writes what EncodePng returns.
+  ASSERT_TRUE(WritePng(Path("w.png"), image, PngEncoding::kSmall).ok());
+  EXPECT_EQ(std::filesystem::file_size(Path("w.png")), small->size());
+}
+
 TEST_F(ImageTest, Png16BitKeepsFullValues) {
   Image image = Image::Make(4, 2, 3, Image::PixelType::kU16);
   image.at_u16(0, 0, 0) = 0x1234;
