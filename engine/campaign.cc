@@ -4,7 +4,6 @@
 
 #include <chrono>
 #include <cstdio>
-#include <ctime>
 #include <fstream>
 #include <thread>
 
@@ -57,13 +56,6 @@ std::string HostCpu() {
       if (colon != std::string::npos) return line.substr(line.find_first_not_of(' ', colon + 1));
     }
   return "";
-}
-
-std::string IsoNow() {
-  std::time_t t = std::time(nullptr);
-  char buf[32];
-  std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
-  return buf;
 }
 
 }  // namespace
@@ -204,7 +196,7 @@ CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const Campaig
   CampaignResult result;
   result.out_dir = options.out_dir.empty() ? "out/" + campaign.name : options.out_dir;
   result.runs = static_cast<int>(campaign.runs.size());
-  const std::string started = IsoNow();
+  const std::string started = UtcTimestamp();
   const auto t0 = std::chrono::steady_clock::now();
   result.report = Env::Default()->CreateDirs(result.out_dir);
   if (!result.report.ok()) return result;

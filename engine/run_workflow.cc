@@ -13,16 +13,12 @@
 #include "engine/scheduler.h"
 
 namespace pb {
-namespace {
-
-std::string IsoNow() {
+std::string UtcTimestamp() {
   std::time_t t = std::time(nullptr);
   char buf[32];
   std::strftime(buf, sizeof buf, "%Y-%m-%dT%H:%M:%SZ", std::gmtime(&t));
   return buf;
 }
-
-}  // namespace
 
 std::string SelfExe() { return "/proc/self/exe"; }
 
@@ -42,7 +38,7 @@ WorkflowRunSummary RunWorkflowInto(const Workflow& wf, Cache& cache, const Workf
   Executor& executor = o.in_process ? static_cast<Executor&>(in_process) : local;
   ProgressPrinter printer(::isatty(2) != 0, o.quiet);
   Scheduler scheduler(wf, cache, executor, &printer);
-  const std::string started = IsoNow();
+  const std::string started = UtcTimestamp();
   const auto t0 = std::chrono::steady_clock::now();
   std::vector<StageOutcome> outcomes = scheduler.Run(opts);
   summary.total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

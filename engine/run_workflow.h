@@ -31,6 +31,9 @@ struct WorkflowRunSummary {
   bool ok() const { return failed == 0 && skipped == 0 && outputs.ok(); }
 };
 
+// Now as an ISO 8601 UTC timestamp ("2026-11-21T23:47:34Z"), for records.
+std::string UtcTimestamp();
+
 // The command that runs stages in child processes: this very binary
 // (/proc/self/exe), even if a rebuild replaced the file meanwhile.
 std::string SelfExe();
