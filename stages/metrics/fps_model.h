@@ -12,8 +12,7 @@
 // chains when the device profile says mips are used, times the bytes per
 // texel of the GPU format the profile assumes.
 //
-// Device profiles (configs/devices/*.yaml) are flat YAML mappings, one
-// `key: value` per line, `#` comments:
+// Device profiles (configs/devices/*.yaml) are YAML mappings:
 //
 //   name: oculus-go                    string, required
 //   description: "..."                 string, optional
@@ -23,8 +22,7 @@
 //   texture_bytes_per_texel: 4         number > 0, default 4 (RGBA8)
 //   mipmaps: true                      boolean, default true
 //
-// Nested mappings, lists and multi-line scalars are refused: a device is a
-// handful of numbers, and a flat format keeps errors at `file:line`.
+// Unknown keys are errors (a typo would otherwise silently keep a default).
 #pragma once
 
 #include <cstdint>
@@ -47,7 +45,7 @@ struct DeviceProfile {
 };
 
 // Parses a device profile. `source` names the text in errors, which read
-// `source:line: ...` (or `source: ...` for a missing key). Values are checked:
+// `source:line:column: ...` (or `source: ...` for a missing key). Values are checked:
 // throughput and refresh > 0, budget >= 0, bytes per texel > 0.
 Expected<DeviceProfile> ParseDeviceProfile(std::string_view text, const std::string& source);
 // Reads and parses the file at `path` (Status::NotFound if it is missing).
