@@ -528,6 +528,33 @@ TEST(PointAssignTest, ThreadCountDoesNotChangeTheOutput) {
   }
 }
 
+// The order of the points in the cloud does not matter either: the face a
+// point gets may not depend on which face the previous point got (the search
+// starts there; a float bound once pruned near-ties order-dependently).
+TEST(PointAssignTest, PointOrderDoesNotChangeTheOutput) {
+  std::mt19937 rng(11);
+  const Mesh mesh = BumpyMesh(24, rng);
+  const PointCloud cloud = RandomCloud(200000, 2.0f, rng);
+  PointCloud reversed = cloud;
+  const size_t n = cloud.size();
+  for (size_t i = 0; i < n; ++i) {
+    for (int k = 0; k < 3; ++k) {
+      reversed.positions[3 * i + k] = cloud.positions[3 * (n - 1 - i) + k];
+      if (cloud.has_normals()) reversed.normals[3 * i + k] = cloud.normals[3 * (n - 1 - i) + k];
+      if (cloud.has_colors()) reversed.colors[3 * i + k] = cloud.colors[3 * (n - 1 - i) + k];
+    }
+  }
+  PointCloud forward = cloud;
+  auto a = AssignPointsToFaces(mesh, std::move(forward), Options(0.03, 100, 2048));
+  auto b = AssignPointsToFaces(mesh, std::move(reversed), Options(0.03, 100, 2048));
+  ASSERT_TRUE(a.ok() && b.ok());
+  ASSERT_GT(a->size(), 10000u);
+  EXPECT_EQ(a->face_begin, b->face_begin);
+  EXPECT_EQ(a->st, b->st);
+  EXPECT_EQ(a->colors, b->colors);
+  EXPECT_EQ(a->normals, b->normals);
+}
+
 TEST(PointAssignTest, ManyPointsOnOneFaceUseTheInPlaceSort) {
   // More points on one face than the gathered sort takes (2^14): the heap
   // sort path must order them the same way.
