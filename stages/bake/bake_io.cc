@@ -1,5 +1,7 @@
 #include "stages/bake/bake_io.h"
 
+#include <tbb/parallel_invoke.h>
+
 #include <utility>
 
 #include "stages/geometry/image.h"
@@ -67,11 +69,15 @@ Status WriteBakeOutputs(StageContext& ctx, std::string_view stage_id, const Bake
   {
     PB_PHASE(ctx, "io");
     const std::string color_path = ctx.output_path("color", "color.png");
-    Status status = WritePng(color_path, result.maps.color);
-    if (!status.ok()) return status.WithContext(std::string(stage_id) + ": " + color_path);
     const std::string normal_path = ctx.output_path("normal", exr ? "normal.exr" : "normal.png");
-    status = WriteImage(normal_path, result.maps.normal);
-    if (!status.ok()) return status.WithContext(std::string(stage_id) + ": " + normal_path);
+    // The two maps encode at the same time (within the stage's thread arena):
+    // each is one thread's work for ~0.5 s at 4096^2.
+    Status color_status, normal_status;
+    tbb::parallel_invoke([&] { color_status = WritePng(color_path, result.maps.color); },
+                         [&] { normal_status = WriteImage(normal_path, result.maps.normal); });
+    if (!color_status.ok()) return color_status.WithContext(std::string(stage_id) + ": " + color_path);
+    if (!normal_status.ok())
+      return normal_status.WithContext(std::string(stage_id) + ": " + normal_path);
   }
   const int size = result.maps.color.width;
   nlohmann::json bake = {{"stage", stage_id},
