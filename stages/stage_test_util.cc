@@ -91,4 +91,16 @@ std::string StageTest::WriteInputPoints(const std::string& name, const PointClou
   return path;
 }
 
+nlohmann::json StageTest::CheckedSchema(const StageType& type, bool defaults) {
+  const nlohmann::json schema = nlohmann::json::parse(type.params_schema);
+  EXPECT_EQ(schema["additionalProperties"], false) << type.id;
+  for (const auto& [name, property] : schema["properties"].items()) {
+    EXPECT_TRUE(property.contains("description")) << type.id << " " << name;
+    if (defaults) {
+      EXPECT_TRUE(property.contains("default")) << type.id << " " << name;
+    }
+  }
+  return schema;
+}
+
 }  // namespace pb

@@ -89,6 +89,11 @@ class StageTest : public testing::TempDirTest {
   // for FakeContext::AddInput.
   std::string WriteInputMesh(const std::string& name, const Mesh& mesh);
   std::string WriteInputPoints(const std::string& name, const PointCloud& cloud);
+  // The parameter schema of stage type `type`, after checking (EXPECT) what
+  // every stage's schema promises: no unknown parameters
+  // (additionalProperties false) and a description for each parameter (and a
+  // default, when `defaults` says every parameter has one).
+  static nlohmann::json CheckedSchema(const StageType& type, bool defaults = false);
 
   FakeRegistry registry_;
 };

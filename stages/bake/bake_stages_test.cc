@@ -55,12 +55,7 @@ TEST_F(BakeStagesTest, SchemasAreWellFormed) {
   for (const char* id : {"bake.vertex_colors", "bake.from_points"}) {
     const StageType* type = registry_.Find(id);
     ASSERT_NE(type, nullptr) << id;
-    const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
-    EXPECT_EQ(schema["additionalProperties"], false);
-    for (const auto& [name, property] : schema["properties"].items()) {
-      EXPECT_TRUE(property.contains("description")) << id << " " << name;
-      EXPECT_TRUE(property.contains("default")) << id << " " << name;
-    }
+    const nlohmann::json schema = CheckedSchema(*type, /*defaults=*/true);
     EXPECT_EQ(schema["properties"]["size"]["default"], 4096);
     EXPECT_EQ(schema["properties"]["gutter"]["default"], 12);
     ASSERT_EQ(type->outputs.size(), 3u);

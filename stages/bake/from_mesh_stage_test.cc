@@ -67,12 +67,7 @@ TEST_F(FromMeshStageTest, IsWellFormed) {
   const StageType* type = registry_.Find("bake.from_mesh");
   ASSERT_NE(type, nullptr);
   EXPECT_EQ(type->version, 1);
-  const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
-  EXPECT_EQ(schema["additionalProperties"], false);
-  for (const auto& [name, property] : schema["properties"].items()) {
-    EXPECT_TRUE(property.contains("description")) << name;
-    EXPECT_TRUE(property.contains("default")) << name;
-  }
+  const nlohmann::json schema = CheckedSchema(*type, /*defaults=*/true);
   for (const char* common : {"size", "gutter", "normal_format"}) {
     EXPECT_TRUE(schema["properties"].contains(common)) << common;
   }

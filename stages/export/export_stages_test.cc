@@ -83,12 +83,7 @@ TEST_F(ExportStagesTest, StagesAreWellFormed) {
   for (const char* id : {"export.gltf", "export.obj"}) {
     const StageType* type = registry_.Find(id);
     ASSERT_NE(type, nullptr) << id;
-    const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
-    EXPECT_EQ(schema["additionalProperties"], false);
-    for (const auto& [name, property] : schema["properties"].items()) {
-      EXPECT_TRUE(property.contains("description")) << id << " " << name;
-      EXPECT_TRUE(property.contains("default")) << id << " " << name;
-    }
+    CheckedSchema(*type, /*defaults=*/true);
     ASSERT_EQ(type->inputs.size(), 3u);
     EXPECT_EQ(type->inputs[0].name, "mesh");
     EXPECT_FALSE(type->inputs[0].optional);

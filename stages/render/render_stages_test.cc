@@ -72,10 +72,7 @@ Image Checker(int size) {
 TEST_F(RenderStagesTest, IsWellFormed) {
   const StageType* type = registry_.Find("render.frames");
   ASSERT_NE(type, nullptr);
-  const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
-  EXPECT_EQ(schema["additionalProperties"], false);
-  for (const auto& [name, property] : schema["properties"].items())
-    EXPECT_TRUE(property.contains("description")) << name;
+  const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["properties"]["size"]["default"], 1024);
   EXPECT_EQ(schema["properties"]["supersample"]["default"], 2);
   ASSERT_EQ(type->inputs.size(), 4u);

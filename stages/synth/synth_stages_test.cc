@@ -36,11 +36,7 @@ TEST_F(SynthStagesTest, RegistersSynthScan) {
   EXPECT_EQ(type->outputs[0].type, "points");
   EXPECT_EQ(type->outputs[1].name, "truth");
   EXPECT_EQ(type->outputs[1].type, "mesh");
-  const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
-  EXPECT_EQ(schema["additionalProperties"], false);
-  for (const auto& [name, property] : schema["properties"].items()) {
-    EXPECT_TRUE(property.contains("description")) << name;
-  }
+  const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["properties"]["preset"]["enum"], nlohmann::json({"room", "tower", "vault"}));
   EXPECT_EQ(schema["properties"]["points"]["default"], 2000000);
   EXPECT_EQ(schema["properties"]["points"]["minimum"], 1000);

@@ -64,12 +64,7 @@ TEST_F(UvStagesTest, UnwrapIsWellFormed) {
   const StageType* type = registry_.Find("uv.unwrap");
   ASSERT_NE(type, nullptr);
   EXPECT_EQ(type->version, 1);
-  const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
-  EXPECT_EQ(schema["additionalProperties"], false);
-  for (const auto& [name, property] : schema["properties"].items()) {
-    EXPECT_TRUE(property.contains("description")) << name;
-    EXPECT_TRUE(property.contains("default")) << name;
-  }
+  const nlohmann::json schema = CheckedSchema(*type, /*defaults=*/true);
   EXPECT_EQ(schema["properties"]["method"]["default"], "charts");
   EXPECT_EQ(schema["properties"]["size"]["default"], 4096);
   EXPECT_EQ(schema["properties"]["size"]["minimum"], 64);
