@@ -99,26 +99,6 @@ void PngSetEncoding(png_structp png, PngEncoding encoding) {
   png_set_compression_strategy(png, Z_RLE);
 }
 
-bool PngWriteAll(png_structp png, png_infop info, FILE* file, const Image* image, png_bytepp rows,
-                 PngEncoding encoding) {
-  if (setjmp(png_jmpbuf(png))) return false;
-  static const int kColorTypes[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
-                                    PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
-  png_init_io(png, file);
-  png_set_IHDR(png, info, static_cast<png_uint_32>(image->width),
-               static_cast<png_uint_32>(image->height),
-               image->type == Image::PixelType::kU16 ? 16 : 8, kColorTypes[image->channels - 1],
-               PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
-  PngSetEncoding(png, encoding);
-  png_write_info(png, info);
-  if (image->type == Image::PixelType::kU16 && std::endian::native == std::endian::little) {
-    png_set_swap(png);
-  }
-  png_write_image(png, rows);
-  png_write_end(png, info);
-  return true;
-}
-
 // In-memory PNG writing: libpng calls these instead of fwrite/fflush.
 extern "C" void PngAppendToVector(png_structp png, png_bytep data, png_size_t length) {
   auto* out = static_cast<std::vector<uint8_t>*>(png_get_io_ptr(png));
@@ -127,12 +107,13 @@ extern "C" void PngAppendToVector(png_structp png, png_bytep data, png_size_t le
 
 extern "C" void PngFlushNothing(png_structp) {}
 
-bool PngWriteAllToVector(png_structp png, png_infop info, std::vector<uint8_t>* out,
-                         const Image* image, png_bytepp rows, PngEncoding encoding) {
+// Writes `image` through `png`, whose output (a FILE or a vector) the caller
+// has set up. False on a libpng error (the message is in the error state).
+bool PngWriteAll(png_structp png, png_infop info, const Image* image, png_bytepp rows,
+                 PngEncoding encoding) {
   if (setjmp(png_jmpbuf(png))) return false;
   static const int kColorTypes[] = {PNG_COLOR_TYPE_GRAY, PNG_COLOR_TYPE_GRAY_ALPHA,
                                     PNG_COLOR_TYPE_RGB, PNG_COLOR_TYPE_RGB_ALPHA};
-  png_set_write_fn(png, out, PngAppendToVector, PngFlushNothing);
   png_set_IHDR(png, info, static_cast<png_uint_32>(image->width),
                static_cast<png_uint_32>(image->height),
                image->type == Image::PixelType::kU16 ? 16 : 8, kColorTypes[image->channels - 1],
@@ -240,69 +221,58 @@ Expected<Image> ReadPng(const std::string& path) {
   return image;
 }
 
-Status WritePng(const std::string& path, const Image& image, PngEncoding encoding) {
-  if (image.type == Image::PixelType::kF32) {
-    return Status::Invalid(path + ": PNG holds 8/16-bit samples; write float images as .exr");
-  }
-  if (image.channels < 1 || image.channels > 4 || image.width <= 0 || image.height <= 0 ||
-      image.data.size() != image.sample_count() * image.bytes_per_sample()) {
-    return Status::Invalid(path + ": malformed image (" + std::to_string(image.width) + "x" +
-                           std::to_string(image.height) + "x" + std::to_string(image.channels) +
-                           ", " + std::to_string(image.data.size()) + " bytes)");
-  }
-  File file(path, "wb");
-  if (!file.get()) return Status::Errno(path, "open");
-  PngErrorState error;
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, PngOnError, PngOnWarning);
-  if (!png) return Status::Internal(path + ": png_create_write_struct failed");
-  png_infop info = png_create_info_struct(png);
-  struct Cleanup {
-    png_structp* png;
-    png_infop* info;
-    ~Cleanup() { png_destroy_write_struct(png, info); }
-  } cleanup{&png, &info};
-  if (!info) return Status::Internal(path + ": png_create_info_struct failed");
-  const size_t row_bytes = size_t(image.width) * size_t(image.channels) * image.bytes_per_sample();
-  std::vector<png_bytep> rows(image.height);
-  // libpng takes non-const rows but does not modify them when writing.
-  png_bytep base = const_cast<png_bytep>(image.data.data());
-  for (int y = 0; y < image.height; ++y) rows[y] = base + y * row_bytes;
-  if (!PngWriteAll(png, info, file.get(), &image, rows.data(), encoding)) {
-    return Status::Io(path + ": writing PNG: " + error.message);
-  }
-  if (file.Close() != 0) return Status::Errno(path, "close");
-  return Status::Ok();
-}
+namespace {
 
-Expected<std::vector<uint8_t>> EncodePng(const Image& image, PngEncoding encoding) {
+// The PNG bytes of `image`; errors start with `what` (a path, or "encoding PNG").
+Expected<std::vector<uint8_t>> EncodePngFor(const Image& image, PngEncoding encoding,
+                                            const std::string& what) {
   if (image.type == Image::PixelType::kF32) {
-    return Status::Invalid("encoding PNG: PNG holds 8/16-bit samples, not float");
+    return Status::Invalid(what + ": PNG holds 8/16-bit samples, not float (write float images as .exr)");
   }
   if (image.channels < 1 || image.channels > 4 || image.width <= 0 || image.height <= 0 ||
       image.data.size() != image.sample_count() * image.bytes_per_sample()) {
-    return Status::Invalid("encoding PNG: malformed image (" + std::to_string(image.width) + "x" +
+    return Status::Invalid(what + ": malformed image (" + std::to_string(image.width) + "x" +
                            std::to_string(image.height) + "x" + std::to_string(image.channels) +
                            ", " + std::to_string(image.data.size()) + " bytes)");
   }
   std::vector<uint8_t> bytes;
   PngErrorState error;
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, &error, PngOnError, PngOnWarning);
-  if (!png) return Status::Internal("encoding PNG: png_create_write_struct failed");
+  if (!png) return Status::Internal(what + ": png_create_write_struct failed");
   png_infop info = png_create_info_struct(png);
   struct Cleanup {
     png_structp* png;
     png_infop* info;
     ~Cleanup() { png_destroy_write_struct(png, info); }
   } cleanup{&png, &info};
-  if (!info) return Status::Internal("encoding PNG: png_create_info_struct failed");
+  if (!info) return Status::Internal(what + ": png_create_info_struct failed");
   const size_t row_bytes = size_t(image.width) * size_t(image.channels) * image.bytes_per_sample();
   std::vector<png_bytep> rows(image.height);
+  // libpng takes non-const rows but does not modify them when writing.
   png_bytep base = const_cast<png_bytep>(image.data.data());
   for (int y = 0; y < image.height; ++y) rows[y] = base + y * row_bytes;
-  if (!PngWriteAllToVector(png, info, &bytes, &image, rows.data(), encoding)) {
-    return Status::Internal(std::string("encoding PNG: ") + error.message);
+  png_set_write_fn(png, &bytes, PngAppendToVector, PngFlushNothing);
+  if (!PngWriteAll(png, info, &image, rows.data(), encoding)) {
+    return Status::Internal(what + ": encoding PNG: " + error.message);
   }
   return bytes;
+}
+
+}  // namespace
+
+Status WritePng(const std::string& path, const Image& image, PngEncoding encoding) {
+  PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, EncodePngFor(image, encoding, path));
+  File file(path, "wb");
+  if (!file.get()) return Status::Errno(path, "open");
+  if (std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size()) {
+    return Status::Errno(path, "write");
+  }
+  if (file.Close() != 0) return Status::Errno(path, "close");
+  return Status::Ok();
+}
+
+Expected<std::vector<uint8_t>> EncodePng(const Image& image, PngEncoding encoding) {
+  return EncodePngFor(image, encoding, "encoding PNG");
 }
 
 Expected<Image> ReadExr(const std::string& path) {
