@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_clock.h"
 #include "stages/geometry/bake.h"
 #include "stages/geometry/bake_from_mesh.h"
 #include "stages/geometry/bake_from_points.h"
@@ -124,9 +125,7 @@ void DrawPanel(const Mesh& mesh, const Image& color, const Window& w, Image& out
   }
 }
 
-double Seconds(std::chrono::steady_clock::time_point since) {
-  return std::chrono::duration<double>(std::chrono::steady_clock::now() - since).count();
-}
+using pb::bench::Seconds;
 
 int Main(int argc, char** argv) {
   if (argc < 2) {

@@ -13,7 +13,6 @@
 //     assigns with max_distance = SPACINGS x spacing; prints one Markdown row:
 //     wall and CPU seconds of the assignment, RSS before, peak RSS during it
 //     and the cloud's size, and the counts of the report.
-#include <sys/resource.h>
 
 #include <chrono>
 #include <cstdio>
@@ -27,21 +26,16 @@
 #include "stages/geometry/ply.h"
 #include "stages/geometry/point_assign.h"
 #include "stages/geometry/spacing.h"
+#include "bench/bench_clock.h"
 #include "stages/geometry/synth_scanner.h"
 #include "stages/geometry/synth_scene.h"
 #include "stages/geometry/uv_atlas.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-
-double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
-
-double CpuSeconds() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return usage.ru_utime.tv_sec + usage.ru_stime.tv_sec + 1e-6 * (usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
+using pb::bench::Clock;
+using pb::bench::CpuSeconds;
+using pb::bench::Seconds;
 
 // VmRSS or VmHWM of this process, bytes.
 double StatusBytes(const char* field) {

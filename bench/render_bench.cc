@@ -7,7 +7,6 @@
 //
 // cell_m 0.0065 gives the room's truth mesh 5.5 M faces. With out_dir, the
 // frames are written there as PNGs.
-#include <sys/resource.h>
 #include <tbb/task_arena.h>
 
 #include <chrono>
@@ -17,23 +16,16 @@
 #include <vector>
 
 #include "stages/geometry/image.h"
+#include "bench/bench_clock.h"
 #include "stages/geometry/render.h"
 #include "stages/geometry/synth_scene.h"
 #include "stages/geometry/tangents.h"
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double Seconds(Clock::time_point since) { return std::chrono::duration<double>(Clock::now() - since).count(); }
-
-// CPU seconds (user + system) of the process so far: on a shared machine
-// wall time depends on the load, CPU time much less.
-double CpuSeconds() {
-  rusage usage{};
-  getrusage(RUSAGE_SELF, &usage);
-  return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
-         1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
-}
+using pb::bench::Clock;
+using pb::bench::CpuSeconds;
+using pb::bench::Seconds;
 
 struct Viewpoint {
   const char* name;
