@@ -275,6 +275,50 @@ Expected<std::vector<uint8_t>> EncodePng(const Image& image, PngEncoding encodin
   return EncodePngFor(image, encoding, "encoding PNG");
 }
 
+Expected<ImageSize> ReadImageSize(const std::string& path) {
+  unsigned char magic[8] = {};
+  {
+    File file(path, "rb");
+    if (!file.get()) {
+      if (errno == ENOENT) return Status::NotFound(path + ": no such file");
+      return Status::Errno(path, "open");
+    }
+    const size_t got = std::fread(magic, 1, sizeof magic, file.get());
+    if (got == sizeof magic && png_sig_cmp(magic, 0, 8) == 0) {
+      PngErrorState error;
+      png_structp png =
+          png_create_read_struct(PNG_LIBPNG_VER_STRING, &error, PngOnError, PngOnWarning);
+      if (!png) return Status::Internal(path + ": png_create_read_struct failed");
+      png_infop info = png_create_info_struct(png);
+      struct Cleanup {
+        png_structp* png;
+        png_infop* info;
+        ~Cleanup() { png_destroy_read_struct(png, info, nullptr); }
+      } cleanup{&png, &info};
+      if (!info) return Status::Internal(path + ": png_create_info_struct failed");
+      PngInfo header;
+      if (!PngReadInfo(png, info, file.get(), &header))
+        return Status::Corrupt(path + ": corrupt or truncated PNG: " + error.message);
+      if (header.width > 0x7fffffffu || header.height > 0x7fffffffu)
+        return Status::Corrupt(path + ": PNG header gives an invalid size");
+      return ImageSize{static_cast<int>(header.width), static_cast<int>(header.height)};
+    }
+  }
+  if (magic[0] != 0x76 || magic[1] != 0x2f || magic[2] != 0x31 || magic[3] != 0x01)
+    return Status::Unsupported(path + ": neither PNG nor OpenEXR");
+  try {
+    Imf::InputFile file(path.c_str());
+    const Imath::Box2i window = file.header().dataWindow();
+    const int64_t width = int64_t(window.max.x) - window.min.x + 1;
+    const int64_t height = int64_t(window.max.y) - window.min.y + 1;
+    if (width <= 0 || height <= 0 || width > 0x7fffffff || height > 0x7fffffff)
+      return Status::Corrupt(path + ": EXR data window gives an invalid size");
+    return ImageSize{static_cast<int>(width), static_cast<int>(height)};
+  } catch (const std::exception& e) {
+    return Status::Corrupt(path + ": corrupt or unreadable EXR: " + e.what());
+  }
+}
+
 Expected<Image> ReadExr(const std::string& path) {
   {
     File probe(path, "rb");

@@ -80,6 +80,17 @@ Expected<std::vector<uint8_t>> EncodePng(const Image& image,
 Expected<Image> ReadExr(const std::string& path);
 Status WriteExr(const std::string& path, const Image& image);
 
+// Width and height of a PNG or OpenEXR file (its data window) from its
+// header, without decoding pixels; the format is told by the file's
+// signature, not its name (cache files have no extension). Status::Unsupported
+// for a file that is neither, Status::Corrupt for an unreadable header,
+// Status::NotFound for a missing file.
+struct ImageSize {
+  int width = 0;
+  int height = 0;
+};
+Expected<ImageSize> ReadImageSize(const std::string& path);
+
 // By extension (case-insensitive): ".png" or ".exr"; Status::Unsupported
 // otherwise.
 Expected<Image> ReadImage(const std::string& path);

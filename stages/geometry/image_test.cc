@@ -55,6 +55,32 @@ TEST_F(ImageTest, PngEncodingsDecodeAlikeAndSmallIsSmaller) {
   EXPECT_EQ(std::filesystem::file_size(Path("w.png")), small->size());
 }
 
+TEST_F(ImageTest, ReadImageSizeFromHeadersWhateverTheFileName) {
+  const Image png = Image::Make(37, 21, 3, Image::PixelType::kU8);
+  const Image exr = Image::Make(19, 44, 3, Image::PixelType::kF32);
+  ASSERT_TRUE(WritePng(Path("a.png"), png).ok());
+  ASSERT_TRUE(WriteExr(Path("b.exr"), exr).ok());
+  // As in the cache: no extension.
+  std::filesystem::rename(Path("a.png"), Path("a"));
+  std::filesystem::rename(Path("b.exr"), Path("b"));
+  auto png_size = ReadImageSize(Path("a"));
+  ASSERT_TRUE(png_size.ok()) << png_size.status().message();
+  EXPECT_EQ(png_size->width, 37);
+  EXPECT_EQ(png_size->height, 21);
+  auto exr_size = ReadImageSize(Path("b"));
+  ASSERT_TRUE(exr_size.ok()) << exr_size.status().message();
+  EXPECT_EQ(exr_size->width, 19);
+  EXPECT_EQ(exr_size->height, 44);
+
+  std::ofstream(Path("text")) << "not an image at all";
+  EXPECT_EQ(ReadImageSize(Path("text")).status().code(), Status::Code::kUnsupported);
+  std::ofstream(Path("short"), std::ios::binary) << "\x89PNG\r\n\x1a\n";
+  auto truncated = ReadImageSize(Path("short"));
+  EXPECT_EQ(truncated.status().code(), Status::Code::kCorrupt);
+  EXPECT_THAT(truncated.status().message(), HasSubstr(Path("short")));
+  EXPECT_EQ(ReadImageSize(Path("missing")).status().code(), Status::Code::kNotFound);
+}
+
 TEST_F(ImageTest, Png16BitKeepsFullValues) {
   Image image = Image::Make(4, 2, 3, Image::PixelType::kU16);
   image.at_u16(0, 0, 0) = 0x1234;
