@@ -2,7 +2,7 @@
 //
 // Everything that writes durable state (the cache, output folders, run
 // records) goes through an Env, so tests can inject a failure at a chosen write
-// (see FaultInjectingEnv) and check that nothing that looks complete is left
+// (see base/testing/fault_injecting_env.h) and check that nothing that looks complete is left
 // behind. Durable writes are always "write a temporary name, fsync, rename".
 #pragma once
 
@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 
 namespace pb {
 
@@ -51,24 +51,6 @@ class Env {
 
   // The process-wide real file system.
   static Env* Default();
-};
-
-// An Env that fails the Nth durable write (WriteFileAtomic, CopyFileAtomic,
-// Rename, SyncFile, counted together from 1) with ENOSPC-like errors, leaving
-// a half-written temporary file behind as a real crash would.
-class FaultInjectingEnv : public Env {
- public:
-  explicit FaultInjectingEnv(int fail_at_write) : fail_at_(fail_at_write) {}
-  Status WriteFileAtomic(const std::string& path, std::string_view contents) override;
-  Status CopyFileAtomic(const std::string& from, const std::string& to) override;
-  Status Rename(const std::string& from, const std::string& to) override;
-  Status SyncFile(const std::string& path) override;
-  int writes_seen() const { return writes_; }
-
- private:
-  bool ShouldFail(const std::string& path);
-  int fail_at_;
-  int writes_ = 0;
 };
 
 // A temporary name beside `path`, unique per process and call:

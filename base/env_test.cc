@@ -1,9 +1,10 @@
-#include "engine/base/env.h"
+#include "base/env.h"
 
 #include <gtest/gtest.h>
 
-#include "engine/base/hash.h"
-#include "engine/test_util.h"
+#include "base/hash.h"
+#include "base/testing/fault_injecting_env.h"
+#include "base/testing/temp_dir.h"
 
 namespace pb {
 namespace {

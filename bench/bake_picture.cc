@@ -18,18 +18,18 @@
 #include <vector>
 
 #include "bench/bench_clock.h"
-#include "stages/geometry/bake.h"
-#include "stages/geometry/bake_from_mesh.h"
-#include "stages/geometry/bake_from_points.h"
-#include "stages/geometry/bake_truth.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/mesh_clean.h"
-#include "stages/geometry/mesh_decimate.h"
-#include "stages/geometry/normals.h"
-#include "stages/geometry/poisson.h"
-#include "stages/geometry/synth_scanner.h"
-#include "stages/geometry/synth_scene.h"
-#include "stages/geometry/uv_atlas.h"
+#include "stages/geometry/bake/bake.h"
+#include "stages/geometry/bake/from_mesh.h"
+#include "stages/geometry/bake/from_points.h"
+#include "stages/geometry/bake/truth.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/mesh/clean.h"
+#include "stages/geometry/mesh/decimate.h"
+#include "stages/geometry/points/normals.h"
+#include "stages/geometry/mesh/poisson.h"
+#include "stages/geometry/synth/scanner.h"
+#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/uv/atlas.h"
 
 namespace pb {
 namespace {

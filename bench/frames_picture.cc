@@ -14,8 +14,8 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/frames.h"
-#include "stages/geometry/image.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/core/image.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// point_assign_bench: AssignPointsToFaces (stages/geometry/point_assign.h) on
+// point_assign_bench: AssignPointsToFaces (stages/geometry/bake/point_assign.h) on
 // the synthetic room, for docs/bench-point-assign.md.
 //
 //   point_assign_bench prepare DIR POINTS [FACES]
@@ -22,14 +22,14 @@
 
 #include <tbb/parallel_for.h>
 
-#include "stages/geometry/mesh_decimate.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/point_assign.h"
-#include "stages/geometry/spacing.h"
+#include "stages/geometry/mesh/decimate.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/bake/point_assign.h"
+#include "stages/geometry/points/spacing.h"
 #include "bench/bench_clock.h"
-#include "stages/geometry/synth_scanner.h"
-#include "stages/geometry/synth_scene.h"
-#include "stages/geometry/uv_atlas.h"
+#include "stages/geometry/synth/scanner.h"
+#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/uv/atlas.h"
 
 namespace {
 

@@ -16,11 +16,11 @@
 #include <cstring>
 #include <string>
 
-#include "stages/geometry/mesh_clean.h"
-#include "stages/geometry/mesh_distance.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/poisson.h"
-#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/mesh/clean.h"
+#include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/mesh/poisson.h"
+#include "stages/geometry/synth/scene.h"
 
 namespace {
 

@@ -1,4 +1,4 @@
-// render_bench: the reference renderer (stages/geometry/render.h) on an
+// render_bench: the reference renderer (stages/geometry/render/render.h) on an
 // HPM-size mesh and a textured LPM-size mesh of the synthetic room, and the
 // analytic truth, from the room scene's three viewpoints
 // (configs/scenes/synthetic-room.yaml). Figures in docs/render.md.
@@ -15,11 +15,11 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/image.h"
+#include "stages/geometry/core/image.h"
 #include "bench/bench_clock.h"
-#include "stages/geometry/render.h"
-#include "stages/geometry/synth_scene.h"
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/render/render.h"
+#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/core/tangents.h"
 
 namespace {
 

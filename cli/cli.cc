@@ -1,4 +1,4 @@
-#include "engine/cli.h"
+#include "cli/cli.h"
 
 #include <unistd.h>
 
@@ -9,7 +9,7 @@
 #include <iostream>
 #include <thread>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 #include "engine/cache.h"
 #include "engine/executor.h"
 #include "engine/key.h"

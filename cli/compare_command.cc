@@ -1,12 +1,12 @@
-#include "stages/metrics/compare_command.h"
+#include "cli/compare_command.h"
 
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <nlohmann/json.hpp>
 
-#include "stages/geometry/image.h"
-#include "stages/geometry/image_metrics.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/metrics/image_metrics.h"
 
 namespace pb {
 namespace {

@@ -1,9 +1,9 @@
 // `pointbake compare REF TEST [--map FLIP.png] [--json] [--ppd X]`: the image
-// metrics of metrics.image (stages/geometry/image_metrics.h) for any two
+// metrics of metrics.image (stages/geometry/metrics/image_metrics.h) for any two
 // 8-bit images, e.g. a user's own renders.
 #pragma once
 
-#include "engine/cli.h"
+#include "cli/cli.h"
 
 namespace pb {
 

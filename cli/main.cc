@@ -1,9 +1,9 @@
 // pointbake: the engine's CLI with the built-in stages and commands.
-#include "engine/cli.h"
+#include "cli/cli.h"
 #include "stages/builtin.h"
-#include "stages/metrics/compare_command.h"
-#include "stages/report/report.h"
-#include "stages/report/report_command.h"
+#include "cli/compare_command.h"
+#include "cli/report/report.h"
+#include "cli/report/report_command.h"
 
 int main(int argc, char** argv) {
   pb::Registry registry;

@@ -8,8 +8,8 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
-#include "engine/base/hash.h"
-#include "engine/base/status.h"
+#include "base/hash.h"
+#include "base/status.h"
 
 namespace pb {
 

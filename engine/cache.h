@@ -38,8 +38,8 @@
 #include <vector>
 
 #include "engine/artifact.h"
-#include "engine/base/env.h"
-#include "engine/base/hash.h"
+#include "base/env.h"
+#include "base/hash.h"
 
 namespace pb {
 

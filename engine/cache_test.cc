@@ -9,6 +9,7 @@
 #include <thread>
 #include <fstream>
 
+#include "base/testing/fault_injecting_env.h"
 #include "engine/test_util.h"
 
 namespace pb {

@@ -7,7 +7,7 @@
 #include <fstream>
 #include <thread>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 #include "engine/progress.h"
 #include "engine/schema.h"
 #include "engine/workflow.h"

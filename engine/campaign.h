@@ -17,7 +17,7 @@
 // (e.g. "interpolation=splat"; "big,interpolation=splat").
 //
 // The folder <out>/ holds campaign.json (the manifest; format in
-// stages/report/report.h), runs/<scene>/<workflow>[+<variant>]/ (each run's
+// cli/report/report.h), runs/<scene>/<workflow>[+<variant>]/ (each run's
 // run.json and named outputs, as `pointbake run --out`) and report/.
 #pragma once
 
@@ -25,7 +25,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/registry.h"
 #include "engine/run_workflow.h"
 

@@ -13,7 +13,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 #include "engine/stage_context.h"
 
 extern char** environ;

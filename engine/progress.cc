@@ -2,7 +2,7 @@
 
 #include <cstdio>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 
 namespace pb {
 

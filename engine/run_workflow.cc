@@ -6,7 +6,7 @@
 #include <ctime>
 #include <thread>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 #include "engine/executor.h"
 #include "engine/progress.h"
 #include "engine/run_record.h"

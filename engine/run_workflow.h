@@ -7,7 +7,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/cache.h"
 #include "engine/workflow.h"
 

@@ -20,7 +20,7 @@
 #include <valijson/validation_results.hpp>
 #include <valijson/validator.hpp>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 #include "engine/yaml_json.h"
 
 namespace pb {

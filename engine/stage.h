@@ -19,15 +19,15 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 
 namespace pb {
 
 // Artifact types and their on-disk form (one directory per artifact):
-//   points -> points.ply  (binary little-endian PLY, see stages/geometry/ply.h)
+//   points -> points.ply  (binary little-endian PLY, see stages/geometry/io/ply.h)
 //   mesh   -> mesh.ply    (binary PLY with optional UVs, colors, tangents)
 //   image  -> image.png (8/16-bit) or image.exr (float)
-//   frames -> frames.json + one PNG per viewpoint (stages/geometry/frames.h)
+//   frames -> frames.json + one PNG per viewpoint (stages/geometry/io/frames.h)
 //   table  -> table.json
 //   model  -> an exported model: model.glb, or model.obj + model.mtl + PNGs
 //   any    -> accepted by inputs that take every type (tests, exports)

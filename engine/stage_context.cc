@@ -4,7 +4,7 @@
 #include <chrono>
 #include <thread>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 
 namespace pb {
 namespace {

@@ -1,5 +1,5 @@
-// Test helpers shared by the engine's unit tests: a temporary folder and a
-// registry of tiny in-process stage types.
+// Test helpers shared by the engine's unit tests: the temporary folder of
+// base/testing/temp_dir.h and a registry of tiny in-process stage types.
 #pragma once
 
 #include <cstdlib>
@@ -7,28 +7,11 @@
 #include <fstream>
 #include <string>
 
+#include "base/testing/temp_dir.h"
 #include "engine/registry.h"
 
 namespace pb::testing {
 
-class TempDir {
- public:
-  TempDir() {
-    char tmpl[] = "/tmp/pbtest.XXXXXX";
-    path_ = ::mkdtemp(tmpl);
-  }
-  ~TempDir() { std::filesystem::remove_all(path_); }
-  const std::string& path() const { return path_; }
-  std::string Write(const std::string& name, const std::string& text) const {
-    const std::string p = path_ + "/" + name;
-    std::filesystem::create_directories(std::filesystem::path(p).parent_path());
-    std::ofstream(p) << text;
-    return p;
-  }
-
- private:
-  std::string path_;
-};
 
 // "t.text" writes params.text; "t.upper" upper-cases input `in`;
 // "t.len" writes the length of input `in`; "t.pair" joins `a` and `b`;

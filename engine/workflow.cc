@@ -8,7 +8,7 @@
 #include <set>
 #include <sstream>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 #include "engine/schema.h"
 
 namespace pb {

@@ -14,7 +14,7 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/registry.h"
 #include "engine/yaml_json.h"
 

@@ -13,7 +13,7 @@
 #include <utility>
 #include <vector>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 
 namespace pb {
 namespace {

@@ -1,8 +1,8 @@
-#include "stages/mesh/mesh_io.h"
+#include "stages/mesh_io.h"
 
 #include <utility>
 
-#include "stages/geometry/ply.h"
+#include "stages/geometry/io/ply.h"
 #include "stages/params.h"
 
 namespace pb {

@@ -1,15 +1,15 @@
 // The `mesh` artifact as stage adapters read and write it: one binary PLY
-// file, mesh.ply (stages/geometry/ply.h), plus the artifact's JSON meta
+// file, mesh.ply (stages/geometry/io/ply.h), plus the artifact's JSON meta
 // (origin, counts, which attributes it has, and what earlier stages
-// recorded). The mesh counterpart of stages/points/points_io.h.
+// recorded). The mesh counterpart of stages/points_io.h.
 #pragma once
 
 #include <string>
 #include <string_view>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/stage.h"
-#include "stages/geometry/mesh.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

@@ -11,9 +11,9 @@
 #include <string>
 #include <string_view>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/stage.h"
-#include "stages/geometry/image.h"
+#include "stages/geometry/core/image.h"
 
 namespace pb {
 

@@ -1,10 +1,10 @@
-#include "stages/points/points_io.h"
+#include "stages/points_io.h"
 
 #include <cmath>
 #include <utility>
 
-#include "engine/base/env.h"
-#include "stages/geometry/ply.h"
+#include "base/env.h"
+#include "stages/geometry/io/ply.h"
 #include "stages/params.h"
 
 namespace pb {

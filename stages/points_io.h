@@ -1,5 +1,5 @@
 // The `points` artifact as stage adapters read and write it: one binary PLY
-// file, points.ply (stages/geometry/ply.h), positions in meters relative to the
+// file, points.ply (stages/geometry/io/ply.h), positions in meters relative to the
 // cloud's origin, plus the artifact's JSON meta (origin, point count, spacing_m
 // and whatever earlier stages added).
 #pragma once
@@ -7,9 +7,9 @@
 #include <string>
 #include <string_view>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/stage.h"
-#include "stages/geometry/point_cloud.h"
+#include "stages/geometry/core/point_cloud.h"
 
 namespace pb {
 

@@ -2,7 +2,7 @@
 
 #include <stdlib.h>
 
-#include "stages/geometry/ply.h"
+#include "stages/geometry/io/ply.h"
 
 namespace pb {
 

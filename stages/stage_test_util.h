@@ -13,9 +13,9 @@
 #include <string_view>
 #include <vector>
 
-#include "stages/geometry/mesh.h"
-#include "stages/geometry/point_cloud.h"
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/core/mesh.h"
+#include "stages/geometry/core/point_cloud.h"
+#include "stages/geometry/testing/test_data.h"
 #include "engine/stage.h"
 
 namespace pb {

@@ -34,29 +34,8 @@ std::string RunResult::Describe() const {
   return s.str();
 }
 
-TempDir::TempDir() {
-  char tmpl[] = "/tmp/pb_cli_test_XXXXXX";
-  if (!::mkdtemp(tmpl)) throw std::runtime_error(std::string("mkdtemp: ") + std::strerror(errno));
-  path_ = tmpl;
-}
-
-TempDir::~TempDir() {
-  if (std::getenv("PB_KEEP_TEST_DIRS")) return;
-  RemoveAll(path_);
-}
-
 void RemoveAll(const std::string& path) {
-  std::error_code ec;
-  // Cache objects are read-only; make everything writable first so removal
-  // works whatever the permissions.
-  if (fs::exists(path, ec)) {
-    for (auto it = fs::recursive_directory_iterator(path, ec); !ec && it != fs::recursive_directory_iterator();
-         it.increment(ec)) {
-      std::error_code ec2;
-      fs::permissions(it->path(), fs::perms::owner_all, fs::perm_options::add, ec2);
-    }
-  }
-  fs::remove_all(path, ec);
+  ::pb::testing::TempDir::RemoveAll(path);
 }
 
 namespace {

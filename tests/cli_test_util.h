@@ -6,6 +6,8 @@
 
 #include <nlohmann/json.hpp>
 #include <string>
+
+#include "base/testing/temp_dir.h"
 #include <utility>
 #include <vector>
 
@@ -32,18 +34,10 @@ struct RunResult {
   std::string command;
 };
 
-// A fresh folder under /tmp (mkdtemp), removed recursively on destruction.
-class TempDir {
+// The tests' one temporary folder (base/testing/temp_dir.h), with `dir / "rel"`.
+class TempDir : public ::pb::testing::TempDir {
  public:
-  TempDir();
-  ~TempDir();
-  TempDir(const TempDir&) = delete;
-  TempDir& operator=(const TempDir&) = delete;
-  const std::string& path() const { return path_; }
-  std::string operator/(const std::string& rel) const { return path_ + "/" + rel; }
-
- private:
-  std::string path_;
+  std::string operator/(const std::string& rel) const { return path() + "/" + rel; }
 };
 
 // Runs `pointbake ARGS...` (PB_BINARY) with `cwd` as working directory (empty:

@@ -5,7 +5,7 @@
 #include <cmath>
 #include <string>
 
-#include "stages/geometry/image.h"
+#include "stages/geometry/core/image.h"
 #include "tests/cli_test_util.h"
 
 namespace pbtest {

@@ -6,14 +6,14 @@
 // This file is the order of the work; the pieces are declared in
 // report_internal.h: reading and the data files (report_read.cc), images
 // (report_images.cc), charts, Markdown and HTML (report_html.cc).
-#include "stages/report/report.h"
+#include "cli/report/report.h"
 
 #include <string>
 #include <utility>
 #include <vector>
 
-#include "engine/base/env.h"
-#include "stages/report/report_internal.h"
+#include "base/env.h"
+#include "cli/report/report_internal.h"
 
 namespace pb {
 

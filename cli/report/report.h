@@ -47,7 +47,7 @@
 //   <out>/<run dir>/<named outputs> (the shipped workflows' `outputs:`;
 //   any may be absent, e.g. when a stage failed or the scene has no truth):
 //     frames/         `frames` artifact (frames.json + PNGs,
-//                     stages/geometry/frames.h): this workflow's result
+//                     stages/geometry/io/frames.h): this workflow's result
 //     truth_frames/   the ground truth rendered (synthetic scenes only)
 //     vs_hpm.json     metrics.image table against the HPM frames (absent in
 //                     the HPM workflow itself): columns frame, psnr_db,
@@ -93,7 +93,7 @@
 
 #include <string>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 
 namespace pb {
 

@@ -1,9 +1,9 @@
-#include "stages/report/report_command.h"
+#include "cli/report/report_command.h"
 
 #include <charconv>
 #include <cstdio>
 
-#include "stages/report/report.h"
+#include "cli/report/report.h"
 
 namespace pb {
 namespace {

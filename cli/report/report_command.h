@@ -4,7 +4,7 @@
 // without running anything.
 #pragma once
 
-#include "engine/cli.h"
+#include "cli/cli.h"
 
 namespace pb {
 

@@ -10,7 +10,7 @@
 #include <utility>
 #include <vector>
 
-#include "stages/report/report_internal.h"
+#include "cli/report/report_internal.h"
 
 namespace pb::report_internal {
 namespace {

@@ -13,10 +13,10 @@
 #include <utility>
 #include <vector>
 
-#include "engine/base/env.h"
-#include "stages/geometry/frames.h"
-#include "stages/geometry/image.h"
-#include "stages/report/report_internal.h"
+#include "base/env.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/core/image.h"
+#include "cli/report/report_internal.h"
 
 namespace pb::report_internal {
 namespace {

@@ -13,8 +13,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/report/report.h"
+#include "base/status.h"
+#include "cli/report/report.h"
 
 namespace pb::report_internal {
 

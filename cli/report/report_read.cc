@@ -12,9 +12,9 @@
 #include <utility>
 #include <vector>
 
-#include "engine/base/env.h"
-#include "stages/geometry/table.h"
-#include "stages/report/report_internal.h"
+#include "base/env.h"
+#include "stages/geometry/core/table.h"
+#include "cli/report/report_internal.h"
 
 namespace pb::report_internal {
 namespace {

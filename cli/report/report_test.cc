@@ -1,6 +1,6 @@
 // Campaign report on a tiny campaign folder written by the test: one scene,
 // HPM + LPM (failed) + point transfer, with run records, tables and frames.
-#include "stages/report/report.h"
+#include "cli/report/report.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -11,9 +11,9 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "stages/geometry/frames.h"
-#include "stages/geometry/table.h"
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/core/table.h"
+#include "stages/geometry/testing/test_data.h"
 
 namespace pb {
 namespace {

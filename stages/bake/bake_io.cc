@@ -4,8 +4,8 @@
 
 #include <utility>
 
-#include "stages/geometry/image.h"
-#include "stages/mesh/mesh_io.h"
+#include "stages/geometry/core/image.h"
+#include "stages/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {

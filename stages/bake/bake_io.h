@@ -11,9 +11,9 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/stage.h"
-#include "stages/geometry/bake.h"
+#include "stages/geometry/bake/bake.h"
 
 namespace pb {
 

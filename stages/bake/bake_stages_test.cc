@@ -7,8 +7,8 @@
 #include <string>
 
 #include "stages/builtin.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/ply.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/io/ply.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

@@ -1,14 +1,14 @@
 // bake.from_mesh: color and normal maps of a low mesh with uvs from a high
-// mesh with vertex colors, by ray casting (stages/geometry/bake_from_mesh.h).
+// mesh with vertex colors, by ray casting (stages/geometry/bake/from_mesh.h).
 #include <string>
 #include <utility>
 
 #include "engine/stage.h"
 #include "stages/bake/bake_io.h"
-#include "stages/bake/bake_stages.h"
-#include "stages/geometry/bake_from_mesh.h"
-#include "stages/geometry/ply.h"
-#include "stages/mesh/mesh_io.h"
+#include "stages/builtin.h"
+#include "stages/geometry/bake/from_mesh.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {

@@ -1,5 +1,5 @@
 // bake.from_points: the paper's point-based detail transfer
-// (stages/geometry/bake_from_points.h).
+// (stages/geometry/bake/from_points.h).
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -7,12 +7,12 @@
 
 #include "engine/stage.h"
 #include "stages/bake/bake_io.h"
-#include "stages/bake/bake_stages.h"
-#include "stages/geometry/bake_from_points.h"
-#include "stages/geometry/spacing.h"
-#include "stages/mesh/mesh_io.h"
+#include "stages/builtin.h"
+#include "stages/geometry/bake/from_points.h"
+#include "stages/geometry/points/spacing.h"
+#include "stages/mesh_io.h"
 #include "stages/params.h"
-#include "stages/points/points_io.h"
+#include "stages/points_io.h"
 
 namespace pb {
 namespace {

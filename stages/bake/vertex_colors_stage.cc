@@ -1,13 +1,13 @@
 // bake.vertex_colors: color map from the mesh's own vertex colors, flat
-// normal map (the paper's HPM and LPM workflows; stages/geometry/bake.h).
+// normal map (the paper's HPM and LPM workflows; stages/geometry/bake/bake.h).
 #include <string>
 #include <utility>
 
 #include "engine/stage.h"
 #include "stages/bake/bake_io.h"
-#include "stages/bake/bake_stages.h"
-#include "stages/geometry/bake.h"
-#include "stages/mesh/mesh_io.h"
+#include "stages/builtin.h"
+#include "stages/geometry/bake/bake.h"
+#include "stages/mesh_io.h"
 
 namespace pb {
 namespace {

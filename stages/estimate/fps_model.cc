@@ -3,7 +3,7 @@
 //
 // Device files are YAML read by the engine's reader (engine/yaml_json.h), so
 // errors carry file:line:column like every other file of the project.
-#include "stages/metrics/fps_model.h"
+#include "stages/estimate/fps_model.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,15 +1,15 @@
 // estimate.fps: the frame rate a device profile predicts for a textured mesh
-// (model: stages/metrics/fps_model.h; calibration: docs/fps.md).
+// (model: stages/estimate/fps_model.h; calibration: docs/fps.md).
 #include <algorithm>
 #include <cstdint>
 #include <string>
 #include <vector>
 
 #include "engine/stage.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/table.h"
-#include "stages/mesh/mesh_io.h"
-#include "stages/metrics/fps_model.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/core/table.h"
+#include "stages/mesh_io.h"
+#include "stages/estimate/fps_model.h"
 #include "stages/params.h"
 
 namespace pb {

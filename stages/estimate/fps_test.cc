@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/image.h"
-#include "stages/geometry/table.h"
-#include "stages/metrics/fps_model.h"
-#include "stages/metrics/metrics_stages.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/core/table.h"
+#include "stages/estimate/fps_model.h"
+#include "stages/builtin.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

@@ -11,11 +11,11 @@
 #include <string>
 
 #include "stages/builtin.h"
-#include "stages/geometry/gltf.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/obj.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/io/gltf.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/io/obj.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/core/tangents.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

@@ -1,11 +1,11 @@
 // export.gltf: a mesh and its baked maps as binary glTF 2.0
-// (stages/geometry/gltf.h).
+// (stages/geometry/io/gltf.h).
 #include <string>
 #include <utility>
 
 #include "engine/stage.h"
-#include "stages/export/export_stages.h"
-#include "stages/geometry/gltf.h"
+#include "stages/builtin.h"
+#include "stages/geometry/io/gltf.h"
 #include "stages/params.h"
 
 namespace pb {

@@ -1,11 +1,11 @@
 // export.obj: a mesh and its baked maps as Wavefront OBJ + MTL + PNG
-// (stages/geometry/obj.h).
+// (stages/geometry/io/obj.h).
 #include <string>
 #include <utility>
 
 #include "engine/stage.h"
-#include "stages/export/export_stages.h"
-#include "stages/geometry/obj.h"
+#include "stages/builtin.h"
+#include "stages/geometry/io/obj.h"
 #include "stages/params.h"
 
 namespace pb {

@@ -5,17 +5,17 @@
 
 #include <cstdio>
 
-#include "stages/geometry/text_parse.h"
-#include "stages/geometry/e57.h"
-#include "stages/geometry/las.h"
-#include "stages/geometry/pcd.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/ptx.h"
-#include "stages/geometry/scan_read.h"
-#include "stages/geometry/xyz.h"
-#include "stages/io/io_stages.h"
+#include "stages/geometry/core/text_parse.h"
+#include "stages/geometry/io/e57.h"
+#include "stages/geometry/io/las.h"
+#include "stages/geometry/io/pcd.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/io/ptx.h"
+#include "stages/geometry/io/scan_read.h"
+#include "stages/geometry/io/xyz.h"
+#include "stages/builtin.h"
 #include "stages/params.h"
-#include "stages/points/points_io.h"
+#include "stages/points_io.h"
 
 namespace pb {
 namespace {

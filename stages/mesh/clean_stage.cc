@@ -1,10 +1,10 @@
 // mesh.clean: removes degenerate, duplicate and non-manifold faces, small
 // components and unreferenced vertices, and splits non-manifold vertices
-// (stages/geometry/mesh_clean.h), so that UV unwrapping gets manifold input.
-#include "stages/mesh/clean_stage.h"
+// (stages/geometry/mesh/clean.h), so that UV unwrapping gets manifold input.
+#include "stages/builtin.h"
 
-#include "stages/geometry/mesh_clean.h"
-#include "stages/mesh/mesh_io.h"
+#include "stages/geometry/mesh/clean.h"
+#include "stages/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {

@@ -1,13 +1,13 @@
 // mesh.decimate: quadric edge collapse to a face budget
-// (stages/geometry/mesh_decimate.h).
+// (stages/geometry/mesh/decimate.h).
 #include <cmath>
 #include <cstdio>
 #include <string>
 #include <utility>
 
 #include "engine/stage.h"
-#include "stages/geometry/mesh_decimate.h"
-#include "stages/mesh/mesh_io.h"
+#include "stages/geometry/mesh/decimate.h"
+#include "stages/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {

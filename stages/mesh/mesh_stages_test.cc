@@ -11,7 +11,7 @@
 #include <string>
 
 #include "stages/builtin.h"
-#include "stages/geometry/ply.h"
+#include "stages/geometry/io/ply.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

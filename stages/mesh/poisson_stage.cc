@@ -1,5 +1,5 @@
 // mesh.poisson: screened Poisson reconstruction from oriented points
-// (stages/geometry/poisson.h), optionally trimmed by density.
+// (stages/geometry/mesh/poisson.h), optionally trimmed by density.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -8,11 +8,11 @@
 #include <utility>
 
 #include "engine/stage.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/poisson.h"
-#include "stages/mesh/mesh_stages.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/mesh/poisson.h"
+#include "stages/builtin.h"
 #include "stages/params.h"
-#include "stages/points/points_io.h"
+#include "stages/points_io.h"
 
 namespace pb {
 namespace {

@@ -1,16 +1,16 @@
 // metrics.geometry: distance between a mesh and the ground truth, sampled both
-// ways (stages/geometry/mesh_distance.h), written as a table.
-#include "stages/metrics/geometry_stage.h"
+// ways (stages/geometry/mesh/distance.h), written as a table.
+#include "stages/builtin.h"
 
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <optional>
 
-#include "stages/geometry/mesh_distance.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/synth_scene.h"
-#include "stages/geometry/table.h"
+#include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/core/table.h"
 #include "stages/params.h"
 
 namespace pb {

@@ -1,15 +1,15 @@
 // metrics.image: per-frame and mean image metrics of `frames` against
 // `reference`, frames matched by name.
-#include "stages/metrics/image_stage.h"
+#include "stages/builtin.h"
 
 #include <tbb/task_arena.h>
 
 #include <algorithm>
 #include <cmath>
 
-#include "stages/geometry/frames.h"
-#include "stages/geometry/image_metrics.h"
-#include "stages/geometry/table.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/metrics/image_metrics.h"
+#include "stages/geometry/core/table.h"
 #include "stages/params.h"
 
 namespace pb {

@@ -1,14 +1,14 @@
-// The frames artifact (stages/geometry/frames.h) and the metrics.image stage
+// The frames artifact (stages/geometry/io/frames.h) and the metrics.image stage
 // through the fake context.
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <fstream>
 
-#include "stages/geometry/frames.h"
-#include "stages/geometry/image_metrics.h"
-#include "stages/geometry/table.h"
-#include "stages/metrics/metrics_stages.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/metrics/image_metrics.h"
+#include "stages/geometry/core/table.h"
+#include "stages/builtin.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

@@ -4,12 +4,11 @@
 #include <chrono>
 #include <fstream>
 
-#include "stages/geometry/mesh_clean.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/synth_scene.h"
-#include "stages/geometry/table.h"
-#include "stages/mesh/clean_stage.h"
-#include "stages/metrics/metrics_stages.h"
+#include "stages/geometry/mesh/clean.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/core/table.h"
+#include "stages/builtin.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

@@ -1,8 +1,8 @@
-// points.downsample: voxel-grid downsampling (stages/geometry/voxel_downsample.h).
-#include "stages/geometry/voxel_downsample.h"
+// points.downsample: voxel-grid downsampling (stages/geometry/points/voxel_downsample.h).
+#include "stages/geometry/points/voxel_downsample.h"
 #include "stages/params.h"
-#include "stages/points/points_io.h"
-#include "stages/points/points_stages.h"
+#include "stages/points_io.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

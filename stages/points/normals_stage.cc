@@ -1,10 +1,10 @@
-// points.normals: k-NN PCA normals with orientation (stages/geometry/normals.h).
+// points.normals: k-NN PCA normals with orientation (stages/geometry/points/normals.h).
 #include <string>
 
-#include "stages/geometry/normals.h"
+#include "stages/geometry/points/normals.h"
 #include "stages/params.h"
-#include "stages/points/points_io.h"
-#include "stages/points/points_stages.h"
+#include "stages/points_io.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

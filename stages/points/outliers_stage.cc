@@ -1,8 +1,8 @@
-// points.outliers: statistical outlier removal (stages/geometry/outliers.h).
-#include "stages/geometry/outliers.h"
+// points.outliers: statistical outlier removal (stages/geometry/points/outliers.h).
+#include "stages/geometry/points/outliers.h"
 #include "stages/params.h"
-#include "stages/points/points_io.h"
-#include "stages/points/points_stages.h"
+#include "stages/points_io.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

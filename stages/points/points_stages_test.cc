@@ -1,6 +1,6 @@
 // Runs the io and points stages through a fake StageContext (no engine, no
 // child processes): files go to a temporary directory.
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -12,10 +12,8 @@
 #include <set>
 
 #include "stages/builtin.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/table.h"
-#include "stages/io/io_stages.h"
-#include "stages/points/points_stages.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/core/table.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

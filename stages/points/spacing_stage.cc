@@ -1,9 +1,9 @@
-// points.spacing: median nearest-neighbour distance (stages/geometry/spacing.h),
+// points.spacing: median nearest-neighbour distance (stages/geometry/points/spacing.h),
 // recorded in the artifact's meta for later stages' thresholds.
-#include "stages/geometry/spacing.h"
+#include "stages/geometry/points/spacing.h"
 #include "stages/params.h"
-#include "stages/points/points_io.h"
-#include "stages/points/points_stages.h"
+#include "stages/points_io.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

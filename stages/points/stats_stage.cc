@@ -1,9 +1,9 @@
 // points.stats: a one-row table describing a point cloud.
 #include <cmath>
 
-#include "stages/geometry/table.h"
-#include "stages/points/points_io.h"
-#include "stages/points/points_stages.h"
+#include "stages/geometry/core/table.h"
+#include "stages/points_io.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

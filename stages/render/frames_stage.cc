@@ -1,6 +1,6 @@
 // render.frames: draws a mesh (or the ground truth) from the scene's
-// viewpoints with the reference renderer (stages/geometry/render.h) and
-// writes a `frames` artifact (stages/geometry/frames.h).
+// viewpoints with the reference renderer (stages/geometry/render/render.h) and
+// writes a `frames` artifact (stages/geometry/io/frames.h).
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -13,13 +13,13 @@
 #include <vector>
 
 #include "engine/stage.h"
-#include "stages/geometry/frames.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/render.h"
-#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/render/render.h"
+#include "stages/geometry/synth/scene.h"
 #include "stages/params.h"
-#include "stages/render/render_stages.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

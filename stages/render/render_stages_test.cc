@@ -7,12 +7,12 @@
 #include <fstream>
 
 #include "stages/builtin.h"
-#include "stages/geometry/frames.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/render.h"
-#include "stages/geometry/synth_scene.h"
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/render/render.h"
+#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/core/tangents.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

@@ -1,15 +1,15 @@
 // synth.scan: a simulated laser scan of an analytic room plus its ground
-// truth (stages/geometry/synth_scene.h, stages/geometry/synth_scanner.h).
+// truth (stages/geometry/synth/scene.h, stages/geometry/synth/scanner.h).
 #include <tbb/task_arena.h>
 
 #include <cmath>
 #include <fstream>
 
-#include "stages/geometry/ply.h"
-#include "stages/geometry/synth_scanner.h"
-#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/synth/scanner.h"
+#include "stages/geometry/synth/scene.h"
 #include "stages/params.h"
-#include "stages/synth/synth_stages.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

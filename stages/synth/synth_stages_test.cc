@@ -8,10 +8,10 @@
 #include <map>
 #include <set>
 
-#include "stages/geometry/ply.h"
-#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/synth/scene.h"
 #include "stages/stage_test_util.h"
-#include "stages/synth/synth_stages.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

@@ -1,13 +1,13 @@
 // uv.unwrap: cuts a mesh into charts and packs them into one square UV atlas
-// (stages/geometry/uv_atlas.h).
+// (stages/geometry/uv/atlas.h).
 #include <string>
 #include <utility>
 
 #include "engine/stage.h"
-#include "stages/mesh/mesh_io.h"
-#include "stages/geometry/uv_atlas.h"
+#include "stages/mesh_io.h"
+#include "stages/geometry/uv/atlas.h"
 #include "stages/params.h"
-#include "stages/uv/uv_stages.h"
+#include "stages/builtin.h"
 
 namespace pb {
 namespace {

@@ -10,8 +10,8 @@
 #include <string>
 
 #include "stages/builtin.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/uv_atlas.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/uv/atlas.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {

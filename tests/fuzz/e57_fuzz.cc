@@ -11,7 +11,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "stages/geometry/e57.h"
+#include "stages/geometry/io/e57.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

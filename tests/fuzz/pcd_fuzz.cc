@@ -9,7 +9,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "stages/geometry/pcd.h"
+#include "stages/geometry/io/pcd.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

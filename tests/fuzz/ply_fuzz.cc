@@ -8,7 +8,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "stages/geometry/ply.h"
+#include "stages/geometry/io/ply.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -7,7 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "stages/geometry/ptx.h"
+#include "stages/geometry/io/ptx.h"
 #include "tests/fuzz/fuzz_input.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t* data, size_t size) {

@@ -1,4 +1,4 @@
-#include "stages/geometry/bake.h"
+#include "stages/geometry/bake/bake.h"
 
 #include <utility>
 

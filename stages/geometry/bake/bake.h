@@ -8,9 +8,9 @@
 #include <cstddef>
 #include <functional>
 
-#include "engine/base/status.h"
-#include "stages/geometry/bake_raster.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/bake/raster.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

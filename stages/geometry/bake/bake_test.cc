@@ -1,14 +1,14 @@
 // BakeRaster, frames, maps, dilation (bake_raster.h) and BakeVertexColors
 // (bake.h).
-#include "stages/geometry/bake.h"
+#include "stages/geometry/bake/bake.h"
 
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <random>
 
-#include "stages/geometry/bake_raster.h"
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/bake/raster.h"
+#include "stages/geometry/core/tangents.h"
 
 namespace pb {
 namespace {

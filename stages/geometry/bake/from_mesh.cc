@@ -18,7 +18,7 @@
 // between two triangles of the high mesh). A texel is independent of every
 // other and a face's batches do not depend on the threads, so neither does
 // the output.
-#include "stages/geometry/bake_from_mesh.h"
+#include "stages/geometry/bake/from_mesh.h"
 
 #include <embree3/rtcore.h>
 #include <tbb/task_arena.h>
@@ -34,7 +34,7 @@
 #include <utility>
 #include <vector>
 
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/core/tangents.h"
 
 namespace pb {
 namespace {

@@ -5,9 +5,9 @@
 
 #include <cstddef>
 
-#include "engine/base/status.h"
-#include "stages/geometry/bake.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/bake/bake.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/bake_from_mesh.h"
+#include "stages/geometry/bake/from_mesh.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

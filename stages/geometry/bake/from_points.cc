@@ -1,4 +1,4 @@
-#include "stages/geometry/bake_from_points.h"
+#include "stages/geometry/bake/from_points.h"
 
 #include <tbb/enumerable_thread_specific.h>
 

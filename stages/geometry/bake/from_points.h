@@ -8,11 +8,11 @@
 
 #include <cstddef>
 
-#include "engine/base/status.h"
-#include "stages/geometry/bake.h"
-#include "stages/geometry/point_assign.h"
-#include "stages/geometry/point_cloud.h"
-#include "stages/geometry/texel_interp.h"
+#include "base/status.h"
+#include "stages/geometry/bake/bake.h"
+#include "stages/geometry/bake/point_assign.h"
+#include "stages/geometry/core/point_cloud.h"
+#include "stages/geometry/bake/texel_interp.h"
 
 namespace pb {
 

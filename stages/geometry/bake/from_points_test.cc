@@ -1,5 +1,5 @@
 // BakeFromPoints (bake_from_points.h) on planes with known point patterns.
-#include "stages/geometry/bake_from_points.h"
+#include "stages/geometry/bake/from_points.h"
 
 #include <gtest/gtest.h>
 

@@ -23,7 +23,7 @@
 // in-place two-level bucket sort (American flag: 256 face ranges, then faces)
 // groups the points by face across positions, colors and normals; a per-face
 // sort orders each face's points; st is compacted from 3 floats to 2.
-#include "stages/geometry/point_assign.h"
+#include "stages/geometry/bake/point_assign.h"
 
 #include <sys/mman.h>
 #include <unistd.h>

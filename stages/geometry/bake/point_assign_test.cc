@@ -1,4 +1,4 @@
-#include "stages/geometry/point_assign.h"
+#include "stages/geometry/bake/point_assign.h"
 
 #include <gtest/gtest.h>
 

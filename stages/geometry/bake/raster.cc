@@ -1,4 +1,4 @@
-#include "stages/geometry/bake_raster.h"
+#include "stages/geometry/bake/raster.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/enumerable_thread_specific.h>
@@ -11,7 +11,7 @@
 #include <cmath>
 #include <string>
 
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/core/tangents.h"
 
 namespace pb {
 namespace {

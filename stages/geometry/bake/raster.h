@@ -33,9 +33,9 @@
 #include <span>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

@@ -22,7 +22,7 @@
 // This is the only file that includes CGAL (pb_texel_interp): it uses the
 // plain structs of texel_interp.h / bake_raster.h and nothing else of
 // pb_geometry.
-#include "stages/geometry/texel_interp.h"
+#include "stages/geometry/bake/texel_interp.h"
 
 #include <CGAL/Delaunay_triangulation_2.h>
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

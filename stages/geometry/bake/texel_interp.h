@@ -25,7 +25,7 @@
 #include <span>
 #include <vector>
 
-#include "stages/geometry/bake_raster.h"
+#include "stages/geometry/bake/raster.h"
 
 namespace pb {
 

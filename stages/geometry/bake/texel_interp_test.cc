@@ -1,4 +1,4 @@
-#include "stages/geometry/texel_interp.h"
+#include "stages/geometry/bake/texel_interp.h"
 
 #include <gtest/gtest.h>
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/bake_truth.h"
+#include "stages/geometry/bake/truth.h"
 
 #include <cmath>
 #include <vector>

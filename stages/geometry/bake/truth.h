@@ -5,9 +5,9 @@
 
 #include <cstddef>
 
-#include "engine/base/status.h"
-#include "stages/geometry/bake.h"
-#include "stages/geometry/synth_scene.h"
+#include "base/status.h"
+#include "stages/geometry/bake/bake.h"
+#include "stages/geometry/synth/scene.h"
 
 namespace pb {
 

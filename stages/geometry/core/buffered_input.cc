@@ -1,4 +1,4 @@
-#include "stages/geometry/buffered_input.h"
+#include "stages/geometry/core/buffered_input.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>

@@ -1,6 +1,6 @@
-#include "stages/geometry/buffered_input.h"
+#include "stages/geometry/core/buffered_input.h"
 
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/testing/test_data.h"
 #include <gtest/gtest.h>
 #include <stdlib.h>
 

@@ -1,5 +1,5 @@
-#include "stages/geometry/text_parse.h"
-#include "stages/geometry/image.h"
+#include "stages/geometry/core/text_parse.h"
+#include "stages/geometry/core/image.h"
 
 #include <png.h>
 #include <zlib.h>

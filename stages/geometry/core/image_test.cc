@@ -1,5 +1,5 @@
-#include "stages/geometry/image.h"
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/testing/test_data.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

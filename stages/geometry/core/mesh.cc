@@ -1,4 +1,4 @@
-#include "stages/geometry/mesh.h"
+#include "stages/geometry/core/mesh.h"
 
 #include <cstdint>
 #include <string>

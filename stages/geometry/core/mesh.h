@@ -14,8 +14,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/point_cloud.h"
+#include "base/status.h"
+#include "stages/geometry/core/point_cloud.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/point_cloud.h"
+#include "stages/geometry/core/point_cloud.h"
 
 #include <algorithm>
 #include <limits>

@@ -21,7 +21,7 @@
 #include <span>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/table.h"
+#include "stages/geometry/core/table.h"
 
 #include <cmath>
 #include <cstdio>
@@ -6,7 +6,7 @@
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 
 namespace pb {
 

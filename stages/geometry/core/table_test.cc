@@ -1,4 +1,4 @@
-#include "stages/geometry/table.h"
+#include "stages/geometry/core/table.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>

@@ -1,6 +1,6 @@
 // Tangent frames: Lengyel 2001 per-triangle derivatives, corner-angle
 // accumulation as MikkTSpace, Gram–Schmidt per vertex (see tangents.h).
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/core/tangents.h"
 
 #include <algorithm>
 #include <array>

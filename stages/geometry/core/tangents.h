@@ -29,8 +29,8 @@
 #include <cstddef>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

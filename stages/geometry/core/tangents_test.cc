@@ -1,4 +1,4 @@
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/core/tangents.h"
 
 #include <gtest/gtest.h>
 

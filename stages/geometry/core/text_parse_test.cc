@@ -1,4 +1,4 @@
-#include "stages/geometry/text_parse.h"
+#include "stages/geometry/core/text_parse.h"
 
 #include <gtest/gtest.h>
 

@@ -2,7 +2,7 @@
 // PointCloud. Reference: ASTM E2807-11, section 7 (file header), 8.4 (XML
 // section) and the E57 data3D schema (pose, points prototype, colorLimits,
 // intensityLimits, invalid states). See e57.h for what is read and how.
-#include "stages/geometry/e57.h"
+#include "stages/geometry/io/e57.h"
 
 #include <array>
 #include <charconv>
@@ -13,8 +13,8 @@
 #include <string_view>
 #include <vector>
 
-#include "stages/geometry/e57_binary.h"
-#include "stages/geometry/e57_xml.h"
+#include "stages/geometry/io/e57_binary.h"
+#include "stages/geometry/io/e57_xml.h"
 
 namespace pb {
 namespace {

@@ -5,7 +5,7 @@
 // section, packets, bitPackCodec). Departure: index packets are never used
 // (records are read from the first data packet on), so a file whose index is
 // damaged still reads.
-#include "stages/geometry/e57_binary.h"
+#include "stages/geometry/io/e57_binary.h"
 
 #include <fcntl.h>
 #include <sys/stat.h>

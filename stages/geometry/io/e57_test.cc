@@ -1,6 +1,6 @@
-#include "stages/geometry/e57.h"
+#include "stages/geometry/io/e57.h"
 
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -17,9 +17,9 @@
 #include <numbers>
 #include <sstream>
 
-#include "stages/geometry/e57_binary.h"
-#include "stages/geometry/e57_xml.h"
-#include "stages/geometry/ply.h"
+#include "stages/geometry/io/e57_binary.h"
+#include "stages/geometry/io/e57_xml.h"
+#include "stages/geometry/io/ply.h"
 
 namespace pb {
 namespace {

@@ -3,7 +3,7 @@
 // 3.1 (tags), 4.1 (character and entity references). Departures: no DTD
 // processing, no encoding other than UTF-8/ASCII, names are checked only for
 // the ASCII characters XML forbids.
-#include "stages/geometry/e57_xml.h"
+#include "stages/geometry/io/e57_xml.h"
 
 #include <cstdint>
 

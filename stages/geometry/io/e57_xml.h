@@ -19,7 +19,7 @@
 #include <utility>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 
 namespace pb::e57 {
 

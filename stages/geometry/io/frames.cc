@@ -1,9 +1,9 @@
-#include "stages/geometry/frames.h"
+#include "stages/geometry/io/frames.h"
 
 #include <nlohmann/json.hpp>
 #include <set>
 
-#include "engine/base/env.h"
+#include "base/env.h"
 
 namespace pb {
 

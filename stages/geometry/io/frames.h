@@ -29,8 +29,8 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/image.h"
+#include "base/status.h"
+#include "stages/geometry/core/image.h"
 
 namespace pb {
 

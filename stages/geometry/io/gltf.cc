@@ -1,6 +1,6 @@
 // Binary glTF 2.0 writer and reader (see gltf.h). Layout per the glTF 2.0
 // specification, sections 3.6 (binary data), 3.7 (geometry) and 4.4 (GLB).
-#include "stages/geometry/gltf.h"
+#include "stages/geometry/io/gltf.h"
 
 #include <algorithm>
 #include <bit>

@@ -49,9 +49,9 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
-#include "stages/geometry/tangents.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
+#include "stages/geometry/core/tangents.h"
 
 namespace pb {
 

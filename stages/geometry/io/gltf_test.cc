@@ -1,4 +1,4 @@
-#include "stages/geometry/gltf.h"
+#include "stages/geometry/io/gltf.h"
 
 #include <gtest/gtest.h>
 
@@ -8,8 +8,8 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 
-#include "stages/geometry/image.h"
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/testing/test_data.h"
 
 namespace pb {
 namespace {

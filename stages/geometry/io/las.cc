@@ -1,4 +1,4 @@
-#include "stages/geometry/las.h"
+#include "stages/geometry/io/las.h"
 
 #include <algorithm>
 #include <array>
@@ -9,7 +9,7 @@
 #include <type_traits>
 #include <vector>
 
-#include "stages/geometry/buffered_input.h"
+#include "stages/geometry/core/buffered_input.h"
 
 namespace pb {
 namespace {

@@ -2,7 +2,7 @@
 // "Object Files (.obj)" and "MTL Material Format" (Advanced Visualizer 3.0);
 // `norm` is the PBR extension's normal map key; colors on `v` lines the
 // extension MeshLab and Blender read.
-#include "stages/geometry/obj.h"
+#include "stages/geometry/io/obj.h"
 
 #include <algorithm>
 #include <charconv>
@@ -14,8 +14,8 @@
 #include <sstream>
 #include <tuple>
 
-#include "stages/geometry/tangents.h"
-#include "stages/geometry/text_parse.h"
+#include "stages/geometry/core/tangents.h"
+#include "stages/geometry/core/text_parse.h"
 
 namespace pb {
 namespace {

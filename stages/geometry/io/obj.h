@@ -45,8 +45,8 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/obj.h"
+#include "stages/geometry/io/obj.h"
 
 #include <gtest/gtest.h>
 
@@ -7,8 +7,8 @@
 #include <fstream>
 #include <iterator>
 
-#include "stages/geometry/tangents.h"
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/core/tangents.h"
+#include "stages/geometry/testing/test_data.h"
 
 namespace pb {
 namespace {

@@ -5,7 +5,7 @@
 // ((c & 31) << 8) + next byte + 1 and len + 2 bytes are copied from there.
 // Unlike lzf_d.c it decodes as a stream into an 8 KiB window, because the
 // block can be larger than the memory we want to spend on it.
-#include "stages/geometry/pcd.h"
+#include "stages/geometry/io/pcd.h"
 
 #include <algorithm>
 #include <array>
@@ -18,8 +18,8 @@
 #include <string_view>
 #include <vector>
 
-#include "stages/geometry/buffered_input.h"
-#include "stages/geometry/text_parse.h"
+#include "stages/geometry/core/buffered_input.h"
+#include "stages/geometry/core/text_parse.h"
 
 namespace pb {
 namespace {

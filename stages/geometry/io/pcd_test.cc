@@ -1,6 +1,6 @@
-#include "stages/geometry/pcd.h"
+#include "stages/geometry/io/pcd.h"
 
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <malloc.h>

@@ -1,4 +1,4 @@
-#include "stages/geometry/ply.h"
+#include "stages/geometry/io/ply.h"
 
 #include <algorithm>
 #include <array>
@@ -14,8 +14,8 @@
 #include <type_traits>
 #include <string_view>
 
-#include "stages/geometry/buffered_input.h"
-#include "stages/geometry/text_parse.h"
+#include "stages/geometry/core/buffered_input.h"
+#include "stages/geometry/core/text_parse.h"
 
 namespace pb {
 namespace {

@@ -1,12 +1,12 @@
-#include "stages/geometry/ptx.h"
+#include "stages/geometry/io/ptx.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
 #include <string_view>
 
-#include "stages/geometry/buffered_input.h"
-#include "stages/geometry/text_parse.h"
+#include "stages/geometry/core/buffered_input.h"
+#include "stages/geometry/core/text_parse.h"
 
 namespace pb {
 namespace {

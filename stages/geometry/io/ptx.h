@@ -55,7 +55,7 @@
 
 #include <string>
 
-#include "stages/geometry/scan_read.h"
+#include "stages/geometry/io/scan_read.h"
 
 namespace pb {
 

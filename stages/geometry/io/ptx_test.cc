@@ -1,6 +1,6 @@
-#include "stages/geometry/ptx.h"
+#include "stages/geometry/io/ptx.h"
 
-#include "stages/geometry/test_data.h"
+#include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/point_cloud.h"
+#include "stages/geometry/core/point_cloud.h"
 
 namespace pb {
 

@@ -1,6 +1,6 @@
 // XYZ/TXT/PTS reader; the formats are described in xyz.h. The PTS intensity
 // range (-2048..2047) follows Leica Cyclone's export documentation.
-#include "stages/geometry/xyz.h"
+#include "stages/geometry/io/xyz.h"
 
 #include <algorithm>
 #include <array>
@@ -13,8 +13,8 @@
 #include <string_view>
 #include <vector>
 
-#include "stages/geometry/buffered_input.h"
-#include "stages/geometry/text_parse.h"
+#include "stages/geometry/core/buffered_input.h"
+#include "stages/geometry/core/text_parse.h"
 
 namespace pb {
 namespace {

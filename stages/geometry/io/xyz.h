@@ -43,8 +43,8 @@
 
 #include <string>
 
-#include "engine/base/status.h"
-#include "stages/geometry/scan_read.h"
+#include "base/status.h"
+#include "stages/geometry/io/scan_read.h"
 
 namespace pb {
 

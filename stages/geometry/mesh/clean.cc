@@ -3,7 +3,7 @@
 // stitching: converting sets of polygons to manifold surfaces", IEEE TVCG
 // 7(2), 2001): corners of a vertex are joined across each manifold edge, and
 // each resulting class of corners becomes one vertex.
-#include "stages/geometry/mesh_clean.h"
+#include "stages/geometry/mesh/clean.h"
 
 #include <algorithm>
 #include <array>

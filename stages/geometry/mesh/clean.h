@@ -24,8 +24,8 @@
 
 #include <cstdint>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/mesh_clean.h"
+#include "stages/geometry/mesh/clean.h"
 
 #include <gtest/gtest.h>
 

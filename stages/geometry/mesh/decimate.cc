@@ -9,7 +9,7 @@
 //    degenerate faces, because the output must stay manifold;
 //  * the heap is lazy: an entry remembers the versions of its two vertices and
 //    is skipped when either changed since it was pushed.
-#include "stages/geometry/mesh_decimate.h"
+#include "stages/geometry/mesh/decimate.h"
 
 #include <algorithm>
 #include <array>

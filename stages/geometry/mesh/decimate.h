@@ -2,7 +2,7 @@
 // Simplification Using Quadric Error Metrics", SIGGRAPH 1997), restricted to
 // collapses that keep a 2-manifold mesh manifold.
 //
-// Input and output are triangle meshes (stages/geometry/mesh.h); the output
+// Input and output are triangle meshes (stages/geometry/core/mesh.h); the output
 // has the same origin and the same set of attributes as the input.
 //
 //  * Cost: each vertex carries the sum of the area-weighted plane quadrics of
@@ -44,8 +44,8 @@
 #include <cstdint>
 #include <functional>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/mesh_decimate.h"
+#include "stages/geometry/mesh/decimate.h"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 #include <utility>
 #include <vector>
 
-#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/synth/scene.h"
 
 namespace pb {
 namespace {

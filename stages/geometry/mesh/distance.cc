@@ -2,7 +2,7 @@
 // Ericson, "Real-Time Collision Detection", Morgan Kaufmann 2005, 5.1.5.
 // Area-uniform triangle sampling: Osada, Funkhouser, Chazelle, Dobkin,
 // "Shape distributions", ACM TOG 21(4), 2002, section 4.2.
-#include "stages/geometry/mesh_distance.h"
+#include "stages/geometry/mesh/distance.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -18,9 +18,9 @@
 #include <functional>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
-#include "stages/geometry/synth_scene.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
+#include "stages/geometry/synth/scene.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/mesh_distance.h"
+#include "stages/geometry/mesh/distance.h"
 
 #include <gtest/gtest.h>
 

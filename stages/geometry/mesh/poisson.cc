@@ -1,4 +1,4 @@
-#include "stages/geometry/poisson.h"
+#include "stages/geometry/mesh/poisson.h"
 
 #include <dlfcn.h>
 #include <unistd.h>
@@ -12,7 +12,7 @@
 #include <mutex>
 #include <string>
 
-#include "stages/geometry/poisson_module.h"
+#include "stages/geometry/mesh/poisson_module.h"
 
 #ifndef PB_POISSON_MODULE_DIR
 #define PB_POISSON_MODULE_DIR ""

@@ -19,9 +19,9 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
-#include "stages/geometry/point_cloud.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
+#include "stages/geometry/core/point_cloud.h"
 
 namespace pb {
 

@@ -8,9 +8,9 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/mesh.h"
-#include "stages/geometry/point_cloud.h"
-#include "stages/geometry/poisson.h"
+#include "stages/geometry/core/mesh.h"
+#include "stages/geometry/core/point_cloud.h"
+#include "stages/geometry/mesh/poisson.h"
 
 namespace pb {
 

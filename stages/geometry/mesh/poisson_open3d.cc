@@ -10,7 +10,7 @@
 #include <memory>
 #include <tuple>
 
-#include "stages/geometry/poisson_module.h"
+#include "stages/geometry/mesh/poisson_module.h"
 
 extern "C" __attribute__((visibility("default"))) bool pb_poisson_open3d_run_v1(
     pb::PoissonModuleCall* call) {

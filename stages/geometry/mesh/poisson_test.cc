@@ -1,4 +1,4 @@
-#include "stages/geometry/poisson.h"
+#include "stages/geometry/mesh/poisson.h"
 
 #include <gtest/gtest.h>
 
@@ -7,10 +7,10 @@
 #include <map>
 #include <utility>
 
-#include "stages/geometry/mesh_clean.h"
-#include "stages/geometry/mesh_distance.h"
-#include "stages/geometry/normals.h"
-#include "stages/geometry/synth_scanner.h"
+#include "stages/geometry/mesh/clean.h"
+#include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/points/normals.h"
+#include "stages/geometry/synth/scanner.h"
 
 namespace pb {
 namespace {

@@ -11,7 +11,7 @@
 // are single precision in the same order of operations, because FLIP's
 // reference values are only reproducible that way (this file is built with
 // -ffp-contract=off -fno-fast-math). Departure: the mean is summed in double.
-#include "stages/geometry/image_metrics.h"
+#include "stages/geometry/metrics/image_metrics.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -43,8 +43,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/image.h"
+#include "base/status.h"
+#include "stages/geometry/core/image.h"
 
 namespace pb {
 

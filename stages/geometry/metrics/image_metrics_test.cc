@@ -1,7 +1,7 @@
 // PSNR, SSIM, MS-SSIM and FLIP against the independent reference values of
 // issue 7 (official FLIP v1.6; a float64 SSIM agreeing with scikit-image to
 // 1e-13) and against closed-form cases.
-#include "stages/geometry/image_metrics.h"
+#include "stages/geometry/metrics/image_metrics.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>

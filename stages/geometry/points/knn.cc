@@ -6,7 +6,7 @@
 // vector quantization", DCC 1993 (as in nanoflann). Departure: splits are at
 // the median *count* (not the median of the spread), which keeps the tree
 // balanced and implicit, so no node pointers are stored.
-#include "stages/geometry/knn.h"
+#include "stages/geometry/points/knn.h"
 
 #include <tbb/parallel_invoke.h>
 

@@ -1,6 +1,6 @@
 // KnnIndex against brute force; statistical outlier removal and median
 // spacing, which are thin layers over it.
-#include "stages/geometry/knn.h"
+#include "stages/geometry/points/knn.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -13,8 +13,8 @@
 #include <random>
 #include <vector>
 
-#include "stages/geometry/outliers.h"
-#include "stages/geometry/spacing.h"
+#include "stages/geometry/points/outliers.h"
+#include "stages/geometry/points/spacing.h"
 
 namespace pb {
 namespace {

@@ -15,7 +15,7 @@
 // error over the gap to the middle eigenvalue, tiny for a surface; when the
 // gap is small (lines, blobs) cyclic Jacobi rotations (Golub & Van Loan,
 // section 8.5) take over: accurate there, but 4x slower.
-#include "stages/geometry/normals.h"
+#include "stages/geometry/points/normals.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/knn.h"
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 namespace {

@@ -1,4 +1,4 @@
-#include "stages/geometry/normals.h"
+#include "stages/geometry/points/normals.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -13,9 +13,9 @@
 #include <random>
 #include <vector>
 
-#include "stages/geometry/knn.h"
-#include "stages/geometry/outliers.h"
-#include "stages/geometry/spacing.h"
+#include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/outliers.h"
+#include "stages/geometry/points/spacing.h"
 
 namespace pb {
 namespace {

@@ -6,7 +6,7 @@
 // standard deviation, keep when mean distance <= threshold). Departure: the
 // global mean and deviation are summed sequentially in index order (two
 // passes, double precision) so the result never depends on the thread count.
-#include "stages/geometry/outliers.h"
+#include "stages/geometry/points/outliers.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/knn.h"
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 namespace {

@@ -1,7 +1,7 @@
 // Median nearest-neighbour spacing: exact 1-NN by kd-tree (knn.h) over a
 // deterministic subsample; the median (not the mean) so that duplicates and
 // sparse far-field points do not move it.
-#include "stages/geometry/spacing.h"
+#include "stages/geometry/points/spacing.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -13,7 +13,7 @@
 #include <string>
 #include <vector>
 
-#include "stages/geometry/knn.h"
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 namespace {

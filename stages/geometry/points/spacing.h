@@ -11,8 +11,8 @@
 
 #include <cstddef>
 
-#include "engine/base/status.h"
-#include "stages/geometry/point_cloud.h"
+#include "base/status.h"
+#include "stages/geometry/core/point_cloud.h"
 
 namespace pb {
 

@@ -1,4 +1,4 @@
-#include "stages/geometry/voxel_downsample.h"
+#include "stages/geometry/points/voxel_downsample.h"
 
 #include <algorithm>
 #include <cmath>

@@ -13,8 +13,8 @@
 // time, 16 bytes per input point of scratch memory.
 #pragma once
 
-#include "engine/base/status.h"
-#include "stages/geometry/point_cloud.h"
+#include "base/status.h"
+#include "stages/geometry/core/point_cloud.h"
 
 namespace pb {
 

@@ -6,7 +6,7 @@
 // ways that do not change pictures measurably: it shades every sample (SSAA,
 // with the LOD of the pixel footprint as MSAA would), and it has no far
 // plane. Built with -ffp-contract=off -fno-fast-math (CMakeLists.txt).
-#include "stages/geometry/render.h"
+#include "stages/geometry/render/render.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -81,10 +81,10 @@
 #include <string>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/image.h"
-#include "stages/geometry/mesh.h"
-#include "stages/geometry/synth_scene.h"
+#include "base/status.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/core/mesh.h"
+#include "stages/geometry/synth/scene.h"
 
 namespace pb {
 

@@ -1,6 +1,6 @@
 // The reference renderer: determinism, texture reproduction, normal maps,
 // z-buffer, near clipping, and ground truth against the rasterized truth mesh.
-#include "stages/geometry/render.h"
+#include "stages/geometry/render/render.h"
 
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
@@ -10,7 +10,7 @@
 #include <cstdlib>
 #include <numbers>
 
-#include "stages/geometry/tangents.h"
+#include "stages/geometry/core/tangents.h"
 
 namespace pb {
 namespace {

@@ -5,7 +5,7 @@
 // range noise, colors from a co-registered camera). Departures: no beam
 // divergence / mixed pixels at edges, no intensity falloff, no max range
 // (rooms are small), colors are the albedo (uniform white light).
-#include "stages/geometry/synth_scanner.h"
+#include "stages/geometry/synth/scanner.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

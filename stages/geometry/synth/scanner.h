@@ -27,9 +27,9 @@
 #include <functional>
 #include <vector>
 
-#include "engine/base/status.h"
-#include "stages/geometry/point_cloud.h"
-#include "stages/geometry/synth_scene.h"
+#include "base/status.h"
+#include "stages/geometry/core/point_cloud.h"
+#include "stages/geometry/synth/scene.h"
 
 namespace pb {
 

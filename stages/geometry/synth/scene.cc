@@ -5,7 +5,7 @@
 // NETower, room D31: brick walls, stone floors, openings). Departures: walls
 // have no thickness (no reveals in openings), relief is a displacement along
 // the base normal (see the header), and nothing exists outside the room.
-#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/synth/scene.h"
 
 #include <tbb/parallel_for.h>
 

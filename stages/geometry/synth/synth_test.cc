@@ -9,9 +9,9 @@
 #include <filesystem>
 #include <numbers>
 
-#include "stages/geometry/image.h"
-#include "stages/geometry/synth_scanner.h"
-#include "stages/geometry/synth_scene.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/synth/scanner.h"
+#include "stages/geometry/synth/scene.h"
 
 namespace pb {
 namespace {

@@ -10,6 +10,8 @@
 #include <fstream>
 #include <string>
 
+#include "base/testing/temp_dir.h"
+
 namespace pb::testing {
 
 // `$PB_SOURCE_DIR/../shared/data` (set by ctest), else /work/shared/data;
@@ -26,12 +28,7 @@ inline std::string SharedDataDir() {
 // A test with its own empty folder `dir_`, removed afterwards.
 class TempDirTest : public ::testing::Test {
  protected:
-  void SetUp() override {
-    std::string pattern = (std::filesystem::temp_directory_path() / "pb_test_XXXXXX").string();
-    ASSERT_NE(::mkdtemp(pattern.data()), nullptr);
-    dir_ = pattern;
-  }
-  void TearDown() override { std::filesystem::remove_all(dir_); }
+  void SetUp() override { dir_ = temp_.path(); }
 
   std::string Path(const std::string& name) const { return (dir_ / name).string(); }
   // Writes `bytes` to dir_/name and returns the path.
@@ -40,6 +37,7 @@ class TempDirTest : public ::testing::Test {
     return Path(name);
   }
 
+  ::pb::testing::TempDir temp_;
   std::filesystem::path dir_;
 };
 

@@ -2,7 +2,7 @@
 // and its sources (Blender Smart UV Project for the chart criterion, Sander
 // et al. 2001 for stretch, Jylänki 2010 for the skyline packer, MeshLab's
 // trivial per-triangle parametrization for the baseline).
-#include "stages/geometry/uv_atlas.h"
+#include "stages/geometry/uv/atlas.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -17,8 +17,8 @@
 #include <string>
 #include <utility>
 
-#include "stages/geometry/uv_charts.h"
-#include "stages/geometry/uv_pack.h"
+#include "stages/geometry/uv/charts.h"
+#include "stages/geometry/uv/pack.h"
 
 namespace pb {
 namespace {

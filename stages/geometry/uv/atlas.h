@@ -48,8 +48,8 @@
 #include <cstdint>
 #include <functional>
 
-#include "engine/base/status.h"
-#include "stages/geometry/mesh.h"
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

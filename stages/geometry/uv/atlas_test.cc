@@ -1,4 +1,4 @@
-#include "stages/geometry/uv_atlas.h"
+#include "stages/geometry/uv/atlas.h"
 
 #include <gtest/gtest.h>
 
@@ -9,10 +9,10 @@
 #include <map>
 #include <string>
 
-#include "stages/geometry/image.h"
-#include "stages/geometry/ply.h"
-#include "stages/geometry/synth_scene.h"
-#include "stages/geometry/uv_pack.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/uv/pack.h"
 
 namespace pb {
 namespace {

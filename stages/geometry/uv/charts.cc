@@ -10,7 +10,7 @@
 // surfaces; (2) a chart whose projection folds or overlaps itself is split in
 // two (breadth-first halves) until none does. The minimal-area rectangle uses
 // the fact that it has a side on the convex hull (Freeman & Shapira 1975).
-#include "stages/geometry/uv_charts.h"
+#include "stages/geometry/uv/charts.h"
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>

@@ -7,7 +7,7 @@
 #include <functional>
 #include <vector>
 
-#include "stages/geometry/mesh.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 

@@ -1,6 +1,6 @@
 // Skyline bottom-left rectangle packing (Jylänki 2010, SKYLINE-BL, with
 // quarter turns) and a bisection on the uniform chart scale.
-#include "stages/geometry/uv_pack.h"
+#include "stages/geometry/uv/pack.h"
 
 #include <algorithm>
 #include <cmath>

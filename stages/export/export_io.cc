@@ -1,4 +1,4 @@
-#include "stages/export/export_stages.h"
+#include "stages/builtin.h"
 
 #include <algorithm>
 #include <cassert>
@@ -8,9 +8,9 @@
 #include <iterator>
 #include <string>
 
-#include "stages/geometry/image.h"
-#include "stages/geometry/text_parse.h"
-#include "stages/mesh/mesh_io.h"
+#include "stages/geometry/core/image.h"
+#include "stages/geometry/core/text_parse.h"
+#include "stages/mesh_io.h"
 #include "stages/params.h"
 
 namespace pb {

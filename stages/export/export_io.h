@@ -1,6 +1,6 @@
 // The export family: `export.gltf` (model.glb) and `export.obj` (model.obj +
 // model.mtl + color.png + normal.png), from a mesh and optional baked color
-// and normal maps (stages/geometry/gltf.h, obj.h).
+// and normal maps (stages/geometry/io/gltf.h, obj.h).
 #pragma once
 
 #include <cstdint>
@@ -8,9 +8,9 @@
 #include <string_view>
 #include <vector>
 
-#include "engine/base/status.h"
+#include "base/status.h"
 #include "engine/stage.h"
-#include "stages/geometry/mesh.h"
+#include "stages/geometry/core/mesh.h"
 
 namespace pb {
 
