@@ -1,7 +1,6 @@
-#include "stages/builtin.h"
+#include "stages/export/export_io.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <fstream>
@@ -14,13 +13,6 @@
 #include "stages/params.h"
 
 namespace pb {
-
-void RegisterExportStages(StageRegistry& registry) {
-  for (StageType type : {GltfExportStage(), ObjExportStage()}) {
-    [[maybe_unused]] const Status status = registry.Register(std::move(type));
-    assert(status.ok());
-  }
-}
 
 namespace {
 

@@ -1,6 +1,6 @@
-// The export family: `export.gltf` (model.glb) and `export.obj` (model.obj +
-// model.mtl + color.png + normal.png), from a mesh and optional baked color
-// and normal maps (stages/geometry/io/gltf.h, obj.h).
+// What the export family (`export.gltf`: model.glb; `export.obj`: model.obj +
+// model.mtl + color.png + normal.png) shares: reading a mesh and optional
+// baked color and normal maps (stages/geometry/io/gltf.h, obj.h).
 #pragma once
 
 #include <cstdint>
@@ -13,11 +13,6 @@
 #include "stages/geometry/core/mesh.h"
 
 namespace pb {
-
-void RegisterExportStages(StageRegistry& registry);
-
-StageType GltfExportStage();
-StageType ObjExportStage();
 
 // Shared by the export stages: the PNG bytes for texture input `port`, empty
 // when the port is not connected. An 8-bit PNG is passed through byte for
