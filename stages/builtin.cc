@@ -12,7 +12,8 @@ constexpr StageType (*kBuiltinStages[])() = {
     OutliersStage,     NormalsStage,      SpacingStage,          PoissonStage,
     DecimateStage,     CleanStage,        UnwrapStage,           VertexColorsBakeStage,
     FromMeshBakeStage, FromPointsBakeStage, GltfExportStage,     ObjExportStage,
-    FramesStage,       GeometryMetricsStage, ImageMetricsStage,  FpsStage,
+    FramesStage,       SplatsStage,       GeometryMetricsStage, ImageMetricsStage,
+    FpsStage,
 };
 
 }  // namespace

@@ -48,6 +48,8 @@ StageType ObjExportStage();
 
 // render.frames: the deterministic CPU reference renderer (docs/render.md).
 StageType FramesStage();
+// render.splats: the colored scan drawn as splats (what the scanner saw).
+StageType SplatsStage();
 
 // metrics.geometry: distances between a mesh and the truth; metrics.image:
 // PSNR, SSIM, MS-SSIM, FLIP between two sets of frames.

@@ -19,6 +19,7 @@
 #include "stages/geometry/render/render.h"
 #include "stages/geometry/synth/scene.h"
 #include "stages/params.h"
+#include "stages/render/viewpoints.h"
 #include "stages/builtin.h"
 
 namespace pb {
@@ -26,30 +27,12 @@ namespace {
 
 constexpr const char* kId = "render.frames";
 
-// The viewpoint items repeat schemas/scene.schema.json so that a workflow
-// can pass `viewpoints: ${scene.viewpoints}` unchanged.
 constexpr const char* kSchema = R"({
   "type": "object",
   "additionalProperties": false,
   "required": ["viewpoints"],
   "properties": {
-    "viewpoints": {
-      "type": "array",
-      "minItems": 1,
-      "description": "Views to render, as a scene's `viewpoints` (pass ${scene.viewpoints}): eye and target in scene coordinates (meters), optional up (default [0, 0, 1]), vertical fov_deg (default 60) and name (default view<N>, N counted from 1).",
-      "items": {
-        "type": "object",
-        "required": ["eye", "target"],
-        "additionalProperties": false,
-        "properties": {
-          "name": { "type": "string", "description": "Frame name, unique; also the PNG's name." },
-          "eye": { "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": "Camera position, meters." },
-          "target": { "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": "Point looked at, meters." },
-          "up": { "type": "array", "items": { "type": "number" }, "minItems": 3, "maxItems": 3, "description": "Up direction (default [0, 0, 1])." },
-          "fov_deg": { "type": "number", "exclusiveMinimum": 0, "exclusiveMaximum": 180, "description": "Vertical field of view, degrees (default 60)." }
-        }
-      }
-    },
+    "viewpoints": VIEWPOINTS_SCHEMA,
     "size": {
       "type": "integer",
       "minimum": 16,
@@ -106,85 +89,6 @@ struct Options {
   int truth_supersample = 4;
 };
 
-Expected<std::array<double, 3>> Vector3(const nlohmann::json& item, const char* key, size_t index) {
-  const std::string where =
-      std::string(kId) + ": viewpoints[" + std::to_string(index) + "]." + key + ": ";
-  if (!item.contains(key)) return Status::Invalid(where + "missing");
-  const nlohmann::json& value = item[key];
-  if (!value.is_array() || value.size() != 3)
-    return Status::Invalid(where + "must be an array of 3 numbers");
-  std::array<double, 3> out{};
-  for (size_t k = 0; k < 3; ++k) {
-    if (!value[k].is_number()) return Status::Invalid(where + "must be an array of 3 numbers");
-    out[k] = value[k].get<double>();
-    if (!std::isfinite(out[k])) return Status::Invalid(where + "must be finite");
-  }
-  return out;
-}
-
-// Letters, digits, '-', '_' and '.' are kept; anything else becomes '_'.
-std::string FileStem(const std::string& name) {
-  std::string stem = name;
-  for (char& c : stem)
-    if (!std::isalnum(static_cast<unsigned char>(c)) && c != '-' && c != '_' && c != '.') c = '_';
-  return stem;
-}
-
-struct View {
-  FrameEntry entry;
-  RenderCamera camera;
-};
-
-Expected<std::vector<View>> ReadViewpoints(const StageContext& ctx, int size) {
-  if (!ctx.params().contains("viewpoints"))
-    return Status::Invalid(std::string(kId) + ": parameter 'viewpoints' is missing");
-  const nlohmann::json& list = ctx.params()["viewpoints"];
-  if (!list.is_array() || list.empty())
-    return Status::Invalid(std::string(kId) + ": parameter 'viewpoints' must be a non-empty array");
-  std::vector<View> views;
-  std::set<std::string> names, files;
-  for (size_t i = 0; i < list.size(); ++i) {
-    const nlohmann::json& item = list[i];
-    const std::string where = std::string(kId) + ": viewpoints[" + std::to_string(i) + "]";
-    if (!item.is_object()) return Status::Invalid(where + ": must be an object");
-    for (const auto& [key, value] : item.items())
-      if (key != "name" && key != "eye" && key != "target" && key != "up" && key != "fov_deg")
-        return Status::Invalid(where + ": unknown key '" + key + "'");
-    View view;
-    view.camera.size = size;
-    std::string name = "view" + std::to_string(i + 1);
-    if (item.contains("name")) {
-      if (!item["name"].is_string() || item["name"].get<std::string>().empty())
-        return Status::Invalid(where + ".name: must be a non-empty string");
-      name = item["name"].get<std::string>();
-    }
-    if (!names.insert(name).second) return Status::Invalid(where + ": duplicate name '" + name + "'");
-    FrameViewpoint viewpoint;
-    PB_ASSIGN_OR_RETURN(viewpoint.eye, Vector3(item, "eye", i));
-    PB_ASSIGN_OR_RETURN(viewpoint.target, Vector3(item, "target", i));
-    view.camera.eye = viewpoint.eye;
-    view.camera.target = viewpoint.target;
-    if (item.contains("up")) {
-      PB_ASSIGN_OR_RETURN(view.camera.up, Vector3(item, "up", i));
-      viewpoint.up = view.camera.up;
-    }
-    if (item.contains("fov_deg")) {
-      if (!item["fov_deg"].is_number()) return Status::Invalid(where + ".fov_deg: must be a number");
-      view.camera.fov_deg = item["fov_deg"].get<double>();
-      if (!(view.camera.fov_deg > 0 && view.camera.fov_deg < 180))
-        return Status::Invalid(where + ".fov_deg: must be in (0, 180)");
-      viewpoint.fov_deg = view.camera.fov_deg;
-    }
-    std::string stem = FileStem(name);
-    std::string file = stem + ".png";
-    for (int k = 2; files.count(file) > 0; ++k) file = stem + "_" + std::to_string(k) + ".png";
-    files.insert(file);
-    view.entry = FrameEntry{name, file, viewpoint};
-    views.push_back(std::move(view));
-  }
-  return views;
-}
-
 Expected<Options> ReadOptions(const StageContext& ctx) {
   Options options;
   PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", 1024, 16, 8192));
@@ -232,7 +136,7 @@ Expected<MipTexture> ReadTexture(StageContext& ctx, const char* port, bool norma
 
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const Options options, ReadOptions(ctx));
-  PB_ASSIGN_OR_RETURN(const std::vector<View> views, ReadViewpoints(ctx, options.size));
+  PB_ASSIGN_OR_RETURN(const std::vector<View> views, ReadViewpoints(ctx, kId, options.size));
   const bool has_mesh = ctx.has_input("mesh"), has_truth = ctx.has_input("truth");
   if (has_mesh == has_truth)
     return Status::Invalid(std::string(kId) + ": connect exactly one of 'mesh' and 'truth' (got " +
@@ -347,7 +251,7 @@ StageType FramesStage() {
       "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>).\n\n"
       "Counters: `frames`, `triangles` (faces drawn per frame; 0 for the analytic truth), "
       "`pixels` (over all frames). Phases: `io`, `compute`.";
-  type.params_schema = kSchema;
+  type.params_schema = WithViewpointsSchema(kSchema);
   type.inputs = {
       {"mesh", "mesh", "The mesh to draw (mesh.ply; uvs and tangents for the maps).", true},
       {"color", "image", "Color map, sRGB (color.png), addressed by the mesh's uvs.", true},

@@ -222,5 +222,69 @@ TEST_F(RenderStagesTest, ClearErrors) {
   EXPECT_NE(error(nlohmann::json{{"size", 32}}, mesh_only).find("'viewpoints' is missing"), std::string::npos);
 }
 
+// render.splats: a grid of colored points where the quad of Quad() is, at
+// the same georeferenced origin.
+PointCloud QuadPoints() {
+  PointCloud cloud;
+  cloud.origin = {300000.0, 5000000.0, 100.0};
+  for (int j = 0; j <= 40; ++j)
+    for (int i = 0; i <= 40; ++i) {
+      cloud.positions.insert(cloud.positions.end(), {-1.0f + 0.05f * i, 5.0f, -1.0f + 0.05f * j});
+      cloud.colors.insert(cloud.colors.end(), {uint8_t(i * 6), 90, uint8_t(j * 6)});
+    }
+  return cloud;
+}
+
+TEST_F(RenderStagesTest, SplatsIsWellFormed) {
+  const StageType* type = registry_.Find("render.splats");
+  ASSERT_NE(type, nullptr);
+  const nlohmann::json schema = CheckedSchema(*type);
+  EXPECT_EQ(schema["properties"]["size"]["default"], 1024);
+  EXPECT_EQ(schema["properties"]["supersample"]["default"], 2);
+  EXPECT_EQ(schema["properties"]["k"]["default"], 8);
+  EXPECT_EQ(schema["properties"]["viewpoints"]["items"]["required"], nlohmann::json::array({"eye", "target"}));
+  ASSERT_EQ(type->inputs.size(), 1u);
+  EXPECT_FALSE(type->inputs[0].optional);
+  ASSERT_EQ(type->outputs.size(), 1u);
+  EXPECT_EQ(type->outputs[0].type, "frames");
+}
+
+TEST_F(RenderStagesTest, SplatsWriteTheSameFramesAsRenderFramesWouldNameThem) {
+  auto render = [&](int threads, const std::string& out) {
+    std::filesystem::create_directories(dir_ / out);
+    FakeContext ctx(dir_ / out, Params(Viewpoints()), threads);
+    ctx.AddInput("points", "points", WriteInputPoints("grid", QuadPoints()));
+    EXPECT_TRUE(Run("render.splats", ctx).ok());
+    EXPECT_EQ(ctx.counters_["points"], 41 * 41);
+    EXPECT_EQ(ctx.meta_["frames"]["render"]["source"], "splats");
+    EXPECT_EQ(ctx.meta_["frames"]["render"]["lighting"], "unlit");
+    // Spacing 5 cm, the 8th neighbour a diagonal: radius 0.75 * 7.07 cm.
+    EXPECT_NEAR(ctx.counters_["median_radius_m"], 0.75 * 0.05 * std::sqrt(2.0), 1e-6);
+    EXPECT_TRUE(ctx.phases_.count("spacing") && ctx.phases_.count("compute"));
+    return Frames(ctx).value();
+  };
+  const FrameSet one = render(1, "a"), two = render(2, "b");
+  ASSERT_EQ(one.frames.size(), 2u);
+  EXPECT_EQ(one.frames[0].entry.name, "front");
+  EXPECT_EQ(one.frames[1].entry.file, "view2.png");
+  for (size_t i = 0; i < one.frames.size(); ++i) EXPECT_EQ(one.frames[i].image.data, two.frames[i].image.data);
+  // Where render.frames draws the quad, the splats cover the same middle.
+  const Image& front = one.frames[0].image;
+  EXPECT_EQ(front.at_u8(16, 16, 3), 255);
+  EXPECT_EQ(front.at_u8(16, 16, 1), 90);
+  EXPECT_EQ(front.at_u8(0, 0, 3), 0);
+}
+
+TEST_F(RenderStagesTest, SplatsReportBadInput) {
+  FakeContext ctx(dir_, Params(Viewpoints()));
+  PointCloud two;
+  two.positions = {0, 0, 0, 1, 1, 1};
+  ctx.AddInput("points", "points", WriteInputPoints("two", two));
+  const Status status = Run("render.splats", ctx);
+  EXPECT_FALSE(status.ok());
+  EXPECT_NE(status.message().find("render.splats"), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find("k = 8"), std::string::npos) << status.message();
+}
+
 }  // namespace
 }  // namespace pb

@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstddef>
+#include <vector>
 
 #include "base/status.h"
 #include "stages/geometry/core/point_cloud.h"
@@ -24,5 +25,16 @@ struct SpacingOptions {
 // Median nearest-neighbour distance in meters. Status::Invalid if the cloud
 // has fewer than 2 points or a non-finite coordinate (naming the point).
 Expected<double> MedianSpacing(const PointCloud& cloud, const SpacingOptions& options = {});
+
+// Local spacing: for every point, the distance in meters to its k-th nearest
+// other point (exact k-NN, knn.h; duplicates count at distance 0). Where the
+// scan is denser or sparser the value follows it, unlike the median: what a
+// splat radius or a "near the scan" threshold needs. With a structured scan
+// the k-th neighbour reaches across the sparser of the two scan directions
+// (k = 8 on a square grid of step h gives h * sqrt(2)). Deterministic for any
+// thread count (run inside a tbb::task_arena to limit threads).
+// Status::Invalid if k < 1, the cloud has at most k points or a non-finite
+// coordinate.
+Expected<std::vector<float>> LocalSpacing(const PointCloud& cloud, int k);
 
 }  // namespace pb

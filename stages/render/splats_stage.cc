@@ -1,0 +1,212 @@
+// render.splats: draws the colored scan itself from the scene's viewpoints
+// (stages/geometry/render/splat.h), splat radii from the local point spacing
+// (stages/geometry/points/spacing.h), and writes a `frames` artifact like
+// render.frames: the reference of what the scanner saw.
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/stage.h"
+#include "stages/builtin.h"
+#include "stages/geometry/io/frames.h"
+#include "stages/geometry/points/spacing.h"
+#include "stages/geometry/render/splat.h"
+#include "stages/params.h"
+#include "stages/points_io.h"
+#include "stages/render/viewpoints.h"
+
+namespace pb {
+namespace {
+
+constexpr const char* kId = "render.splats";
+
+constexpr const char* kSchema = R"({
+  "type": "object",
+  "additionalProperties": false,
+  "required": ["viewpoints"],
+  "properties": {
+    "viewpoints": VIEWPOINTS_SCHEMA,
+    "size": {
+      "type": "integer",
+      "minimum": 16,
+      "maximum": 8192,
+      "default": 1024,
+      "description": "Width and height of every frame, pixels (use render.frames' size to compare with its frames)."
+    },
+    "supersample": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 8,
+      "default": 2,
+      "description": "Samples per pixel along each axis, box-averaged in linear light, as render.frames."
+    },
+    "k": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 64,
+      "default": 8,
+      "description": "Local spacing of a point: the distance to its k-th nearest other point. 8 reaches the diagonal neighbours of a structured scan's grid (sqrt(2) steps), so the disks close the grid in its sparser direction too."
+    },
+    "radius_scale": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 0.75,
+      "description": "Splat radius = radius_scale * local spacing, meters. 0.75 * sqrt(2) steps covers a square grid without gaps (it needs 0.71 steps) with little blur; larger closes sparser scans and blurs more."
+    },
+    "depth_tolerance": {
+      "type": "number",
+      "minimum": 0,
+      "default": 2,
+      "description": "Splats up to this many radii (of the front splat at the sample) behind the front splat blend with it; farther ones are hidden. Large enough for one surface seen obliquely, small against the distance between surfaces."
+    },
+    "max_radius_px": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 32,
+      "description": "Largest splat radius on screen, output pixels (points just in front of the eye would otherwise cover the frame)."
+    },
+    "background": {
+      "type": "array",
+      "items": { "type": "integer", "minimum": 0, "maximum": 255 },
+      "minItems": 3,
+      "maxItems": 3,
+      "default": [0, 0, 0],
+      "description": "sRGB color where no splat is (alpha 0 there)."
+    }
+  }
+})";
+
+struct Options {
+  SplatOptions splat;
+  int size = 0;
+  int k = 0;
+  double radius_scale = 0;
+};
+
+Expected<Options> ReadOptions(const StageContext& ctx) {
+  Options options;
+  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", 1024, 16, 8192));
+  PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", 2, 1, 8));
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 8, 1, 64));
+  PB_ASSIGN_OR_RETURN(options.radius_scale, NumberParam(ctx, kId, "radius_scale", 0.75));
+  PB_ASSIGN_OR_RETURN(options.splat.depth_tolerance, NumberParam(ctx, kId, "depth_tolerance", 2.0));
+  PB_ASSIGN_OR_RETURN(options.splat.max_radius_px, NumberParam(ctx, kId, "max_radius_px", 32.0));
+  if (!(options.radius_scale > 0)) return Status::Invalid(std::string(kId) + ": 'radius_scale' must be > 0");
+  if (!(options.splat.depth_tolerance >= 0))
+    return Status::Invalid(std::string(kId) + ": 'depth_tolerance' must be >= 0");
+  if (!(options.splat.max_radius_px > 0)) return Status::Invalid(std::string(kId) + ": 'max_radius_px' must be > 0");
+  if (ctx.params().contains("background")) {
+    const nlohmann::json& bg = ctx.params()["background"];
+    if (!bg.is_array() || bg.size() != 3)
+      return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
+    for (size_t c = 0; c < 3; ++c) {
+      if (!bg[c].is_number_integer() || bg[c].get<int64_t>() < 0 || bg[c].get<int64_t>() > 255)
+        return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
+      options.splat.background[c] = uint8_t(bg[c].get<int64_t>());
+    }
+  }
+  options.size = int(size);
+  options.splat.supersample = int(supersample);
+  options.k = int(k);
+  return options;
+}
+
+Status Run(StageContext& ctx) {
+  PB_ASSIGN_OR_RETURN(const Options options, ReadOptions(ctx));
+  PB_ASSIGN_OR_RETURN(const std::vector<View> views, ReadViewpoints(ctx, kId, options.size));
+  PB_ASSIGN_OR_RETURN(const InputPoints input, ReadInputPoints(ctx, kId, 0.2));
+  const PointCloud& cloud = input.cloud;
+
+  tbb::task_arena arena(std::max(1, ctx.threads()));
+  std::vector<float> radius;
+  {
+    PB_PHASE(ctx, "spacing");
+    Expected<std::vector<float>> spacing = Status::Internal("not run");
+    arena.execute([&] { spacing = LocalSpacing(cloud, options.k); });
+    if (!spacing.ok()) return spacing.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
+    radius = std::move(*spacing);
+    for (float& r : radius) r = float(r * options.radius_scale);
+  }
+  ctx.progress(0.35);
+
+  FrameSet frames;
+  frames.width = frames.height = options.size;
+  size_t covered_samples = 0, drawn = 0;
+  {
+    PB_PHASE(ctx, "compute");
+    for (size_t i = 0; i < views.size(); ++i) {
+      Expected<Image> image = Status::Internal("not run");
+      SplatStats stats;
+      arena.execute([&] { image = RenderSplats(cloud, radius, views[i].camera, options.splat, &stats); });
+      if (!image.ok())
+        return image.status().WithContext(std::string(kId) + ": viewpoint '" + views[i].entry.name + "'");
+      covered_samples += stats.covered_samples;
+      drawn += stats.drawn;
+      frames.frames.push_back(Frame{views[i].entry, std::move(*image)});
+      ctx.progress(0.35 + 0.55 * double(i + 1) / double(views.size()));
+    }
+  }
+  {
+    PB_PHASE(ctx, "io");
+    PB_RETURN_IF_ERROR(WriteFrames(frames, [&ctx](const std::string& file) {
+      return ctx.output_path("frames", file);
+    }));
+  }
+  std::vector<float> sorted = radius;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  const double median_radius_m = sorted[sorted.size() / 2];
+  const double pixels = double(views.size()) * options.size * options.size;
+  const int ss = options.splat.supersample;
+  nlohmann::json meta = ctx.input("points").meta;
+  if (!meta.is_object()) meta = nlohmann::json::object();
+  meta["kind"] = "frames";
+  meta["render"] = {{"source", "splats"},
+                    {"size", options.size},
+                    {"supersample", ss},
+                    {"lighting", "unlit"},
+                    {"k", options.k},
+                    {"radius_scale", options.radius_scale},
+                    {"median_radius_m", median_radius_m},
+                    {"coverage", covered_samples / (pixels * ss * ss)}};
+  ctx.set_output_meta("frames", std::move(meta));
+  ctx.counter("frames", double(views.size()));
+  ctx.counter("points", double(cloud.size()));
+  ctx.counter("splats_drawn", double(drawn));
+  ctx.counter("median_radius_m", median_radius_m);
+  ctx.counter("pixels", pixels);
+  ctx.progress(1.0);
+  return Status::Ok();
+}
+
+}  // namespace
+
+StageType SplatsStage() {
+  StageType type;
+  type.id = kId;
+  type.version = 1;
+  type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
+  type.doc =
+      "Draws every point of `points` as a disk facing the camera, of radius `radius_scale` * its "
+      "local spacing (the distance to its `k`-th nearest other point), with the camera, sample grid, "
+      "resolve and encoding of render.frames (docs/render.md): `supersample`^2 samples per pixel "
+      "averaged in linear light, 8-bit sRGB RGBA, alpha 255 where a splat covers any sample of the "
+      "pixel, 0 elsewhere. Per sample the nearest splat wins, and every splat within "
+      "`depth_tolerance` radii behind it blends with it (weight 1 - (d/r)^2 + 1/16), so one surface "
+      "gives a smooth color while a surface behind it stays hidden. Unlit: the scan's colors were "
+      "lit when it was scanned; compare these frames with render.frames at `lighting: unlit`. "
+      "Points without colors are gray (180). The bytes are the same for any thread count.\n\n"
+      "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>), the same names and "
+      "files as render.frames with the same viewpoints, so metrics.image compares them.\n\n"
+      "Counters: `frames`, `points`, `splats_drawn` (over all frames), `median_radius_m`, `pixels`. "
+      "Phases: `io`, `spacing`, `compute`.";
+  type.params_schema = WithViewpointsSchema(kSchema);
+  type.inputs = {{"points", "points", "The colored scan (points.ply).", false}};
+  type.outputs = {{"frames", "frames", "One 8-bit sRGB RGBA PNG per viewpoint, and frames.json.", false}};
+  type.run = &Run;
+  return type;
+}
+
+}  // namespace pb
