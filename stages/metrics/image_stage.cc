@@ -6,6 +6,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <vector>
 
 #include "stages/geometry/io/frames.h"
 #include "stages/geometry/metrics/image_metrics.h"
@@ -16,6 +18,14 @@ namespace pb {
 namespace {
 
 constexpr const char* kId = "metrics.image";
+
+// The table's columns after `frame`: whole-frame metrics (version 1's), then
+// the same on pixels covered in both frames, then the coverage figures
+// (image_metrics.h, CompareCovered).
+constexpr const char* kColumns[] = {
+    "psnr_db",         "ssim_luma",         "ssim_rgb",         "ms_ssim_luma",         "flip_mean",
+    "covered_psnr_db", "covered_ssim_luma", "covered_ssim_rgb", "covered_ms_ssim_luma", "covered_flip_mean",
+    "coverage_iou",    "hole_px",           "enclosed_hole_px", "hole_fraction",        "compared_px"};
 
 // The ppd default is FLIP's own (FlipDefaultPpd(), checked by a test).
 constexpr const char* kSchema = R"({
@@ -77,11 +87,12 @@ Status Run(StageContext& ctx) {
   ctx.progress(0.1);
 
   Table table;
-  table.columns = {"frame", "psnr_db", "ssim_luma", "ssim_rgb", "ms_ssim_luma", "flip_mean"};
-  FrameSet maps;
-  maps.width = test.width;
-  maps.height = test.height;
-  double sums[5] = {0, 0, 0, 0, 0};
+  table.columns = {"frame"};
+  for (const char* name : kColumns) table.columns.push_back(name);
+  FrameSet maps, covered_maps;
+  maps.width = covered_maps.width = test.width;
+  maps.height = covered_maps.height = test.height;
+  std::vector<double> sums(std::size(kColumns), 0.0);
   {
     PB_PHASE(ctx, "compute");
     tbb::task_arena arena(std::max(1, ctx.threads()));
@@ -90,18 +101,40 @@ Status Run(StageContext& ctx) {
       const Frame& ref = *reference.find(frame.entry.name);
       ImageMetricsOptions options;
       options.flip_ppd = ppd;
-      FlipResult flip;
+      FlipResult flip, covered_flip;
       Expected<ImageMetrics> m = Status::Internal("not run");
-      arena.execute([&] { m = CompareImages(ref.image, frame.image, options, &flip); });
+      Expected<CoveredComparison> c = Status::Internal("not run");
+      arena.execute([&] {
+        m = CompareImages(ref.image, frame.image, options, &flip);
+        if (m.ok()) c = CompareCovered(ref.image, frame.image, options, &covered_flip);
+      });
       if (!m.ok()) return m.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
-      const double values[5] = {m->psnr_db, m->ssim_luma, m->ssim_rgb, m->ms_ssim_luma, m->flip_mean};
+      if (!c.ok()) return c.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
+      const CoverageStats& cov = c->coverage;
+      const double values[] = {m->psnr_db,
+                               m->ssim_luma,
+                               m->ssim_rgb,
+                               m->ms_ssim_luma,
+                               m->flip_mean,
+                               c->metrics.psnr_db,
+                               c->metrics.ssim_luma,
+                               c->metrics.ssim_rgb,
+                               c->metrics.ms_ssim_luma,
+                               c->metrics.flip_mean,
+                               cov.iou,
+                               double(cov.hole_px),
+                               double(cov.enclosed_hole_px),
+                               cov.hole_fraction,
+                               double(cov.compared_px)};
+      static_assert(std::size(values) == std::size(kColumns));
       std::vector<TableValue> row = {frame.entry.name};
-      for (int k = 0; k < 5; ++k) {
+      for (size_t k = 0; k < std::size(values); ++k) {
         row.emplace_back(values[k]);
         sums[k] += values[k];
       }
       table.rows.push_back(std::move(row));
       maps.frames.push_back(Frame{frame.entry, FlipErrorColorMap(flip)});
+      covered_maps.frames.push_back(Frame{frame.entry, FlipErrorColorMap(covered_flip)});
       ctx.progress(0.1 + 0.8 * double(i + 1) / double(test.frames.size()));
     }
   }
@@ -112,17 +145,19 @@ Status Run(StageContext& ctx) {
 
   ctx.counter("frames", n);
   ctx.counter("pixels_per_frame", double(test.width) * double(test.height));
-  // An identical frame makes the mean PSNR infinite; the run record holds
-  // finite numbers only, so that counter is left out then.
-  if (std::isfinite(sums[0] / n)) ctx.counter("psnr_db", sums[0] / n);
-  const char* names[5] = {"psnr_db", "ssim_luma", "ssim_rgb", "ms_ssim_luma", "flip_mean"};
-  for (int k = 1; k < 5; ++k)
-    if (std::isfinite(sums[k] / n)) ctx.counter(names[k], sums[k] / n);
+  // An identical frame makes the mean PSNR infinite (and a frame with no
+  // pixel covered in both makes the covered means NaN); the run record holds
+  // finite numbers only, so such counters are left out.
+  for (size_t k = 0; k < std::size(kColumns); ++k)
+    if (std::isfinite(sums[k] / n)) ctx.counter(kColumns[k], sums[k] / n);
   {
     PB_PHASE(ctx, "io");
     PB_RETURN_IF_ERROR(WriteTable(ctx.output_path("table", "table.json"), table));
     PB_RETURN_IF_ERROR(WriteFrames(maps, [&ctx](const std::string& file) {
       return ctx.output_path("flip", file);
+    }));
+    PB_RETURN_IF_ERROR(WriteFrames(covered_maps, [&ctx](const std::string& file) {
+      return ctx.output_path("flip_covered", file);
     }));
   }
   ctx.set_output_meta("table", {{"kind", "image_metrics"}, {"ppd", ppd}, {"frames", n}});
@@ -130,7 +165,9 @@ Status Run(StageContext& ctx) {
   if (!flip_meta.is_object()) flip_meta = nlohmann::json::object();
   flip_meta["kind"] = "flip_error_maps";
   flip_meta["ppd"] = ppd;
-  ctx.set_output_meta("flip", std::move(flip_meta));
+  ctx.set_output_meta("flip", flip_meta);
+  flip_meta["kind"] = "flip_error_maps_covered";
+  ctx.set_output_meta("flip_covered", std::move(flip_meta));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -140,32 +177,46 @@ Status Run(StageContext& ctx) {
 StageType ImageMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;
   type.summary = "Image quality of rendered frames against reference frames: PSNR, SSIM, MS-SSIM, FLIP";
   type.doc =
       "Compares every frame of `frames` with the frame of the same name in `reference` (a frame "
-      "missing on either side, or sets of different sizes, is an error naming it). All pixels "
-      "count; an alpha channel is ignored. Metrics (docs/metrics.md): PSNR in dB over R, G, B "
+      "missing on either side, or sets of different sizes, is an error naming it), twice: over the "
+      "whole frame (all pixels count, alpha ignored; version 1's columns) and on the pixels covered "
+      "in both frames (alpha > 0), with the coverage reported apart, so that a silhouette "
+      "difference or a hole is named as such instead of drowning the texture comparison. Metrics (docs/metrics.md): PSNR in dB over R, G, B "
       "(MAX 255; identical frames give infinity, written as null); SSIM (Wang et al. 2004, 11x11 "
       "Gaussian sigma 1.5, K1 0.01, K2 0.03, valid-region mean) on luma Y = 0.299 R + 0.587 G + "
       "0.114 B (`ssim_luma`) and as the mean of R, G, B (`ssim_rgb`); MS-SSIM on luma (5 scales, "
       "weights 0.0448 0.2856 0.3001 0.2363 0.1333; null below 176 px); FLIP (Andersson et al. "
       "2020, LDR, NVIDIA FLIP v1.6) at `ppd` pixels per degree. The paper's HDR-VDP-2 is not "
       "computed.\n\n"
+      "Covered pixels (docs/metrics.md): `compared_px` are the pixels covered in both frames whose "
+      "4 neighbours are too (supersampled edge pixels blend with the background); PSNR is their MSE; "
+      "for SSIM, MS-SSIM and FLIP the tested frame takes the reference's pixels outside them, the "
+      "maps are computed on the full frame and averaged over them only (null when there are none). "
+      "`coverage_iou`: covered in both / covered in either. `hole_px`: covered in the reference, "
+      "background in the tested frame; `enclosed_hole_px`: those of them inside the tested frame's "
+      "own silhouette (its background not connected to the frame's border: background seen through "
+      "the surface); `hole_fraction` = hole_px / the reference's covered pixels.\n\n"
       "Output `table` columns: `frame`, `psnr_db`, `ssim_luma`, `ssim_rgb`, `ms_ssim_luma`, "
-      "`flip_mean`; one row per frame in the order of `frames`, then a row `mean` with the "
-      "arithmetic mean of each column. Output `flip`: the FLIP error map of every frame, magma "
-      "color-mapped, same names and files.\n\n"
-      "Counters: `frames`, `pixels_per_frame`, and the means `psnr_db` (left out when infinite), "
-      "`ssim_luma`, `ssim_rgb`, `ms_ssim_luma`, `flip_mean`. Phases: `io`, `compute`.";
+      "`flip_mean` (whole frame), `covered_psnr_db`, `covered_ssim_luma`, `covered_ssim_rgb`, "
+      "`covered_ms_ssim_luma`, `covered_flip_mean`, `coverage_iou`, `hole_px`, `enclosed_hole_px`, "
+      "`hole_fraction`, `compared_px`; one row per frame in the order of `frames`, then a row `mean` "
+      "with the arithmetic mean of each column. Output `flip`: the whole-frame FLIP error map of "
+      "every frame, magma color-mapped, same names and files; `flip_covered`: the map of the "
+      "covered-pixel comparison.\n\n"
+      "Counters: `frames`, `pixels_per_frame`, and the mean of every column (left out when not "
+      "finite: identical frames give an infinite PSNR). Phases: `io`, `compute`.";
   type.params_schema = kSchema;
   type.inputs = {{"frames", "frames", "The frames to evaluate (frames.json + PNGs).", false},
                  {"reference", "frames",
                   "Reference frames of the same names and size (HPM or ground-truth renders).",
                   false}};
   type.outputs = {
-      {"table", "table", "Per-frame and mean PSNR, SSIM, MS-SSIM and FLIP.", false},
-      {"flip", "frames", "FLIP error maps (magma colormap), one per frame.", false}};
+      {"table", "table", "Per-frame and mean PSNR, SSIM, MS-SSIM and FLIP, whole-frame and on covered pixels, and coverage.", false},
+      {"flip", "frames", "FLIP error maps (magma colormap), one per frame.", false},
+      {"flip_covered", "frames", "FLIP error maps of the covered-pixel comparison, one per frame.", false}};
   type.run = &Run;
   return type;
 }

@@ -199,10 +199,49 @@ TEST_F(ImageStageTest, MissingFrameIsNamed) {
 TEST_F(ImageStageTest, SchemaDefaultPpdIsFlipDefault) {
   const StageType* type = registry_.Find("metrics.image");
   ASSERT_NE(type, nullptr);
-  const nlohmann::json schema = nlohmann::json::parse(type->params_schema);
+  const nlohmann::json schema = CheckedSchema(*type, true);
   EXPECT_EQ(schema["properties"]["ppd"]["default"].get<double>(), FlipDefaultPpd());
-  ASSERT_EQ(type->outputs.size(), 2u);
+  ASSERT_EQ(type->outputs.size(), 3u);
   EXPECT_EQ(type->outputs[1].type, "frames");
+  EXPECT_EQ(type->outputs[2].name, "flip_covered");
+  EXPECT_EQ(type->version, 2);
+}
+
+TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
+  // RGBA frames: the reference covered but for a 10-pixel border, the test
+  // the same with a 6 x 4 hole in the middle and 5 on its brightness.
+  FrameSet reference = MakeSet(64, 64, {{"v", 0}}), test = MakeSet(64, 64, {{"v", 5}});
+  for (FrameSet* set : {&reference, &test}) {
+    Image rgba = Image::Make(64, 64, 4, Image::PixelType::kU8);
+    const Image& rgb = set->frames[0].image;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        bool covered = x >= 10 && x < 54 && y >= 10 && y < 54;
+        if (set == &test && x >= 30 && x < 36 && y >= 30 && y < 34) covered = false;
+        for (int c = 0; c < 3; ++c) rgba.at_u8(x, y, c) = covered ? rgb.at_u8(x, y, c) : 0;
+        rgba.at_u8(x, y, 3) = covered ? 255 : 0;
+      }
+    set->frames[0].image = std::move(rgba);
+  }
+  FakeContext ctx(dir_, nlohmann::json::object());
+  AddFrames(ctx, "frames", "test", test);
+  AddFrames(ctx, "reference", "ref", reference);
+  ASSERT_TRUE(Run("metrics.image", ctx).ok());
+  Expected<Table> table = ReadTable(ctx.outputs_.at("table"));
+  ASSERT_TRUE(table.ok()) << table.status().message();
+  Expected<CoveredComparison> c = CompareCovered(reference.frames[0].image, test.frames[0].image);
+  ASSERT_TRUE(c.ok());
+  EXPECT_EQ(TableNumber(table->get(0, "hole_px")), 24);
+  EXPECT_EQ(TableNumber(table->get(0, "enclosed_hole_px")), 24);
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(0, "hole_fraction")), 24.0 / (44 * 44));
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(0, "coverage_iou")), (44.0 * 44 - 24) / (44 * 44));
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(0, "covered_psnr_db")), c->metrics.psnr_db);
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(0, "covered_flip_mean")), c->metrics.flip_mean);
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(0, "compared_px")), double(c->coverage.compared_px));
+  // The whole frame counts the black border, the same in both, as agreement.
+  EXPECT_LT(TableNumber(table->get(0, "covered_psnr_db")), TableNumber(table->get(0, "psnr_db")));
+  EXPECT_EQ(ctx.counters_.at("hole_px"), 24);
+  ASSERT_TRUE(ctx.files_.count("flip_covered/frames.json"));
 }
 
 }  // namespace

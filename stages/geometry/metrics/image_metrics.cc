@@ -106,8 +106,10 @@ struct SsimMeans {
 };
 
 // Valid-region means of the SSIM maps of two planes.
+// With `mask` (width * height, nonzero = counted), only the positions whose
+// window center is in the mask count; no such position gives NaN means.
 SsimMeans SsimValidMeans(const std::vector<double>& a, const std::vector<double>& b, int width,
-                         int height) {
+                         int height, const std::vector<uint8_t>* mask = nullptr) {
   const auto& k = SsimKernel();
   const int out_w = width - 2 * kSsimRadius, out_h = height - 2 * kSsimRadius;
   // Horizontal pass of the five moments: out_w x height each.
@@ -134,11 +136,13 @@ SsimMeans SsimValidMeans(const std::vector<double>& a, const std::vector<double>
   constexpr double kC2 = (0.03 * 255) * (0.03 * 255);
   // Vertical pass and the maps, summed per row; rows are added in order so
   // the result does not depend on the thread count.
-  std::vector<double> row_cs(out_h), row_ssim(out_h);
+  std::vector<double> row_cs(out_h), row_ssim(out_h), row_count(out_h);
   tbb::parallel_for(tbb::blocked_range<int>(0, out_h), [&](const tbb::blocked_range<int>& rows) {
     for (int y = rows.begin(); y < rows.end(); ++y) {
-      double sum_cs = 0, sum_ssim = 0;
+      double sum_cs = 0, sum_ssim = 0, count = 0;
       for (int x = 0; x < out_w; ++x) {
+        if (mask && !(*mask)[size_t(y + kSsimRadius) * width + x + kSsimRadius]) continue;
+        ++count;
         double s[kMoments] = {0, 0, 0, 0, 0};
         for (int i = 0; i < kSsimWindow; ++i)
           for (int m = 0; m < kMoments; ++m) s[m] += k[i] * at(m, x, y + i);
@@ -152,14 +156,17 @@ SsimMeans SsimValidMeans(const std::vector<double>& a, const std::vector<double>
       }
       row_cs[y] = sum_cs;
       row_ssim[y] = sum_ssim;
+      row_count[y] = count;
     }
   });
   SsimMeans means;
+  double n = 0;
   for (int y = 0; y < out_h; ++y) {
     means.cs += row_cs[y];
     means.ssim += row_ssim[y];
+    n += row_count[y];
   }
-  const double n = double(out_w) * double(out_h);
+  if (n == 0) return {std::numeric_limits<double>::quiet_NaN(), std::numeric_limits<double>::quiet_NaN()};
   means.cs /= n;
   means.ssim /= n;
   return means;
@@ -270,6 +277,163 @@ Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
   m.flip_mean = flip_result.mean;
   if (flip) *flip = std::move(flip_result);
   return m;
+}
+
+// ---------------------------------------------------------------------------
+// Covered pixels (image_metrics.h, CompareCovered).
+namespace {
+
+// 1 where the image is covered (alpha > 0; every pixel without alpha).
+std::vector<uint8_t> CoverageMask(const Image& image) {
+  const size_t pixels = size_t(image.width) * size_t(image.height);
+  std::vector<uint8_t> mask(pixels, 1);
+  if (image.channels == 2 || image.channels == 4) {
+    const uint8_t* src = image.u8();
+    for (size_t i = 0; i < pixels; ++i) mask[i] = src[i * image.channels + image.channels - 1] > 0;
+  }
+  return mask;
+}
+
+// 1 where `covered` is 0 and no 4-connected path of uncovered pixels leads to
+// the frame's border: background seen through the surface inside its own
+// silhouette.
+std::vector<uint8_t> EnclosedBackground(const std::vector<uint8_t>& covered, int width, int height) {
+  std::vector<uint8_t> outside(covered.size(), 0);
+  std::vector<size_t> stack;
+  auto push = [&](int x, int y) {
+    const size_t i = size_t(y) * width + x;
+    if (covered[i] || outside[i]) return;
+    outside[i] = 1;
+    stack.push_back(i);
+  };
+  for (int x = 0; x < width; ++x) {
+    push(x, 0);
+    push(x, height - 1);
+  }
+  for (int y = 0; y < height; ++y) {
+    push(0, y);
+    push(width - 1, y);
+  }
+  while (!stack.empty()) {
+    const size_t i = stack.back();
+    stack.pop_back();
+    const int x = int(i % width), y = int(i / width);
+    if (x > 0) push(x - 1, y);
+    if (x + 1 < width) push(x + 1, y);
+    if (y > 0) push(x, y - 1);
+    if (y + 1 < height) push(x, y + 1);
+  }
+  std::vector<uint8_t> enclosed(covered.size(), 0);
+  for (size_t i = 0; i < covered.size(); ++i) enclosed[i] = !covered[i] && !outside[i];
+  return enclosed;
+}
+
+// 2x2 "any" reduction of a mask, as Downsample halves a plane.
+std::vector<uint8_t> DownsampleMask(const std::vector<uint8_t>& mask, int width, int height) {
+  const int w = width / 2, h = height / 2;
+  std::vector<uint8_t> out(size_t(w) * h);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t p = size_t(2 * y) * width + 2 * x;
+      out[size_t(y) * w + x] = mask[p] | mask[p + 1] | mask[p + width] | mask[p + width + 1];
+    }
+  return out;
+}
+
+}  // namespace
+
+Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
+                                           const ImageMetricsOptions& options, FlipResult* flip) {
+  PB_ASSIGN_OR_RETURN(auto pair, ToRgb8Pair(reference, test));
+  Rgb8& a = pair.first;
+  Rgb8& b = pair.second;
+  const int w = a.width, h = a.height;
+  const size_t pixels = size_t(w) * size_t(h);
+  const std::vector<uint8_t> ref_covered = CoverageMask(reference), test_covered = CoverageMask(test);
+  const std::vector<uint8_t> enclosed = EnclosedBackground(test_covered, w, h);
+  CoveredComparison r;
+  std::vector<uint8_t> both(pixels);
+  for (size_t i = 0; i < pixels; ++i) {
+    both[i] = ref_covered[i] && test_covered[i];
+    r.coverage.reference_px += ref_covered[i];
+    r.coverage.test_px += test_covered[i];
+    r.coverage.both_px += both[i];
+    r.coverage.union_px += ref_covered[i] || test_covered[i];
+    if (ref_covered[i] && !test_covered[i]) {
+      ++r.coverage.hole_px;
+      r.coverage.enclosed_hole_px += enclosed[i];
+    }
+  }
+  r.coverage.iou = r.coverage.union_px == 0 ? 1.0 : double(r.coverage.both_px) / double(r.coverage.union_px);
+  r.coverage.hole_fraction =
+      r.coverage.reference_px == 0 ? 0.0 : double(r.coverage.hole_px) / double(r.coverage.reference_px);
+  // Compared: covered in both, and so are the 4 neighbours (inside the frame):
+  // supersampled edge pixels mix the surface with the background.
+  std::vector<uint8_t> mask(pixels, 0);
+  for (int y = 0; y < h; ++y)
+    for (int x = 0; x < w; ++x) {
+      const size_t i = size_t(y) * w + x;
+      mask[i] = both[i] && (x == 0 || both[i - 1]) && (x + 1 == w || both[i + 1]) &&
+                (y == 0 || both[i - w]) && (y + 1 == h || both[i + w]);
+      r.coverage.compared_px += mask[i];
+    }
+  // Outside the mask the test frame takes the reference's pixels, so windows
+  // that straddle the mask's edge see no difference from outside it.
+  for (size_t i = 0; i < pixels; ++i)
+    if (!mask[i])
+      for (int c = 0; c < 3; ++c) b.rgb[i * 3 + c] = a.rgb[i * 3 + c];
+
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  ImageMetrics& m = r.metrics;
+  m.psnr_db = m.ssim_luma = m.ssim_rgb = m.ms_ssim_luma = m.flip_mean = nan;
+  if (r.coverage.compared_px == 0) {
+    if (flip) *flip = FlipResult{w, h, std::vector<float>(pixels, 0.0f), nan};
+    return r;
+  }
+  uint64_t sum = 0;
+  for (size_t i = 0; i < b.rgb.size(); ++i) {
+    const int d = int(a.rgb[i]) - int(b.rgb[i]);
+    sum += uint64_t(d * d);
+  }
+  m.psnr_db = sum == 0 ? std::numeric_limits<double>::infinity()
+                       : 10.0 * std::log10(255.0 * 255.0 / (double(sum) / double(r.coverage.compared_px * 3)));
+  if (w >= kSsimWindow && h >= kSsimWindow) {
+    m.ssim_luma = SsimValidMeans(Luma(a), Luma(b), w, h, &mask).ssim;
+    double rgb = 0;
+    for (int c = 0; c < 3; ++c) rgb += SsimValidMeans(Channel(a, c), Channel(b, c), w, h, &mask).ssim;
+    m.ssim_rgb = rgb / 3;
+  }
+  if (w >= (kSsimWindow << (kMsSsimScales - 1)) && h >= (kSsimWindow << (kMsSsimScales - 1))) {
+    std::vector<double> pa = Luma(a), pb = Luma(b);
+    std::vector<uint8_t> level_mask = mask;
+    int lw = w, lh = h;
+    double product = 1;
+    for (int scale = 0; scale < kMsSsimScales; ++scale) {
+      const SsimMeans means = SsimValidMeans(pa, pb, lw, lh, &level_mask);
+      const double term = scale + 1 < kMsSsimScales ? means.cs : means.ssim;
+      product *= std::isnan(term) ? nan : std::pow(std::max(term, 0.0), kMsSsimWeights[scale]);
+      if (scale + 1 < kMsSsimScales) {
+        pa = Downsample(pa, lw, lh);
+        pb = Downsample(pb, lw, lh);
+        level_mask = DownsampleMask(level_mask, lw, lh);
+        lw /= 2;
+        lh /= 2;
+      }
+    }
+    m.ms_ssim_luma = product;
+  }
+  // FLIP of the filled frames (RGB, no alpha), averaged over the mask.
+  Image ref_rgb = Image::Make(w, h, 3, Image::PixelType::kU8), test_rgb = Image::Make(w, h, 3, Image::PixelType::kU8);
+  std::copy(a.rgb.begin(), a.rgb.end(), ref_rgb.u8());
+  std::copy(b.rgb.begin(), b.rgb.end(), test_rgb.u8());
+  PB_ASSIGN_OR_RETURN(FlipResult flip_result, Flip(ref_rgb, test_rgb, options.flip_ppd));
+  double flip_sum = 0;
+  for (size_t i = 0; i < pixels; ++i)
+    if (mask[i]) flip_sum += flip_result.error[i];
+  m.flip_mean = flip_sum / double(r.coverage.compared_px);
+  flip_result.mean = m.flip_mean;
+  if (flip) *flip = std::move(flip_result);
+  return r;
 }
 
 // ---------------------------------------------------------------------------

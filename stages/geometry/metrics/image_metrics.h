@@ -2,8 +2,9 @@
 // size: PSNR, SSIM, MS-SSIM and FLIP (LDR).
 //
 // Inputs are 8-bit sRGB images (Image::PixelType::kU8) with 1 to 4 channels:
-// gray (1, 2 channels) counts as R = G = B, alpha (channel 2 or 4) is ignored,
-// so every metric uses all pixels. Sizes must match (Status::Invalid
+// gray (1, 2 channels) counts as R = G = B; CompareImages ignores alpha
+// (channel 2 or 4), so every metric uses all pixels; CompareCovered (at the
+// end) measures only pixels covered in both frames and reports coverage apart. Sizes must match (Status::Invalid
 // otherwise); x = column, y = row as in image.h.
 //
 // Definitions (docs/metrics.md has the reference values they reproduce):
@@ -103,5 +104,56 @@ struct ImageMetrics {
 Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
                                      const ImageMetricsOptions& options = {},
                                      FlipResult* flip = nullptr);
+
+// ---- Covered pixels ----
+//
+// Frames of a surface against frames of another (a workflow's model against
+// the scan's splats, or against HPM) differ in where there is surface at all
+// (silhouettes, holes, surface one side invented) and in what the surface
+// looks like. Whole-frame metrics mix the two, and the first dominates. Here
+// they are apart. A pixel is covered when its alpha is > 0 (render.frames and
+// render.splats write 255 where geometry is, 0 on background; an image without
+// alpha is covered everywhere).
+//  - Coverage agreement: IoU = |covered in both| / |covered in either|.
+//  - Hole pixels: covered in the reference, background in the test frame,
+//    whether at the silhouette or inside it; `enclosed_hole_px` counts those
+//    of them that no 4-connected path of the test frame's background links to
+//    the frame's border: background seen through the surface inside its own
+//    silhouette (a hole in a wall). hole_fraction = hole_px / reference_px.
+//  - Appearance, on the compared pixels: covered in both frames, and so are
+//    their 4 neighbours (edge pixels blend the surface with the background
+//    under supersampling, so they belong to the silhouette, not the texture).
+//    PSNR is the MSE over the compared pixels. For SSIM, MS-SSIM and FLIP, the
+//    test frame first takes the reference's pixels everywhere outside the
+//    compared pixels (both frames are then identical there), the maps are
+//    computed on the full frames as above, and averaged over the compared
+//    pixels only (SSIM: the windows centered on one; MS-SSIM: at each coarser
+//    scale a pixel is compared when any of its 2x2 parents was). So a window
+//    that straddles the mask's edge sees only the differences inside it.
+//    No compared pixel (or too small a frame, as CompareImages): NaN.
+struct CoverageStats {
+  size_t reference_px = 0;  // covered in the reference
+  size_t test_px = 0;       // covered in the test frame
+  size_t both_px = 0;
+  size_t union_px = 0;
+  double iou = 1;           // both / union; 1 when neither has coverage
+  size_t hole_px = 0;       // reference covered, test background
+  size_t enclosed_hole_px = 0;  // of hole_px, inside the test frame's silhouette
+  double hole_fraction = 0;     // hole_px / reference_px (0 without reference coverage)
+  size_t compared_px = 0;       // the pixels the metrics below are measured on
+};
+
+struct CoveredComparison {
+  CoverageStats coverage;
+  ImageMetrics metrics;  // PSNR, SSIM, MS-SSIM, FLIP on the compared pixels
+};
+
+// `flip` (optional) receives the FLIP map of the filled frames (differences
+// inside the compared pixels spread a few pixels past them through FLIP's
+// filters; elsewhere it is 0). Status::Invalid as
+// CompareImages.
+Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
+                                           const ImageMetricsOptions& options = {},
+                                           FlipResult* flip = nullptr);
 
 }  // namespace pb

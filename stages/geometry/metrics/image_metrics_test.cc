@@ -238,5 +238,98 @@ TEST(ImageMetricsTest, SameResultOnAnyThreadCount) {
   EXPECT_EQ(flip[0].error, flip[1].error);
 }
 
+// ---- covered pixels ----
+
+// An RGBA frame: R0's texture (plus `offset`) where `covered`, black and
+// alpha 0 elsewhere.
+Image Frame(int size, const std::function<bool(int, int)>& covered, int offset = 0) {
+  Image image = Image::Make(size, size, 4, Image::PixelType::kU8);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const bool on = covered(x, y);
+      for (int c = 0; c < 3; ++c) image.at_u8(x, y, c) = on ? uint8_t(std::clamp(R0(x, y, c) / 2 + 40 + offset, 0, 255)) : 0;
+      image.at_u8(x, y, 3) = on ? 255 : 0;
+    }
+  return image;
+}
+
+bool Disk(int x, int y, double cx, double cy, double r) { return (x - cx) * (x - cx) + (y - cy) * (y - cy) <= r * r; }
+
+TEST(CoveredTest, IdenticalFramesScorePerfectly) {
+  const Image frame = Frame(kSize, [](int x, int y) { return Disk(x, y, 128, 128, 90); });
+  Expected<CoveredComparison> r = CompareCovered(frame, frame);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(r->metrics.psnr_db, std::numeric_limits<double>::infinity());
+  EXPECT_DOUBLE_EQ(r->metrics.ssim_luma, 1.0);
+  EXPECT_DOUBLE_EQ(r->metrics.ssim_rgb, 1.0);
+  EXPECT_DOUBLE_EQ(r->metrics.ms_ssim_luma, 1.0);
+  EXPECT_EQ(r->metrics.flip_mean, 0.0);
+  EXPECT_EQ(r->coverage.iou, 1.0);
+  EXPECT_EQ(r->coverage.hole_px, 0u);
+  EXPECT_EQ(r->coverage.both_px, r->coverage.reference_px);
+  EXPECT_GT(r->coverage.compared_px, 24000u);  // pi 90^2 = 25447, minus the rim
+  EXPECT_LT(r->coverage.compared_px, r->coverage.both_px);
+}
+
+TEST(CoveredTest, CountsHolePixelsExactly) {
+  // Reference: covered everywhere. Test: a 7 x 5 hole inside (enclosed) and a
+  // 3-pixel strip along the left border (a silhouette miss, not enclosed).
+  const Image reference = Frame(64, [](int, int) { return true; });
+  auto covered = [](int x, int y) {
+    const bool hole = x >= 30 && x < 37 && y >= 20 && y < 25;
+    return !hole && x >= 3;
+  };
+  const Image test = Frame(64, covered);
+  Expected<CoveredComparison> r = CompareCovered(reference, test);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_EQ(r->coverage.reference_px, 64u * 64u);
+  EXPECT_EQ(r->coverage.hole_px, 35u + 3u * 64u);
+  EXPECT_EQ(r->coverage.enclosed_hole_px, 35u);
+  EXPECT_DOUBLE_EQ(r->coverage.hole_fraction, (35.0 + 192.0) / 4096.0);
+  EXPECT_DOUBLE_EQ(r->coverage.iou, (4096.0 - 227.0) / 4096.0);
+  // The same texture where both are covered.
+  EXPECT_EQ(r->metrics.psnr_db, std::numeric_limits<double>::infinity());
+  // The compared pixels leave out the ring around the hole and the strip.
+  EXPECT_EQ(r->coverage.compared_px, 4096u - 227u - (2u * 7u + 2u * 5u) - 64u);
+  // Whole-frame metrics see the holes as black texture.
+  Expected<ImageMetrics> whole = CompareImages(reference, test);
+  ASSERT_TRUE(whole.ok());
+  EXPECT_LT(whole->psnr_db, 25);  // 5.5 % of the pixels black instead of ~100
+}
+
+TEST(CoveredTest, SilhouetteDifferenceDoesNotChangeCoveredPsnr) {
+  // The test frames are the reference's texture plus 10 wherever they are
+  // covered, on a disk that is smaller, the same, or larger than the
+  // reference's: the covered-pixel PSNR is 20 log10(255 / 10) for each; only
+  // the coverage figures tell them apart.
+  const Image reference = Frame(kSize, [](int x, int y) { return Disk(x, y, 128, 128, 80); });
+  const double expected_psnr = 20 * std::log10(255.0 / 10.0);
+  double previous_iou = -1;
+  for (double radius : {60.0, 80.0, 100.0}) {
+    const Image test = Frame(kSize, [&](int x, int y) { return Disk(x, y, 120, 128, radius); }, 10);
+    Expected<CoveredComparison> r = CompareCovered(reference, test);
+    ASSERT_TRUE(r.ok()) << r.status().message();
+    EXPECT_NEAR(r->metrics.psnr_db, expected_psnr, 1e-12) << radius;
+    EXPECT_GT(r->metrics.ssim_luma, 0.9) << radius;  // a constant offset barely moves SSIM
+    EXPECT_NE(r->coverage.iou, previous_iou);
+    previous_iou = r->coverage.iou;
+    Expected<ImageMetrics> whole = CompareImages(reference, test);
+    ASSERT_TRUE(whole.ok());
+    EXPECT_LT(whole->psnr_db, expected_psnr - 3) << radius;  // silhouette errors dominate the whole frame
+  }
+}
+
+TEST(CoveredTest, NoCommonCoverageGivesNaNAndZeroIou) {
+  const Image left = Frame(32, [](int x, int) { return x < 10; });
+  const Image right = Frame(32, [](int x, int) { return x > 20; });
+  Expected<CoveredComparison> r = CompareCovered(left, right);
+  ASSERT_TRUE(r.ok());
+  EXPECT_TRUE(std::isnan(r->metrics.psnr_db));
+  EXPECT_TRUE(std::isnan(r->metrics.flip_mean));
+  EXPECT_EQ(r->coverage.iou, 0.0);
+  EXPECT_EQ(r->coverage.hole_px, 10u * 32u);
+  EXPECT_EQ(r->coverage.enclosed_hole_px, 0u);
+}
+
 }  // namespace
 }  // namespace pb
