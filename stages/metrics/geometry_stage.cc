@@ -8,6 +8,9 @@
 #include <optional>
 
 #include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/mesh/scan_agreement.h"
+#include "stages/geometry/points/spacing.h"
+#include "stages/points_io.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/synth/scene.h"
 #include "stages/geometry/core/table.h"
@@ -27,6 +30,19 @@ constexpr const char* kSchema = R"({
       "minimum": 1,
       "default": 200000,
       "description": "Points sampled per direction, uniformly by area; the mean's noise falls as 1/sqrt(samples)."
+    },
+    "k": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 64,
+      "default": 8,
+      "description": "With `points`: a scan point's local spacing is the distance to its k-th nearest other point (render.splats uses the same)."
+    },
+    "spacing_factor": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 3,
+      "description": "With `points`: mesh surface farther than max(spacing_factor local spacings, the mesh's mean edge) from every scan point is invented; scan points farther than spacing_factor local spacings from the mesh are missing."
     },
     "seed": {
       "type": "integer",
@@ -48,59 +64,102 @@ Expected<Mesh> ReadMeshInput(StageContext& ctx, const char* port, double progres
   return std::move(read.mesh);
 }
 
-std::vector<TableValue> Row(const char* direction, const DistanceStats& s, const char* method) {
-  return {
-      std::string(direction), static_cast<int64_t>(s.samples), s.mean_m, s.rms_m, s.p95_m, s.max_m,
-      std::string(method)};
+std::vector<TableValue> Row(const char* direction, const DistanceStats& s, const char* method,
+                            TableValue beyond_fraction, double boundary_edges_per_1000_faces) {
+  return {std::string(direction), static_cast<int64_t>(s.samples), s.mean_m, s.rms_m, s.p95_m, s.max_m,
+          std::string(method), beyond_fraction, boundary_edges_per_1000_faces};
 }
 
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t samples, IntegerParam(ctx, kId, "samples", 200000, 1));
   PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", 1, 0));
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 8, 1, 64));
+  PB_ASSIGN_OR_RETURN(const double spacing_factor, NumberParam(ctx, kId, "spacing_factor", 3.0));
+  if (!(spacing_factor > 0)) return Status::Invalid(std::string(kId) + ": 'spacing_factor' must be > 0");
+  const bool has_truth = ctx.has_input("truth"), has_points = ctx.has_input("points");
+  if (!has_truth && !has_points)
+    return Status::Invalid(std::string(kId) + ": connect 'truth' (ground truth) or 'points' (the scan), or both");
   Mesh mesh, truth;
   std::optional<SynthScene> scene;
+  std::optional<InputPoints> scan;
   {
     PB_PHASE(ctx, "io");
     PB_ASSIGN_OR_RETURN(mesh, ReadMeshInput(ctx, "mesh", 0, 0.1));
-    PB_ASSIGN_OR_RETURN(truth, ReadMeshInput(ctx, "truth", 0.1, 0.2));
-    const ArtifactView& truth_input = ctx.input("truth");
-    if (truth_input.files.count("scene.json") > 0) {
-      PB_ASSIGN_OR_RETURN(scene, ReadSynthScene(truth_input.files.at("scene.json")));
+    if (has_truth) {
+      PB_ASSIGN_OR_RETURN(truth, ReadMeshInput(ctx, "truth", 0.1, 0.2));
+      const ArtifactView& truth_input = ctx.input("truth");
+      if (truth_input.files.count("scene.json") > 0) {
+        PB_ASSIGN_OR_RETURN(scene, ReadSynthScene(truth_input.files.at("scene.json")));
+      }
     }
   }
+  if (has_points) {
+    PB_ASSIGN_OR_RETURN(scan, ReadInputPoints(ctx, kId, 0.2));
+  }
   ctx.progress(0.2);
-  MeshDistanceResult result;
-  {
+  const double boundary_per_kface =
+      mesh.face_count() ? 1000.0 * double(CountBoundaryEdges(mesh)) / double(mesh.face_count()) : 0.0;
+  Table table;
+  table.columns = {"direction", "samples", "mean_m", "rms_m", "p95_m", "hausdorff_m", "truth",
+                   "beyond_fraction", "boundary_edges_per_1000_faces"};
+  tbb::task_arena arena(std::max(1, ctx.threads()));
+  nlohmann::json meta = {{"kind", "geometry_metrics"}, {"samples", samples}};
+  if (has_truth) {
     PB_PHASE(ctx, "compute");
     MeshDistanceOptions options;
     options.samples = static_cast<size_t>(samples);
     options.seed = static_cast<uint64_t>(seed);
-    options.progress = [&ctx](double f) { ctx.progress(0.2 + 0.75 * f); };
-    tbb::task_arena arena(std::max(1, ctx.threads()));
+    const double end = has_points ? 0.55 : 0.95;
+    options.progress = [&ctx, end](double f) { ctx.progress(0.2 + (end - 0.2) * f); };
     Expected<MeshDistanceResult> measured = Status::Internal("not run");
     arena.execute(
         [&] { measured = MeasureMeshDistance(mesh, truth, scene ? &*scene : nullptr, options); });
     if (!measured.ok()) return measured.status().WithContext(kId);
-    result = std::move(measured).value();
+    const MeshDistanceResult& result = *measured;
+    const char* forward_method = result.analytic_mesh_to_truth ? "analytic" : "mesh";
+    table.rows.push_back(Row("mesh_to_truth", result.mesh_to_truth, forward_method, {}, boundary_per_kface));
+    table.rows.push_back(Row("truth_to_mesh", result.truth_to_mesh, "mesh", {}, boundary_per_kface));
+    table.rows.push_back(Row("symmetric", result.symmetric, forward_method, {}, boundary_per_kface));
+    ctx.counter("truth_faces", static_cast<double>(truth.face_count()));
+    ctx.counter("mean_m", result.symmetric.mean_m);
+    ctx.counter("hausdorff_m", result.symmetric.max_m);
+    meta["analytic_truth"] = result.analytic_mesh_to_truth;
   }
-  const char* forward_method = result.analytic_mesh_to_truth ? "analytic" : "mesh";
-  Table table;
-  table.columns = {"direction", "samples", "mean_m", "rms_m", "p95_m", "hausdorff_m", "truth"};
-  table.rows = {Row("mesh_to_truth", result.mesh_to_truth, forward_method),
-                Row("truth_to_mesh", result.truth_to_mesh, "mesh"),
-                Row("symmetric", result.symmetric, forward_method)};
+  if (has_points) {
+    PB_PHASE(ctx, "scan");
+    Expected<ScanAgreement> agreement = Status::Internal("not run");
+    arena.execute([&] {
+      Expected<std::vector<float>> spacing = LocalSpacing(scan->cloud, int(k));
+      if (!spacing.ok()) {
+        agreement = spacing.status();
+        return;
+      }
+      ScanAgreementOptions options;
+      options.spacing_factor = spacing_factor;
+      options.samples = static_cast<size_t>(samples);
+      options.seed = static_cast<uint64_t>(seed);
+      agreement = MeasureScanAgreement(mesh, scan->cloud, *spacing, options);
+    });
+    if (!agreement.ok())
+      return agreement.status().WithContext(std::string(kId) + ": input 'points' (" + scan->path + ")");
+    table.rows.push_back(Row("mesh_to_scan", agreement->mesh_to_scan, "scan", agreement->invented_area_fraction,
+                             boundary_per_kface));
+    table.rows.push_back(Row("scan_to_mesh", agreement->scan_to_mesh, "scan", agreement->missing_fraction,
+                             boundary_per_kface));
+    ctx.counter("invented_area_fraction", agreement->invented_area_fraction);
+    ctx.counter("missing_fraction", agreement->missing_fraction);
+    ctx.counter("scan_points", static_cast<double>(scan->cloud.size()));
+    meta["median_spacing_m"] = agreement->median_spacing_m;
+    meta["mean_edge_m"] = agreement->mean_edge_m;
+  }
   ctx.counter("mesh_faces", static_cast<double>(mesh.face_count()));
-  ctx.counter("truth_faces", static_cast<double>(truth.face_count()));
   ctx.counter("samples", static_cast<double>(samples));
-  ctx.counter("mean_m", result.symmetric.mean_m);
-  ctx.counter("hausdorff_m", result.symmetric.max_m);
+  ctx.counter("boundary_edges_per_1000_faces", boundary_per_kface);
   {
     PB_PHASE(ctx, "io");
     PB_RETURN_IF_ERROR(WriteTable(ctx.output_path("table", "table.json"), table));
   }
-  ctx.set_output_meta("table", {{"kind", "geometry_metrics"},
-                                {"samples", samples},
-                                {"analytic_truth", result.analytic_mesh_to_truth}});
+  ctx.set_output_meta("table", std::move(meta));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -110,8 +169,10 @@ Status Run(StageContext& ctx) {
 StageType GeometryMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
-  type.summary = "Mesh accuracy against ground truth: mean, RMS, 95th percentile, Hausdorff";
+  type.version = 2;
+  type.summary =
+      "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
+      "against the scan: invented area, missing surface, boundary edges";
   type.doc =
       "Samples `samples` points uniformly by area on each mesh (fixed `seed`) and measures "
       "distances both ways, in meters: mesh -> truth (surface that should not be there) and "
@@ -121,19 +182,33 @@ StageType GeometryMetricsStage() {
       "truth uses the analytic scene's signed distance, exact for the true displaced "
       "surface (column `truth` = \"analytic\"); otherwise the distance to the truth mesh.ply "
       "(\"mesh\").\n\n"
-      "Output table columns: `direction` (mesh_to_truth, truth_to_mesh, symmetric), "
-      "`samples`, `mean_m`, `rms_m`, `p95_m`, `hausdorff_m`, `truth`. The symmetric row has "
-      "the larger Hausdorff distance, the mean of the two means, and RMS / 95th percentile "
-      "over both directions' samples pooled.\n\n"
-      "Counters: `mesh_faces`, `truth_faces`, `samples`, `mean_m`, `hausdorff_m` "
-      "(symmetric). Phases: `io`, `compute`.";
+      "With `points` (the scan; no truth needed; stages/geometry/mesh/scan_agreement.h): a scan "
+      "point's local spacing is the distance to its `k`-th nearest other point; the invented area is "
+      "the fraction of `samples` mesh points (uniform by area, `seed`) farther than "
+      "max(`spacing_factor` x local spacing, the mesh's mean edge) from each of their 16 nearest scan "
+      "points (surface the scanner never saw); missing surface is the fraction of scan points "
+      "(at most `samples`, evenly picked) farther than `spacing_factor` x their local spacing from "
+      "the mesh (what the scanner saw and the model lost). Connect `truth`, `points` or both.\n\n"
+      "Output table columns: `direction` (mesh_to_truth, truth_to_mesh, symmetric with `truth`; "
+      "mesh_to_scan, scan_to_mesh with `points`), `samples`, `mean_m`, `rms_m`, `p95_m`, "
+      "`hausdorff_m`, `truth` (analytic, mesh or scan), `beyond_fraction` (mesh_to_scan: the invented "
+      "area fraction; scan_to_mesh: the missing fraction; null for the truth rows), "
+      "`boundary_edges_per_1000_faces` (edges with one face, per 1000 faces of `mesh`; every row). "
+      "The symmetric row has the larger Hausdorff distance, the mean of the two means, and RMS / "
+      "95th percentile over both directions' samples pooled. mesh_to_scan distances go to the "
+      "nearest scan point.\n\n"
+      "Counters: `mesh_faces`, `samples`, `boundary_edges_per_1000_faces`; with truth `truth_faces`, "
+      "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `invented_area_fraction`, "
+      "`missing_fraction`. Phases: `io`, `compute` (truth), `scan` (points).";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to evaluate (mesh.ply).", false},
                  {"truth", "mesh",
                   "Ground truth: mesh.ply, plus scene.json for the analytic distance (synth.scan "
                   "output 'truth').",
-                  false}};
-  type.outputs = {{"table", "table", "Distance statistics, one row per direction.", false}};
+                  true},
+                 {"points", "points", "The scan the mesh was built from (points.ply), for the truth-free figures.",
+                  true}};
+  type.outputs = {{"table", "table", "Distance statistics and fractions, one row per direction.", false}};
   type.run = &Run;
   return type;
 }

@@ -76,6 +76,58 @@ TEST_F(MeshMetricsStagesTest, CleanStageRemovesDefects) {
   EXPECT_EQ(ctx.meta_.at("mesh").at("faces"), 2);
 }
 
+TEST_F(MeshMetricsStagesTest, GeometrySchemaAndPorts) {
+  const StageType* type = registry_.Find("metrics.geometry");
+  ASSERT_NE(type, nullptr);
+  const nlohmann::json schema = CheckedSchema(*type, true);
+  EXPECT_EQ(schema["properties"]["spacing_factor"]["default"], 3);
+  EXPECT_EQ(schema["properties"]["k"]["default"], 8);
+  ASSERT_EQ(type->inputs.size(), 3u);
+  EXPECT_TRUE(type->inputs[1].optional);
+  EXPECT_EQ(type->inputs[2].name, "points");
+  EXPECT_TRUE(type->inputs[2].optional);
+  EXPECT_EQ(type->version, 2);
+}
+
+TEST_F(MeshMetricsStagesTest, GeometryAgainstTheScanWithoutTruth) {
+  // A 1 m square of 2 x 10 x 10 faces; the scan covers its left half on a
+  // 1 cm grid, plus 51 points half a meter above (missing from the mesh).
+  Mesh mesh;
+  for (int j = 0; j <= 10; ++j)
+    for (int i = 0; i <= 10; ++i) mesh.positions.insert(mesh.positions.end(), {i / 10.0f, j / 10.0f, 0.0f});
+  for (uint32_t j = 0; j < 10; ++j)
+    for (uint32_t i = 0; i < 10; ++i) {
+      const uint32_t a = j * 11 + i;
+      mesh.indices.insert(mesh.indices.end(), {a, a + 1, a + 12, a, a + 12, a + 11});
+    }
+  PointCloud scan;
+  for (int j = 0; j <= 100; ++j)
+    for (int i = 0; i <= 30; ++i) scan.positions.insert(scan.positions.end(), {i * 0.01f, j * 0.01f, 0.0f});
+  for (int j = 0; j <= 50; ++j) scan.positions.insert(scan.positions.end(), {0.1f, j * 0.01f, 0.5f});
+  FakeContext ctx(dir_, {{"samples", 50000}, {"k", 4}});
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("grid", mesh));
+  ctx.AddInput("points", "points", WriteInputPoints("scan", scan));
+  const Status status = Run("metrics.geometry", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  Expected<Table> table = ReadTable(ctx.outputs_.at("table"));
+  ASSERT_TRUE(table.ok()) << table.status().message();
+  ASSERT_EQ(table->rows.size(), 2u);
+  EXPECT_EQ(std::get<std::string>(table->get(0, "direction")), "mesh_to_scan");
+  EXPECT_EQ(std::get<std::string>(table->get(1, "direction")), "scan_to_mesh");
+  // Mean edge 0.114 m > 3 spacings: seen up to x = 0.3 + 0.114.
+  EXPECT_NEAR(TableNumber(table->get(0, "beyond_fraction")), 1 - 0.414, 0.01);
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(1, "beyond_fraction")), 51.0 / (101 * 31 + 51));
+  EXPECT_DOUBLE_EQ(TableNumber(table->get(0, "boundary_edges_per_1000_faces")), 40.0 / 200 * 1000);
+  EXPECT_EQ(ctx.counters_.count("invented_area_fraction"), 1u);
+  EXPECT_TRUE(ctx.phases_.count("scan"));
+
+  FakeContext neither(dir_, nlohmann::json::object());
+  neither.AddInput("mesh", "mesh", WriteInputMesh("grid2", mesh));
+  const Status none = Run("metrics.geometry", neither);
+  EXPECT_FALSE(none.ok());
+  EXPECT_NE(none.message().find("'points'"), std::string::npos) << none.message();
+}
+
 // Timing: 200k samples on a ~10^6-face mesh (not a unit test).
 TEST_F(MeshMetricsStagesTest, DISABLED_TimingMillionFaces) {
   const ArtifactView truth = Truth(0.01, "truth");
