@@ -55,6 +55,16 @@
 //                     frame then "mean"
 //     flip_hpm/       FLIP error maps against HPM (frames artifact)
 //     vs_truth.json, flip_truth/   the same against ground truth
+//     scan_frames/    the scan drawn as splats (render.splats), shown beside
+//                     the frames
+//     vs_scan.json    metrics.image (v2) of the unlit frames against
+//                     scan_frames: the covered_* columns, coverage_iou,
+//                     hole_fraction of row "mean"
+//     flip_scan/      its covered-pixel FLIP maps (shown for scenes without
+//                     ground truth, instead of flip_hpm)
+//     geometry.json   metrics.geometry (v2) with the scan: beyond_fraction of
+//                     rows mesh_to_scan (invented area) and scan_to_mesh
+//                     (missing), boundary_edges_per_1000_faces
 //     fps.json        estimate.fps table, one row: device, triangles,
 //                     texture_width, texture_height, texture_bytes,
 //                     texture_budget_bytes, fits_texture_budget,
@@ -74,8 +84,11 @@
 //                  of the run belongs to is null), peak_ram_bytes, faces,
 //                  texture_size: {width_px, height_px}, texture_bytes, fps,
 //                  fits, device, vs_hpm: {psnr_db, ssim_luma, ssim_rgb,
-//                  ms_ssim_luma, flip_mean}, vs_truth: {...}, error (failed
-//                  runs only)}],
+//                  ms_ssim_luma, flip_mean}, vs_truth: {...}, vs_scan:
+//                  {covered_psnr_db, covered_ssim_luma, covered_flip_mean,
+//                  coverage_iou, hole_fraction}, scan_geometry:
+//                  {invented_area_fraction, missing_fraction,
+//                  boundary_edges_per_1000_faces}, error (failed runs only)}],
 //                  "speedups": {"versus": "point_transfer", "per_scene":
 //                  [{scene, workflow, variant, ratio}], "geometric_mean":
 //                  [{workflow, variant, ratio, scenes}]}}
@@ -85,9 +98,10 @@
 //   report.md     tables (times, RAM, quality, FPS, speed-ups), image links
 //   report.html   self-contained (inline CSS/SVG, images as data: URIs; no
 //                 network, no scripts): stacked time bars per scene,
-//                 peak-RAM bars, the quality and FPS tables, speed-up ratios,
-//                 and per scene the frames side by side (ground truth, each
-//                 workflow) with zoomed crops and FLIP maps
+//                 peak-RAM bars, the quality, against-the-scan and FPS
+//                 tables, speed-up ratios, and per scene the frames side by
+//                 side (ground truth, the scan's splats, each workflow) with
+//                 zoomed crops and FLIP maps
 //   images/       the thumbnails, crops and FLIP maps report.md links to
 #pragma once
 

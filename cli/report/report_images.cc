@@ -191,6 +191,13 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
   }
   if (truth) columns.push_back({"Ground truth", "", "", std::move(truth), std::nullopt, nullptr});
   const bool has_truth = !columns.empty();
+  // The scan itself as splats (render.splats, the same in every run).
+  std::optional<FrameSet> scan;
+  for (const Row& r : c.rows) {
+    if (r.scene != scene || !r.ok() || scan) continue;
+    PB_ASSIGN_OR_RETURN(scan, MaybeReadFrames(JoinPath(r.run_dir, "scan_frames")));
+  }
+  if (scan) columns.push_back({"Scan (splats)", "", "", std::move(scan), std::nullopt, nullptr});
   for (const Row& r : c.rows) {
     if (r.scene != scene) continue;
     Column col{DisplayName(r), "", "", std::nullopt, std::nullopt, &r};
@@ -203,8 +210,14 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
         PB_ASSIGN_OR_RETURN(col.flip, MaybeReadFrames(JoinPath(r.run_dir, "flip_truth")));
         col.flip_title = "FLIP vs ground truth";
       } else {
-        PB_ASSIGN_OR_RETURN(col.flip, MaybeReadFrames(JoinPath(r.run_dir, "flip_hpm")));
-        col.flip_title = "FLIP vs HPM";
+        // Without ground truth the scan is the reference: its covered-pixel
+        // map (unlit), else HPM's.
+        PB_ASSIGN_OR_RETURN(col.flip, MaybeReadFrames(JoinPath(r.run_dir, "flip_scan")));
+        col.flip_title = "FLIP vs scan (covered pixels, unlit)";
+        if (!col.flip) {
+          PB_ASSIGN_OR_RETURN(col.flip, MaybeReadFrames(JoinPath(r.run_dir, "flip_hpm")));
+          col.flip_title = "FLIP vs HPM";
+        }
       }
     }
     columns.push_back(std::move(col));
@@ -240,7 +253,8 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
       const Column& col = columns[k];
       FrameCell cell{col.title, col.note, std::nullopt, std::nullopt, std::nullopt, col.flip_title};
       const std::string base =
-          Slug(scene) + "__" + Slug(col.row ? col.row->name : "truth") + "__" + Slug(view);
+          Slug(scene) + "__" + Slug(col.row ? col.row->name : k == 0 && has_truth ? "truth" : "scan") + "__" +
+          Slug(view);
       std::optional<Image> rgb = rgb_of(col.frames ? &*col.frames : nullptr);
       if (col.frames && !rgb) cell.note = "no frame \"" + view + "\"";
       if (rgb) {

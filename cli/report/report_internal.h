@@ -42,6 +42,19 @@ constexpr std::array<const char*, kQualityCount> kQualityColumns = {
 constexpr std::array<const char*, kQualityCount> kQualityTitles = {"PSNR dB", "SSIM luma",
                                                                    "SSIM RGB", "MS-SSIM", "FLIP"};
 
+// Against the scan (issue 15): the covered-pixel figures of the metrics.image
+// table vs_scan.json (the first kScanImageCount) and the truth-free geometry
+// figures of geometry.json (the rest), with their titles.
+constexpr int kScanCount = 8;
+constexpr int kScanImageCount = 5;
+constexpr std::array<const char*, kScanCount> kScanColumns = {
+    "covered_psnr_db",        "covered_ssim_luma", "covered_flip_mean",
+    "coverage_iou",           "hole_fraction",     "invented_area_fraction",
+    "missing_fraction",       "boundary_edges_per_1000_faces"};
+constexpr std::array<const char*, kScanCount> kScanTitles = {
+    "PSNR dB", "SSIM luma", "FLIP", "Coverage IoU", "Holes %", "Invented area %", "Missing scan %",
+    "Boundary edges / 1000 faces"};
+
 // One run of the campaign: its manifest entry and the figures read from its
 // folder (all null for a failed run).
 struct Row {
@@ -53,6 +66,7 @@ struct Row {
   std::optional<bool> fits;
   std::string device;
   std::array<Opt, kQualityCount> vs_hpm{}, vs_truth{};
+  std::array<Opt, kScanCount> vs_scan{};
   bool ok() const { return status == "ok"; }
 };
 
@@ -77,7 +91,8 @@ struct SpeedUpMean {
 // ---- report_read.cc ---------------------------------------------------------
 
 // Reads campaign.json and every ok run's run.json, vs_hpm.json,
-// vs_truth.json and fps.json; errors name the file.
+// vs_truth.json, vs_scan.json, geometry.json and fps.json; errors name the
+// file.
 Expected<Campaign> ReadCampaign(const std::string& campaign_dir);
 
 // "Point transfer (splat)" for workflow point_transfer, variant splat.

@@ -144,6 +144,35 @@ Status ReadQuality(const std::string& path, std::array<Opt, kQualityCount>& out)
   return Status::Corrupt(path + ": no row with frame \"mean\"");
 }
 
+// The covered-pixel columns of vs_scan.json's "mean" row and the scan rows of
+// geometry.json (metrics.geometry with points); absent files = all null.
+Status ReadScan(const std::string& image_path, const std::string& geometry_path, Row& row) {
+  if (Env::Default()->Exists(image_path)) {
+    PB_ASSIGN_OR_RETURN(Table table, ReadTable(image_path));
+    bool found = false;
+    for (size_t r = 0; r < table.rows.size() && !found; ++r) {
+      const TableValue frame = table.get(r, "frame");
+      if (!std::holds_alternative<std::string>(frame) || std::get<std::string>(frame) != "mean") continue;
+      for (int q = 0; q < kScanImageCount; ++q) row.vs_scan[size_t(q)] = TableOpt(table, r, kScanColumns[size_t(q)]);
+      found = true;
+    }
+    if (!found) return Status::Corrupt(image_path + ": no row with frame \"mean\"");
+  }
+  if (Env::Default()->Exists(geometry_path)) {
+    PB_ASSIGN_OR_RETURN(Table table, ReadTable(geometry_path));
+    for (size_t r = 0; r < table.rows.size(); ++r) {
+      const TableValue direction = table.get(r, "direction");
+      if (!std::holds_alternative<std::string>(direction)) continue;
+      const std::string& d = std::get<std::string>(direction);
+      if (d == "mesh_to_scan") row.vs_scan[5] = TableOpt(table, r, "beyond_fraction");
+      if (d == "scan_to_mesh") row.vs_scan[6] = TableOpt(table, r, "beyond_fraction");
+      if (d == "mesh_to_scan" || d == "scan_to_mesh")
+        row.vs_scan[7] = TableOpt(table, r, "boundary_edges_per_1000_faces");
+    }
+  }
+  return Status::Ok();
+}
+
 Status ReadFps(const std::string& path, Row& row) {
   if (!Env::Default()->Exists(path)) return Status::Ok();
   PB_ASSIGN_OR_RETURN(Table table, ReadTable(path));
@@ -208,6 +237,8 @@ Expected<Campaign> ReadCampaign(const std::string& campaign_dir) {
     PB_RETURN_IF_ERROR(ReadRunTimes(JoinPath(row.run_dir, "run.json"), row));
     PB_RETURN_IF_ERROR(ReadQuality(JoinPath(row.run_dir, "vs_hpm.json"), row.vs_hpm));
     PB_RETURN_IF_ERROR(ReadQuality(JoinPath(row.run_dir, "vs_truth.json"), row.vs_truth));
+    PB_RETURN_IF_ERROR(
+        ReadScan(JoinPath(row.run_dir, "vs_scan.json"), JoinPath(row.run_dir, "geometry.json"), row));
     PB_RETURN_IF_ERROR(ReadFps(JoinPath(row.run_dir, "fps.json"), row));
   }
   auto scene_rank = [&](const std::string& s) {
@@ -283,6 +314,11 @@ Json RowJson(const Row& r) {
     for (int i = 0; i < kQualityCount; ++i) j[kQualityColumns[i]] = OptJson(q[i]);
     return j;
   };
+  auto scan = [&r](int begin, int end) {
+    Json j = Json::object();
+    for (int i = begin; i < end; ++i) j[kScanColumns[size_t(i)]] = OptJson(r.vs_scan[size_t(i)]);
+    return j;
+  };
   Json texture = nullptr;
   if (r.texture_width && r.texture_height)
     texture = {{"width_px", IntJson(r.texture_width)}, {"height_px", IntJson(r.texture_height)}};
@@ -301,7 +337,9 @@ Json RowJson(const Row& r) {
             {"fits", r.fits ? Json(*r.fits) : Json(nullptr)},
             {"device", r.device.empty() ? Json(nullptr) : Json(r.device)},
             {"vs_hpm", quality(r.vs_hpm)},
-            {"vs_truth", quality(r.vs_truth)}};
+            {"vs_truth", quality(r.vs_truth)},
+            {"vs_scan", scan(0, kScanImageCount)},
+            {"scan_geometry", scan(kScanImageCount, kScanCount)}};
   if (!r.error.empty()) j["error"] = r.error;
   return j;
 }
@@ -355,6 +393,8 @@ std::string ResultsCsv(const Campaign& c) {
     header.push_back(h);
   for (const char* prefix : {"vs_hpm_", "vs_truth_"})
     for (const char* q : kQualityColumns) header.push_back(prefix + std::string(q));
+  for (int i = 0; i < kScanCount; ++i)
+    header.push_back((i < kScanImageCount ? "vs_scan_" : "scan_") + std::string(kScanColumns[size_t(i)]));
   header.push_back("error");
   std::string out;
   for (size_t i = 0; i < header.size(); ++i) out += (i ? "," : "") + header[i];
@@ -371,6 +411,8 @@ std::string ResultsCsv(const Campaign& c) {
       values.push_back(v);
     for (const char* key : {"vs_hpm", "vs_truth"})
       for (const char* q : kQualityColumns) values.push_back(j[key][q]);
+    for (int i = 0; i < kScanCount; ++i)
+      values.push_back(j[i < kScanImageCount ? "vs_scan" : "scan_geometry"][kScanColumns[size_t(i)]]);
     values.push_back(r.error.empty() ? Json(nullptr) : Json(r.error));
     for (size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + CsvField(values[i]);
     out += "\n";

@@ -317,6 +317,51 @@ TEST_F(ReportTest, HtmlIsSelfContainedWithChartsAndFrames) {
       std::filesystem::exists(Path("report/images/room__room_point_transfer__front_crop.png")));
 }
 
+TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
+  WriteCampaign();
+  // Point transfer measured against the scan: metrics.image v2's covered
+  // columns and metrics.geometry's scan rows; the scan's splat frames.
+  Table image;
+  image.columns = {"frame", "psnr_db", "covered_psnr_db", "covered_ssim_luma", "covered_flip_mean",
+                   "coverage_iou", "hole_fraction"};
+  image.rows.push_back({std::string("front"), 20.0, 31.5, 0.8, 0.12, 0.9, 0.0125});
+  image.rows.push_back({std::string("mean"), 20.0, 31.5, 0.8, 0.12, 0.9, 0.0125});
+  ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/vs_scan.json", image).ok());
+  Table geometry;
+  geometry.columns = {"direction", "beyond_fraction", "boundary_edges_per_1000_faces"};
+  geometry.rows.push_back({std::string("mesh_to_scan"), 0.25, 3.5});
+  geometry.rows.push_back({std::string("scan_to_mesh"), 0.0625, 3.5});
+  ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/geometry.json", geometry).ok());
+  WriteFrameSet(RunDir("point_transfer") + "/scan_frames", TestFrame(7));
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+
+  const Json results = Results();
+  const Json& pt = results["rows"][2];  // hpm, lpm (failed), point transfer
+  ASSERT_EQ(pt["workflow"], "point_transfer");
+  EXPECT_EQ(pt["vs_scan"]["covered_psnr_db"].get<double>(), 31.5);
+  EXPECT_EQ(pt["vs_scan"]["hole_fraction"].get<double>(), 0.0125);
+  EXPECT_EQ(pt["scan_geometry"]["invented_area_fraction"].get<double>(), 0.25);
+  EXPECT_EQ(pt["scan_geometry"]["missing_fraction"].get<double>(), 0.0625);
+  EXPECT_EQ(pt["scan_geometry"]["boundary_edges_per_1000_faces"].get<double>(), 3.5);
+  EXPECT_TRUE(results["rows"][0]["vs_scan"]["covered_psnr_db"].is_null());  // HPM: no file
+
+  const std::string html = ReadText(Path("report/report.html"));
+  EXPECT_THAT(html, HasSubstr("Against the scan"));
+  EXPECT_THAT(html, HasSubstr("<td>31.50</td>"));
+  EXPECT_THAT(html, HasSubstr("<td>1.25</td>"));   // holes, %
+  EXPECT_THAT(html, HasSubstr("<td>25.00</td>"));  // invented area, %
+  EXPECT_THAT(html, HasSubstr("Scan (splats)"));
+  // Truth, scan (frame + crop each), HPM and point transfer (frame + crop +
+  // FLIP each).
+  size_t images = 0;
+  for (size_t at = html.find("<img "); at != std::string::npos; at = html.find("<img ", at + 1)) ++images;
+  EXPECT_EQ(images, 10u);
+  EXPECT_TRUE(std::filesystem::exists(Path("report/images/room__scan__front_frame.png")));
+  const std::string csv = ReadText(Path("report/results.csv"));
+  EXPECT_THAT(csv, HasSubstr("vs_scan_covered_psnr_db"));
+  EXPECT_THAT(csv, HasSubstr("scan_invented_area_fraction"));
+}
+
 TEST_F(ReportTest, CropIsWhereTransferAndLpmDifferMost) {
   WriteCampaign(/*lpm_ok=*/true);
   ReportOptions options;
