@@ -25,13 +25,20 @@ constexpr const char* kId = "metrics.image";
 constexpr const char* kColumns[] = {
     "psnr_db",         "ssim_luma",         "ssim_rgb",         "ms_ssim_luma",         "flip_mean",
     "covered_psnr_db", "covered_ssim_luma", "covered_ssim_rgb", "covered_ms_ssim_luma", "covered_flip_mean",
-    "coverage_iou",    "hole_px",           "enclosed_hole_px", "hole_fraction",        "compared_px"};
+    "coverage_iou",    "hole_px",           "enclosed_hole_px", "hole_fraction",        "compared_px",
+    "nearer_px",       "farther_px"};
 
 // The ppd default is FLIP's own (FlipDefaultPpd(), checked by a test).
 constexpr const char* kSchema = R"({
   "type": "object",
   "additionalProperties": false,
   "properties": {
+    "depth_tolerance": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.05,
+      "description": "When both sets carry depth maps (render.frames / render.splats `depth: true`): pixels covered in both whose depths differ by more than this fraction of the reference's depth are different surfaces (nearer_px: the tested surface in front, e.g. invented; farther_px: behind), counted apart and left out of the covered metrics."
+    },
     "ppd": {
       "type": "number",
       "exclusiveMinimum": 0,
@@ -76,6 +83,8 @@ Status MatchFrames(const FrameSet& test, const FrameSet& reference) {
 
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const double ppd, NumberParam(ctx, kId, "ppd", FlipDefaultPpd()));
+  PB_ASSIGN_OR_RETURN(const double depth_tolerance, NumberParam(ctx, kId, "depth_tolerance", 0.05));
+  if (!(depth_tolerance >= 0)) return Status::Invalid(std::string(kId) + ": depth_tolerance must be >= 0");
   if (!(ppd > 0)) return Status::Invalid(std::string(kId) + ": ppd must be positive");
   FrameSet test, reference;
   {
@@ -101,12 +110,16 @@ Status Run(StageContext& ctx) {
       const Frame& ref = *reference.find(frame.entry.name);
       ImageMetricsOptions options;
       options.flip_ppd = ppd;
+      options.depth_tolerance = depth_tolerance;
+      const bool depth = frame.depth.width > 0 && ref.depth.width > 0;
       FlipResult flip, covered_flip;
       Expected<ImageMetrics> m = Status::Internal("not run");
       Expected<CoveredComparison> c = Status::Internal("not run");
       arena.execute([&] {
         m = CompareImages(ref.image, frame.image, options, &flip);
-        if (m.ok()) c = CompareCovered(ref.image, frame.image, options, &covered_flip);
+        if (m.ok())
+          c = CompareCovered(ref.image, frame.image, options, &covered_flip, depth ? &ref.depth : nullptr,
+                             depth ? &frame.depth : nullptr);
       });
       if (!m.ok()) return m.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
       if (!c.ok()) return c.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
@@ -125,7 +138,9 @@ Status Run(StageContext& ctx) {
                                double(cov.hole_px),
                                double(cov.enclosed_hole_px),
                                cov.hole_fraction,
-                               double(cov.compared_px)};
+                               double(cov.compared_px),
+                               cov.depth_checked ? double(cov.nearer_px) : std::nan(""),
+                               cov.depth_checked ? double(cov.farther_px) : std::nan("")};
       static_assert(std::size(values) == std::size(kColumns));
       std::vector<TableValue> row = {frame.entry.name};
       for (size_t k = 0; k < std::size(values); ++k) {
@@ -198,11 +213,15 @@ StageType ImageMetricsStage() {
       "`coverage_iou`: covered in both / covered in either. `hole_px`: covered in the reference, "
       "background in the tested frame; `enclosed_hole_px`: those of them inside the tested frame's "
       "own silhouette (its background not connected to the frame's border: background seen through "
-      "the surface); `hole_fraction` = hole_px / the reference's covered pixels.\n\n"
+      "the surface); `hole_fraction` = hole_px / the reference's covered pixels. When both frames "
+      "carry depth maps, `nearer_px` / `farther_px` count the pixels covered in both where the "
+      "tested surface lies in front of / behind the reference's by more than `depth_tolerance` x "
+      "its depth (invented surface in front; missing surface seen through); they are geometry, "
+      "left out of the covered metrics with their 4 neighbours (null without depth maps).\n\n"
       "Output `table` columns: `frame`, `psnr_db`, `ssim_luma`, `ssim_rgb`, `ms_ssim_luma`, "
       "`flip_mean` (whole frame), `covered_psnr_db`, `covered_ssim_luma`, `covered_ssim_rgb`, "
       "`covered_ms_ssim_luma`, `covered_flip_mean`, `coverage_iou`, `hole_px`, `enclosed_hole_px`, "
-      "`hole_fraction`, `compared_px`; one row per frame in the order of `frames`, then a row `mean` "
+      "`hole_fraction`, `compared_px`, `nearer_px`, `farther_px`; one row per frame in the order of `frames`, then a row `mean` "
       "with the arithmetic mean of each column. Output `flip`: the whole-frame FLIP error map of "
       "every frame, magma color-mapped, same names and files; `flip_covered`: the map of the "
       "covered-pixel comparison.\n\n"

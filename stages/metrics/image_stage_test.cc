@@ -59,6 +59,35 @@ TEST_F(FramesTest, RoundTripWithViewpoint) {
   EXPECT_EQ(read->find("nope"), nullptr);
 }
 
+TEST_F(FramesTest, DepthMapsRoundTripAndBadDepthFilesAreNamed) {
+  FrameSet set = MakeSet(24, 16, {{"door", 0}});
+  set.frames[0].entry.depth_file = "door.depth.exr";
+  set.frames[0].depth = Image::Make(24, 16, 1, Image::PixelType::kF32);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 24; ++x) set.frames[0].depth.at_f32(x, y, 0) = 1.0f + 0.25f * x;
+  ASSERT_TRUE(WriteFrames(dir_.string(), set).ok());
+  Expected<FrameSet> read = ReadFrames(Path("frames.json"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->frames[0].entry.depth_file, "door.depth.exr");
+  EXPECT_EQ(read->frames[0].depth.data, set.frames[0].depth.data);
+  // A depth file named like the image, or not .exr, or missing its map.
+  FrameSet bad = set;
+  bad.frames[0].entry.depth_file = "door.png";
+  EXPECT_FALSE(WriteFrames(Path("bad1"), bad).ok());
+  bad.frames[0].entry.depth_file = "door.depth.png";
+  Status named = Validate(FramesIndex{24, 16, {bad.frames[0].entry}});
+  EXPECT_NE(named.message().find(".exr"), std::string::npos) << named.message();
+  bad.frames[0].entry.depth_file = "d.exr";
+  bad.frames[0].depth = Image();
+  std::filesystem::create_directories(Path("bad3"));
+  EXPECT_FALSE(WriteFrames(Path("bad3"), bad).ok());
+  // frames.json naming a depth file that is not there.
+  std::filesystem::remove(Path("door.depth.exr"));
+  Expected<FrameSet> missing = ReadFrames(Path("frames.json"));
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("door.depth.exr"), std::string::npos) << missing.status().message();
+}
+
 TEST_F(FramesTest, ClearErrors) {
   ASSERT_TRUE(WriteFrames(dir_.string(), MakeSet(24, 16, {{"a", 0}, {"b", 1}})).ok());
   // Missing image.
@@ -241,6 +270,7 @@ TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
   // The whole frame counts the black border, the same in both, as agreement.
   EXPECT_LT(TableNumber(table->get(0, "covered_psnr_db")), TableNumber(table->get(0, "psnr_db")));
   EXPECT_EQ(ctx.counters_.at("hole_px"), 24);
+  EXPECT_TRUE(std::holds_alternative<std::monostate>(table->get(0, "nearer_px")));  // no depth maps
   ASSERT_TRUE(ctx.files_.count("flip_covered/frames.json"));
 }
 

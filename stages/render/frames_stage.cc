@@ -33,6 +33,11 @@ constexpr const char* kSchema = R"({
   "required": ["viewpoints"],
   "properties": {
     "viewpoints": VIEWPOINTS_SCHEMA,
+    "depth": {
+      "type": "boolean",
+      "default": false,
+      "description": "Also write each frame's depth map (<frame>.depth.exr: per pixel the view depth in meters of the nearest surface hit, 0 where none), so metrics.image can tell a surface in front of or behind the reference's apart from a texture difference."
+    },
     "size": {
       "type": "integer",
       "minimum": 16,
@@ -87,6 +92,7 @@ struct Options {
   RenderOptions render;
   int size = 1024;
   int truth_supersample = 4;
+  bool depth = false;
 };
 
 Expected<Options> ReadOptions(const StageContext& ctx) {
@@ -95,6 +101,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", 2, 1, 8));
   PB_ASSIGN_OR_RETURN(const int64_t truth_supersample, IntegerParam(ctx, kId, "truth_supersample", 4, 1, 8));
   PB_ASSIGN_OR_RETURN(const std::string lighting, StringParam(ctx, kId, "lighting", "lambert"));
+  PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth", false));
   PB_ASSIGN_OR_RETURN(options.render.ambient, NumberParam(ctx, kId, "ambient", 0.25));
   PB_ASSIGN_OR_RETURN(options.render.diffuse, NumberParam(ctx, kId, "diffuse", 0.75));
   if (lighting != "lambert" && lighting != "unlit")
@@ -141,6 +148,8 @@ Status Run(StageContext& ctx) {
   if (has_mesh == has_truth)
     return Status::Invalid(std::string(kId) + ": connect exactly one of 'mesh' and 'truth' (got " +
                            (has_mesh ? "both" : "neither") + ")");
+  if (options.depth && has_truth)
+    return Status::Invalid(std::string(kId) + ": 'depth' is written for a mesh, not for 'truth'");
   if (has_truth && (ctx.has_input("color") || ctx.has_input("normal")))
     return Status::Invalid(std::string(kId) + ": 'color' and 'normal' go with 'mesh', not 'truth'");
   if (ctx.has_input("normal") && !ctx.has_input("color"))
@@ -187,14 +196,17 @@ Status Run(StageContext& ctx) {
     for (size_t i = 0; i < views.size(); ++i) {
       Expected<Image> image = Status::Internal("not run");
       RenderStats stats;
+      Image depth;
       arena.execute([&] {
         image = scene ? RenderSynthScene(*scene, views[i].camera, render, &stats)
-                      : RenderMesh(mesh, material, views[i].camera, render, &stats);
+                      : RenderMesh(mesh, material, views[i].camera, render, &stats, options.depth ? &depth : nullptr);
       });
       if (!image.ok())
         return image.status().WithContext(std::string(kId) + ": viewpoint '" + views[i].entry.name + "'");
       covered_samples += stats.covered_samples;
-      frames.frames.push_back(Frame{views[i].entry, std::move(*image)});
+      FrameEntry entry = views[i].entry;
+      if (options.depth) entry.depth_file = DepthFileName(entry.file);
+      frames.frames.push_back(Frame{std::move(entry), std::move(*image), std::move(depth)});
       ctx.progress(0.1 + 0.8 * double(i + 1) / double(views.size()));
     }
   }
@@ -248,7 +260,9 @@ StageType FramesStage() {
       "hit, the same light and encoding); without scene.json the truth mesh is drawn with its "
       "vertex colors. Exactly one of `mesh` and `truth`; `normal` needs `color`, `color` needs "
       "uvs, `normal` needs tangents.\n\n"
-      "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>).\n\n"
+      "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>); with `depth`, "
+      "also <name>.depth.exr (view depth in meters of the nearest surface per pixel, 0 on "
+      "background; a mesh only).\n\n"
       "Counters: `frames`, `triangles` (faces drawn per frame; 0 for the analytic truth), "
       "`pixels` (over all frames). Phases: `io`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);

@@ -286,5 +286,37 @@ TEST_F(RenderStagesTest, SplatsReportBadInput) {
   EXPECT_NE(status.message().find("k = 8"), std::string::npos) << status.message();
 }
 
+TEST_F(RenderStagesTest, DepthMapsOfMeshAndSplatsAgreeOnTheSameSurface) {
+  // The quad and the grid of points where it is, 5 m in front of the eye:
+  // both depth maps read 5 m in the middle and 0 on the background, and
+  // survive the trip through frames.json.
+  nlohmann::json params = Params(Viewpoints());
+  params["depth"] = true;
+  std::filesystem::create_directories(dir_ / "mesh");
+  FakeContext mesh_ctx(dir_ / "mesh", params);
+  mesh_ctx.AddInput("mesh", "mesh", WriteInputMesh("quad", Quad()));
+  ASSERT_TRUE(Run("render.frames", mesh_ctx).ok());
+  std::filesystem::create_directories(dir_ / "splats");
+  FakeContext splat_ctx(dir_ / "splats", params);
+  splat_ctx.AddInput("points", "points", WriteInputPoints("grid", QuadPoints()));
+  ASSERT_TRUE(Run("render.splats", splat_ctx).ok());
+  for (FakeContext* ctx : {&mesh_ctx, &splat_ctx}) {
+    Expected<FrameSet> frames = Frames(*ctx);
+    ASSERT_TRUE(frames.ok()) << frames.status().message();
+    const Frame& front = frames->frames[0];
+    EXPECT_EQ(front.entry.depth_file, "front.depth.exr");
+    ASSERT_EQ(front.depth.width, 32);
+    EXPECT_NEAR(front.depth.at_f32(16, 16, 0), 5.0f, 1e-4);
+    EXPECT_EQ(front.depth.at_f32(0, 0, 0), 0.0f);
+  }
+  // Without `depth` there is none.
+  std::filesystem::create_directories(dir_ / "plain");
+  FakeContext plain(dir_ / "plain", Params(Viewpoints()));
+  plain.AddInput("mesh", "mesh", WriteInputMesh("quad2", Quad()));
+  ASSERT_TRUE(Run("render.frames", plain).ok());
+  EXPECT_TRUE(Frames(plain)->frames[0].entry.depth_file.empty());
+  EXPECT_EQ(plain.files_.count("frames/front.depth.exr"), 0u);
+}
+
 }  // namespace
 }  // namespace pb

@@ -29,6 +29,11 @@ constexpr const char* kSchema = R"({
   "required": ["viewpoints"],
   "properties": {
     "viewpoints": VIEWPOINTS_SCHEMA,
+    "depth": {
+      "type": "boolean",
+      "default": false,
+      "description": "Also write each frame's depth map (<frame>.depth.exr: per pixel the view depth in meters of the nearest surface hit, 0 where none), so metrics.image can tell a surface in front of or behind the reference's apart from a texture difference."
+    },
     "size": {
       "type": "integer",
       "minimum": 16,
@@ -81,6 +86,7 @@ constexpr const char* kSchema = R"({
 
 struct Options {
   SplatOptions splat;
+  bool depth = false;
   int size = 0;
   int k = 0;
   double radius_scale = 0;
@@ -91,6 +97,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", 1024, 16, 8192));
   PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", 2, 1, 8));
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 8, 1, 64));
+  PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth", false));
   PB_ASSIGN_OR_RETURN(options.radius_scale, NumberParam(ctx, kId, "radius_scale", 0.75));
   PB_ASSIGN_OR_RETURN(options.splat.depth_tolerance, NumberParam(ctx, kId, "depth_tolerance", 2.0));
   PB_ASSIGN_OR_RETURN(options.splat.max_radius_px, NumberParam(ctx, kId, "max_radius_px", 32.0));
@@ -140,12 +147,17 @@ Status Run(StageContext& ctx) {
     for (size_t i = 0; i < views.size(); ++i) {
       Expected<Image> image = Status::Internal("not run");
       SplatStats stats;
-      arena.execute([&] { image = RenderSplats(cloud, radius, views[i].camera, options.splat, &stats); });
+      Image depth;
+      arena.execute([&] {
+        image = RenderSplats(cloud, radius, views[i].camera, options.splat, &stats, options.depth ? &depth : nullptr);
+      });
       if (!image.ok())
         return image.status().WithContext(std::string(kId) + ": viewpoint '" + views[i].entry.name + "'");
       covered_samples += stats.covered_samples;
       drawn += stats.drawn;
-      frames.frames.push_back(Frame{views[i].entry, std::move(*image)});
+      FrameEntry entry = views[i].entry;
+      if (options.depth) entry.depth_file = DepthFileName(entry.file);
+      frames.frames.push_back(Frame{std::move(entry), std::move(*image), std::move(depth)});
       ctx.progress(0.35 + 0.55 * double(i + 1) / double(views.size()));
     }
   }
@@ -199,7 +211,8 @@ StageType SplatsStage() {
       "lit when it was scanned; compare these frames with render.frames at `lighting: unlit`. "
       "Points without colors are gray (180). The bytes are the same for any thread count.\n\n"
       "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>), the same names and "
-      "files as render.frames with the same viewpoints, so metrics.image compares them.\n\n"
+      "files as render.frames with the same viewpoints, so metrics.image compares them; with "
+      "`depth`, also <name>.depth.exr (the front splats' view depth in meters, 0 on background).\n\n"
       "Counters: `frames`, `points`, `splats_drawn` (over all frames), `median_radius_m`, `pixels`. "
       "Phases: `io`, `spacing`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);

@@ -36,6 +36,11 @@ std::string FileStem(const std::string& name) {
 
 }  // namespace
 
+std::string DepthFileName(const std::string& png_file) {
+  const std::string stem = png_file.size() > 4 ? png_file.substr(0, png_file.size() - 4) : png_file;
+  return stem + ".depth.exr";
+}
+
 std::string WithViewpointsSchema(std::string schema) {
   const std::string token = "VIEWPOINTS_SCHEMA";
   const size_t at = schema.find(token);

@@ -45,6 +45,10 @@ struct View {
   RenderCamera camera;  // of `size` x `size` pixels
 };
 
+// The depth map's file name beside frame file `png_file`: "door.png" ->
+// "door.depth.exr".
+std::string DepthFileName(const std::string& png_file);
+
 // Reads parameter `viewpoints` of the stage `stage_id` (errors name it and
 // the item: "render.frames: viewpoints[1].eye: must be finite").
 Expected<std::vector<View>> ReadViewpoints(const StageContext& ctx, std::string_view stage_id, int size);

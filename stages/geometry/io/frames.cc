@@ -54,6 +54,15 @@ Status Validate(const FramesIndex& index) {
                              "' must be a plain file name ending in .png");
     if (!files.insert(f.file).second)
       return Status::Invalid(where + " '" + f.name + "': file '" + f.file + "' used twice");
+    if (!f.depth_file.empty()) {
+      const std::string& d = f.depth_file;
+      if (d.find('/') != std::string::npos || d.find('\\') != std::string::npos || d.size() <= 4 ||
+          d.compare(d.size() - 4, 4, ".exr") != 0)
+        return Status::Invalid(where + " '" + f.name + "': depth file '" + d +
+                               "' must be a plain file name ending in .exr");
+      if (!files.insert(d).second)
+        return Status::Invalid(where + " '" + f.name + "': file '" + d + "' used twice");
+    }
   }
   return Status::Ok();
 }
@@ -68,6 +77,7 @@ std::string FramesIndexToJson(const FramesIndex& index) {
       if (f.viewpoint->up) entry["up"] = Vec3(*f.viewpoint->up);
       if (f.viewpoint->fov_deg) entry["fov_deg"] = *f.viewpoint->fov_deg;
     }
+    if (!f.depth_file.empty()) entry["depth"] = f.depth_file;
     frames.push_back(std::move(entry));
   }
   nlohmann::json document = nlohmann::json::object();
@@ -121,6 +131,10 @@ Expected<FramesIndex> FramesIndexFromJson(std::string_view json_text, const std:
     if (has_eye != has_target || ((has_up || view.fov_deg) && !has_eye))
       return Status::Invalid(where + ": a viewpoint needs both \"eye\" and \"target\"");
     if (has_eye) entry.viewpoint = view;
+    if (f.contains("depth")) {
+      if (!f["depth"].is_string()) return Status::Invalid(where + ": \"depth\" must be a file name");
+      entry.depth_file = f["depth"].get<std::string>();
+    }
     index.frames.push_back(std::move(entry));
   }
   PB_RETURN_IF_ERROR(Validate(index).WithContext(source));
@@ -149,7 +163,20 @@ Expected<FrameSet> ReadFrames(const std::string& index_path, const FramesFilePat
       return Status::Invalid(what + ": " + entry.file + " is " + std::to_string(image->width) + "x" +
                              std::to_string(image->height) + ", the set is " +
                              std::to_string(index.width) + "x" + std::to_string(index.height));
-    set.frames.push_back(Frame{std::move(entry), std::move(image).value()});
+    Image depth;
+    if (!entry.depth_file.empty()) {
+      const std::string depth_path = path_of ? path_of(entry.depth_file) : JoinPath(dir, entry.depth_file);
+      if (depth_path.empty() || !Env::Default()->Exists(depth_path))
+        return Status::NotFound(what + ": missing depth file '" + entry.depth_file + "'");
+      Expected<Image> read = ReadExr(depth_path);
+      if (!read.ok()) return read.status().WithContext(what);
+      if (read->type != Image::PixelType::kF32 || read->channels != 1 || read->width != index.width ||
+          read->height != index.height)
+        return Status::Invalid(what + ": " + entry.depth_file + " must be a one-channel float " +
+                               std::to_string(index.width) + "x" + std::to_string(index.height) + " EXR");
+      depth = std::move(*read);
+    }
+    set.frames.push_back(Frame{std::move(entry), std::move(image).value(), std::move(depth)});
   }
   return set;
 }
@@ -170,6 +197,15 @@ Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of) {
     PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> png, EncodePng(image));
     PB_RETURN_IF_ERROR(Env::Default()->WriteFileAtomic(
         path_of(f.entry.file), std::string_view(reinterpret_cast<const char*>(png.data()), png.size())));
+    if (!f.entry.depth_file.empty()) {
+      const Image& depth = f.depth;
+      if (depth.type != Image::PixelType::kF32 || depth.channels != 1 || depth.width != frames.width ||
+          depth.height != frames.height)
+        return Status::Invalid("writing frames: frame '" + f.entry.name + "' names a depth file but has no " +
+                               std::to_string(frames.width) + "x" + std::to_string(frames.height) +
+                               " one-channel float depth map");
+      PB_RETURN_IF_ERROR(WriteExr(path_of(f.entry.depth_file), depth));
+    }
   }
   return Env::Default()->WriteFileAtomic(path_of(kFramesIndexFile), FramesIndexToJson(index));
 }

@@ -9,11 +9,18 @@
 //       "frames": [
 //         {"name": "door", "file": "door.png",
 //          "eye": [x, y, z], "target": [x, y, z],   <- optional viewpoint
-//          "up": [x, y, z], "fov_deg": 75},          <- (scene file units)
+//          "up": [x, y, z], "fov_deg": 75,          <- (scene file units)
+//          "depth": "door.depth.exr"},              <- optional depth map
 //         ...
 //       ]
 //     }
 //   door.png, ...   8-bit sRGB PNGs, RGB or RGBA, width x height each
+//   door.depth.exr  optional: one float channel, width x height, the view
+//                   depth in meters (distance along the camera's forward
+//                   axis) of the nearest surface the pixel's samples hit; 0
+//                   where nothing was hit (render.frames `depth: true`,
+//                   render.splats). Readers of version 1 without this key
+//                   ignore it.
 //
 // Names are unique and non-empty; files are plain file names (no folder),
 // ending in ".png", unique, not "frames.json". Alpha, when present, is 255
@@ -50,6 +57,7 @@ struct FrameEntry {
   std::string name;
   std::string file;  // PNG file name inside the artifact
   std::optional<FrameViewpoint> viewpoint;
+  std::string depth_file;  // "" or the depth map's file name (plain, ending in .exr)
 };
 
 struct FramesIndex {
@@ -61,6 +69,7 @@ struct FramesIndex {
 struct Frame {
   FrameEntry entry;
   Image image;  // kU8, 3 or 4 channels, width x height of the set
+  Image depth;  // empty, or kF32 1 channel, width x height: with entry.depth_file
 };
 
 struct FrameSet {

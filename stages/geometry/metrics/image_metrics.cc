@@ -343,7 +343,8 @@ std::vector<uint8_t> DownsampleMask(const std::vector<uint8_t>& mask, int width,
 }  // namespace
 
 Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
-                                           const ImageMetricsOptions& options, FlipResult* flip) {
+                                           const ImageMetricsOptions& options, FlipResult* flip,
+                                           const Image* reference_depth, const Image* test_depth) {
   PB_ASSIGN_OR_RETURN(auto pair, ToRgb8Pair(reference, test));
   Rgb8& a = pair.first;
   Rgb8& b = pair.second;
@@ -367,6 +368,29 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
   r.coverage.iou = r.coverage.union_px == 0 ? 1.0 : double(r.coverage.both_px) / double(r.coverage.union_px);
   r.coverage.hole_fraction =
       r.coverage.reference_px == 0 ? 0.0 : double(r.coverage.hole_px) / double(r.coverage.reference_px);
+  if ((reference_depth == nullptr) != (test_depth == nullptr))
+    return Status::Invalid("covered comparison: give both depth maps or neither");
+  if (reference_depth) {
+    for (const Image* d : {reference_depth, test_depth})
+      if (d->type != Image::PixelType::kF32 || d->channels != 1 || d->width != w || d->height != h)
+        return Status::Invalid("covered comparison: a depth map must be one float channel of " + std::to_string(w) +
+                               "x" + std::to_string(h));
+    if (!(options.depth_tolerance >= 0)) return Status::Invalid("covered comparison: depth_tolerance must be >= 0");
+    r.coverage.depth_checked = true;
+    const float* dr = reference_depth->f32();
+    const float* dt = test_depth->f32();
+    for (size_t i = 0; i < pixels; ++i) {
+      if (!both[i] || !(dr[i] > 0) || !(dt[i] > 0)) continue;
+      const double band = options.depth_tolerance * double(dr[i]);
+      if (double(dt[i]) < double(dr[i]) - band) {
+        ++r.coverage.nearer_px;
+        both[i] = 0;
+      } else if (double(dt[i]) > double(dr[i]) + band) {
+        ++r.coverage.farther_px;
+        both[i] = 0;
+      }
+    }
+  }
   // Compared: covered in both, and so are the 4 neighbours (inside the frame):
   // supersampled edge pixels mix the surface with the background.
   std::vector<uint8_t> mask(pixels, 0);

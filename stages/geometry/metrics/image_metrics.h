@@ -88,6 +88,9 @@ std::array<uint8_t, 3> MagmaColor(int index);
 
 struct ImageMetricsOptions {
   double flip_ppd = FlipDefaultPpd();
+  // CompareCovered with depth maps: surfaces whose depths differ by more
+  // than this fraction of the reference's depth are different surfaces.
+  double depth_tolerance = 0.05;
 };
 
 // All four metrics. For images too small for SSIM (< 11 px) or MS-SSIM
@@ -131,6 +134,14 @@ Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
 //    scale a pixel is compared when any of its 2x2 parents was). So a window
 //    that straddles the mask's edge sees only the differences inside it.
 //    No compared pixel (or too small a frame, as CompareImages): NaN.
+//  - With depth maps of both frames (frames.h: view depth per pixel, 0 where
+//    nothing was hit): of the pixels covered in both, those where the tested
+//    surface is nearer than the reference's by more than depth_tolerance x
+//    the reference's depth (`nearer_px`: surface the model invented in front
+//    of what the reference shows, e.g. Poisson closing an open side), or
+//    farther (`farther_px`: the model misses the reference's surface there and
+//    shows what is behind it) are counted apart and left out of the compared
+//    pixels (with their 4 neighbours): they are geometry, not texture.
 struct CoverageStats {
   size_t reference_px = 0;  // covered in the reference
   size_t test_px = 0;       // covered in the test frame
@@ -141,6 +152,9 @@ struct CoverageStats {
   size_t enclosed_hole_px = 0;  // of hole_px, inside the test frame's silhouette
   double hole_fraction = 0;     // hole_px / reference_px (0 without reference coverage)
   size_t compared_px = 0;       // the pixels the metrics below are measured on
+  bool depth_checked = false;   // both depth maps were given
+  size_t nearer_px = 0;         // covered in both, tested surface nearer (depth_checked)
+  size_t farther_px = 0;        // covered in both, tested surface farther (depth_checked)
 };
 
 struct CoveredComparison {
@@ -152,8 +166,11 @@ struct CoveredComparison {
 // inside the compared pixels spread a few pixels past them through FLIP's
 // filters; elsewhere it is 0). Status::Invalid as
 // CompareImages.
+// `reference_depth` and `test_depth` (both or neither): one-channel kF32
+// depth maps of the frames' size (Status::Invalid otherwise).
 Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
                                            const ImageMetricsOptions& options = {},
-                                           FlipResult* flip = nullptr);
+                                           FlipResult* flip = nullptr, const Image* reference_depth = nullptr,
+                                           const Image* test_depth = nullptr);
 
 }  // namespace pb

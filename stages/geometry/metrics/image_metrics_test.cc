@@ -331,5 +331,39 @@ TEST(CoveredTest, NoCommonCoverageGivesNaNAndZeroIou) {
   EXPECT_EQ(r->coverage.enclosed_hole_px, 0u);
 }
 
+TEST(CoveredTest, DepthMapsSetSurfacesInFrontOrBehindApart) {
+  // The same frame, but a 10 x 10 block of the test frame is another surface
+  // 0.5 m in front (and of another color), a 6 x 6 block one 1 m behind.
+  const int size = 64;
+  const Image reference = Frame(size, [](int, int) { return true; });
+  Image test = reference;
+  Image reference_depth = Image::Make(size, size, 1, Image::PixelType::kF32);
+  Image test_depth = Image::Make(size, size, 1, Image::PixelType::kF32);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      float d = 2.0f;
+      const bool front = x >= 10 && x < 20 && y >= 10 && y < 20, behind = x >= 40 && x < 46 && y >= 30 && y < 36;
+      if (front) d = 1.5f;
+      if (behind) d = 3.0f;
+      if (front || behind)
+        for (int c = 0; c < 3; ++c) test.at_u8(x, y, c) = uint8_t(255 - test.at_u8(x, y, c));
+      reference_depth.at_f32(x, y, 0) = 2.0f;
+      test_depth.at_f32(x, y, 0) = d;
+    }
+  Expected<CoveredComparison> without = CompareCovered(reference, test);
+  ASSERT_TRUE(without.ok());
+  EXPECT_FALSE(without->coverage.depth_checked);
+  EXPECT_LT(without->metrics.psnr_db, 30);  // the blocks count as texture error
+  Expected<CoveredComparison> r = CompareCovered(reference, test, {}, nullptr, &reference_depth, &test_depth);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_TRUE(r->coverage.depth_checked);
+  EXPECT_EQ(r->coverage.nearer_px, 100u);
+  EXPECT_EQ(r->coverage.farther_px, 36u);
+  EXPECT_EQ(r->coverage.iou, 1.0);  // coverage is coverage
+  EXPECT_EQ(r->coverage.compared_px, size_t(size * size - 100 - 40 - 36 - 24));
+  EXPECT_EQ(r->metrics.psnr_db, std::numeric_limits<double>::infinity());
+  EXPECT_FALSE(CompareCovered(reference, test, {}, nullptr, &reference_depth, nullptr).ok());
+}
+
 }  // namespace
 }  // namespace pb

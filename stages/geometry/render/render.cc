@@ -410,7 +410,7 @@ Expected<MipTexture> BuildNormalTexture(const Image& image) {
 }
 
 Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, const RenderCamera& camera,
-                           const RenderOptions& options, RenderStats* stats) {
+                           const RenderOptions& options, RenderStats* stats, Image* depth_m) {
   PB_RETURN_IF_ERROR(Validate(mesh));
   if (material.color && !mesh.has_uvs())
     return Status::Invalid("render: a color map needs a mesh with uvs");
@@ -503,6 +503,26 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
   };
   size_t covered = 0;
   Image image = Resolve(cam, camera.size, options, &covered, shade);
+  if (depth_m) {
+    // The visibility keys hold the float depth in their upper 32 bits.
+    *depth_m = Image::Make(camera.size, camera.size, 1, Image::PixelType::kF32);
+    const int ss = cam.supersample;
+    tbb::parallel_for(tbb::blocked_range<int>(0, camera.size), [&](const tbb::blocked_range<int>& rows) {
+      for (int y = rows.begin(); y < rows.end(); ++y)
+        for (int x = 0; x < camera.size; ++x) {
+          float nearest = 0;
+          for (int j = 0; j < ss; ++j)
+            for (int i = 0; i < ss; ++i) {
+              const uint64_t key =
+                  visibility[size_t(y * ss + j) * cam.samples + size_t(x * ss + i)].load(std::memory_order_relaxed);
+              if (key == kEmpty) continue;
+              const float d = std::bit_cast<float>(uint32_t(key >> 32));
+              if (nearest == 0 || d < nearest) nearest = d;
+            }
+          depth_m->f32()[size_t(y) * camera.size + x] = nearest;
+        }
+    });
+  }
   if (stats) {
     stats->triangles = mesh.face_count();
     stats->clipped = clipped.load();

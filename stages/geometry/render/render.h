@@ -151,8 +151,13 @@ struct RenderStats {
 // An RGBA kU8 image of camera.size squared. Status::Invalid for a bad camera
 // (eye == target, up parallel to the view, fov or size out of range), bad
 // options, a mesh failing Validate, or a material the mesh cannot carry.
+//
+// `depth_m` (optional) receives a one-channel kF32 image of the same size:
+// per pixel the smallest view depth (meters along the camera's forward axis)
+// of its samples that hit geometry, 0 where none did.
 Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, const RenderCamera& camera,
-                           const RenderOptions& options, RenderStats* stats = nullptr);
+                           const RenderOptions& options, RenderStats* stats = nullptr,
+                           Image* depth_m = nullptr);
 
 // The analytic scene, ray cast (see above); options.supersample is the
 // truth's own sample count per axis.

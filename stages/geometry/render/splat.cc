@@ -91,7 +91,7 @@ struct ScreenSplat {
 }  // namespace
 
 Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> radius_m, const RenderCamera& camera,
-                             const SplatOptions& options, SplatStats* stats) {
+                             const SplatOptions& options, SplatStats* stats, Image* depth_m) {
   PB_RETURN_IF_ERROR(Validate(cloud));
   if (radius_m.size() != cloud.size())
     return Status::Invalid("splats: " + std::to_string(radius_m.size()) + " radii for " +
@@ -163,6 +163,7 @@ Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> rad
   const size_t sample_count = size_t(cam.samples) * cam.samples;
   std::vector<float> color(sample_count * 3, 0.0f);
   std::vector<uint8_t> covered(sample_count, 0);
+  std::vector<float> sample_depth(depth_m ? sample_count : 0, 0.0f);
   const float gray = SrgbByteToLinear(kDefaultGray);
   std::array<float, 256> decode{};
   for (int v = 0; v < 256; ++v) decode[v] = SrgbByteToLinear(uint8_t(v));
@@ -228,6 +229,7 @@ Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> rad
           const double* acc = &sum[local * 4];
           for (int c = 0; c < 3; ++c) color[global * 3 + c] = float(acc[c] / acc[3]);
           covered[global] = 1;
+          if (depth_m) sample_depth[global] = depth[local];
         }
     }
   });
@@ -259,6 +261,19 @@ Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> rad
       }
     covered_total += covered_here;
   });
+  if (depth_m) {
+    *depth_m = Image::Make(size, size, 1, Image::PixelType::kF32);
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) {
+        float nearest = 0;
+        for (int j = 0; j < ss; ++j)
+          for (int i = 0; i < ss; ++i) {
+            const float d = sample_depth[size_t(y * ss + j) * cam.samples + size_t(x * ss + i)];
+            if (d > 0 && (nearest == 0 || d < nearest)) nearest = d;
+          }
+        depth_m->f32()[size_t(y) * size + x] = nearest;
+      }
+  }
   if (stats) {
     stats->points = n;
     stats->drawn = drawn.load();

@@ -68,8 +68,10 @@ struct SplatStats {
 // An RGBA kU8 image of camera.size squared. `radius_m` holds one radius per
 // point of `cloud` (meters). Status::Invalid for a bad camera (as RenderMesh),
 // bad options, a cloud failing Validate, or radius_m of the wrong length.
+// `depth_m` (optional): as RenderMesh's, the smallest front-splat depth of
+// the pixel's samples (meters along the view axis), 0 where none.
 Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> radius_m,
                              const RenderCamera& camera, const SplatOptions& options,
-                             SplatStats* stats = nullptr);
+                             SplatStats* stats = nullptr, Image* depth_m = nullptr);
 
 }  // namespace pb
