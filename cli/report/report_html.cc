@@ -239,7 +239,7 @@ TextTable ScanTable(const Campaign& c) {
       const std::string col = kScanColumns[size_t(i)];
       if (col == "covered_psnr_db")
         cells.push_back(FmtFixed(v, "%.2f"));
-      else if (col == "hole_fraction" || col == "invented_area_fraction" || col == "missing_fraction")
+      else if (col.size() > 9 && col.compare(col.size() - 9, 9, "_fraction") == 0)
         cells.push_back(v ? Printf("%.2f", *v * 100) : kDash);
       else if (col == "boundary_edges_per_1000_faces")
         cells.push_back(FmtFixed(v, "%.1f"));
@@ -256,7 +256,9 @@ const char* kScanNote =
     "viewpoints (render.splats; the scan's colors are already lit, so both sides are unlit). "
     "PSNR, SSIM and FLIP on the pixels covered in both frames (edge pixels left out); coverage IoU "
     "= covered in both / covered in either; holes = pixels the scan covers and the model leaves "
-    "background, % of the scan's pixels. Invented area: % of the mesh's area farther than "
+    "background, % of the scan's pixels; in front / behind = pixels both cover where the model's "
+    "surface lies more than 5 % of the depth in front of (invented surface) or behind the scan's, % "
+    "of the scan's pixels, left out of PSNR, SSIM and FLIP. Invented area: % of the mesh's area farther than "
     "max(3 local spacings, its mean edge) from every scan point; missing scan: % of scan points "
     "farther than 3 local spacings from the mesh; boundary edges: edges with one face.";
 

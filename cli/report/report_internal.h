@@ -45,15 +45,16 @@ constexpr std::array<const char*, kQualityCount> kQualityTitles = {"PSNR dB", "S
 // Against the scan (issue 15): the covered-pixel figures of the metrics.image
 // table vs_scan.json (the first kScanImageCount) and the truth-free geometry
 // figures of geometry.json (the rest), with their titles.
-constexpr int kScanCount = 8;
-constexpr int kScanImageCount = 5;
+constexpr int kScanCount = 10;
+constexpr int kScanImageCount = 7;
 constexpr std::array<const char*, kScanCount> kScanColumns = {
     "covered_psnr_db",        "covered_ssim_luma", "covered_flip_mean",
-    "coverage_iou",           "hole_fraction",     "invented_area_fraction",
-    "missing_fraction",       "boundary_edges_per_1000_faces"};
+    "coverage_iou",           "hole_fraction",     "nearer_fraction",
+    "farther_fraction",       "invented_area_fraction", "missing_fraction",
+    "boundary_edges_per_1000_faces"};
 constexpr std::array<const char*, kScanCount> kScanTitles = {
-    "PSNR dB", "SSIM luma", "FLIP", "Coverage IoU", "Holes %", "Invented area %", "Missing scan %",
-    "Boundary edges / 1000 faces"};
+    "PSNR dB", "SSIM luma", "FLIP", "Coverage IoU", "Holes %", "In front %", "Behind %",
+    "Invented area %", "Missing scan %", "Boundary edges / 1000 faces"};
 
 // One run of the campaign: its manifest entry and the figures read from its
 // folder (all null for a failed run).

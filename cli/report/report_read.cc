@@ -164,10 +164,10 @@ Status ReadScan(const std::string& image_path, const std::string& geometry_path,
       const TableValue direction = table.get(r, "direction");
       if (!std::holds_alternative<std::string>(direction)) continue;
       const std::string& d = std::get<std::string>(direction);
-      if (d == "mesh_to_scan") row.vs_scan[5] = TableOpt(table, r, "beyond_fraction");
-      if (d == "scan_to_mesh") row.vs_scan[6] = TableOpt(table, r, "beyond_fraction");
+      if (d == "mesh_to_scan") row.vs_scan[kScanImageCount] = TableOpt(table, r, "beyond_fraction");
+      if (d == "scan_to_mesh") row.vs_scan[kScanImageCount + 1] = TableOpt(table, r, "beyond_fraction");
       if (d == "mesh_to_scan" || d == "scan_to_mesh")
-        row.vs_scan[7] = TableOpt(table, r, "boundary_edges_per_1000_faces");
+        row.vs_scan[kScanImageCount + 2] = TableOpt(table, r, "boundary_edges_per_1000_faces");
     }
   }
   return Status::Ok();

@@ -323,9 +323,9 @@ TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
   // columns and metrics.geometry's scan rows; the scan's splat frames.
   Table image;
   image.columns = {"frame", "psnr_db", "covered_psnr_db", "covered_ssim_luma", "covered_flip_mean",
-                   "coverage_iou", "hole_fraction"};
-  image.rows.push_back({std::string("front"), 20.0, 31.5, 0.8, 0.12, 0.9, 0.0125});
-  image.rows.push_back({std::string("mean"), 20.0, 31.5, 0.8, 0.12, 0.9, 0.0125});
+                   "coverage_iou", "hole_fraction", "nearer_fraction"};
+  image.rows.push_back({std::string("front"), 20.0, 31.5, 0.8, 0.12, 0.9, 0.0125, 0.0775});
+  image.rows.push_back({std::string("mean"), 20.0, 31.5, 0.8, 0.12, 0.9, 0.0125, 0.0775});
   ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/vs_scan.json", image).ok());
   Table geometry;
   geometry.columns = {"direction", "beyond_fraction", "boundary_edges_per_1000_faces"};
@@ -350,6 +350,9 @@ TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
   EXPECT_THAT(html, HasSubstr("<td>31.50</td>"));
   EXPECT_THAT(html, HasSubstr("<td>1.25</td>"));   // holes, %
   EXPECT_THAT(html, HasSubstr("<td>25.00</td>"));  // invented area, %
+  EXPECT_THAT(html, HasSubstr("<td>7.75</td>"));   // surface in front, %
+  EXPECT_EQ(pt["vs_scan"]["nearer_fraction"].get<double>(), 0.0775);
+  EXPECT_TRUE(pt["vs_scan"]["farther_fraction"].is_null());
   EXPECT_THAT(html, HasSubstr("Scan (splats)"));
   // Truth, scan (frame + crop each), HPM and point transfer (frame + crop +
   // FLIP each).

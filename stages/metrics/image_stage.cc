@@ -26,7 +26,7 @@ constexpr const char* kColumns[] = {
     "psnr_db",         "ssim_luma",         "ssim_rgb",         "ms_ssim_luma",         "flip_mean",
     "covered_psnr_db", "covered_ssim_luma", "covered_ssim_rgb", "covered_ms_ssim_luma", "covered_flip_mean",
     "coverage_iou",    "hole_px",           "enclosed_hole_px", "hole_fraction",        "compared_px",
-    "nearer_px",       "farther_px"};
+    "nearer_px",       "farther_px",        "nearer_fraction",  "farther_fraction"};
 
 // The ppd default is FLIP's own (FlipDefaultPpd(), checked by a test).
 constexpr const char* kSchema = R"({
@@ -140,7 +140,11 @@ Status Run(StageContext& ctx) {
                                cov.hole_fraction,
                                double(cov.compared_px),
                                cov.depth_checked ? double(cov.nearer_px) : std::nan(""),
-                               cov.depth_checked ? double(cov.farther_px) : std::nan("")};
+                               cov.depth_checked ? double(cov.farther_px) : std::nan(""),
+                               cov.depth_checked && cov.reference_px ? double(cov.nearer_px) / double(cov.reference_px)
+                                                                     : std::nan(""),
+                               cov.depth_checked && cov.reference_px ? double(cov.farther_px) / double(cov.reference_px)
+                                                                     : std::nan("")};
       static_assert(std::size(values) == std::size(kColumns));
       std::vector<TableValue> row = {frame.entry.name};
       for (size_t k = 0; k < std::size(values); ++k) {
@@ -192,7 +196,7 @@ Status Run(StageContext& ctx) {
 StageType ImageMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;
+  type.version = 3;
   type.summary = "Image quality of rendered frames against reference frames: PSNR, SSIM, MS-SSIM, FLIP";
   type.doc =
       "Compares every frame of `frames` with the frame of the same name in `reference` (a frame "
@@ -217,11 +221,13 @@ StageType ImageMetricsStage() {
       "carry depth maps, `nearer_px` / `farther_px` count the pixels covered in both where the "
       "tested surface lies in front of / behind the reference's by more than `depth_tolerance` x "
       "its depth (invented surface in front; missing surface seen through); they are geometry, "
-      "left out of the covered metrics with their 4 neighbours (null without depth maps).\n\n"
+      "left out of the covered metrics with their 4 neighbours (null without depth maps); "
+      "`nearer_fraction` / `farther_fraction`: the same over the reference's covered pixels.\n\n"
       "Output `table` columns: `frame`, `psnr_db`, `ssim_luma`, `ssim_rgb`, `ms_ssim_luma`, "
       "`flip_mean` (whole frame), `covered_psnr_db`, `covered_ssim_luma`, `covered_ssim_rgb`, "
       "`covered_ms_ssim_luma`, `covered_flip_mean`, `coverage_iou`, `hole_px`, `enclosed_hole_px`, "
-      "`hole_fraction`, `compared_px`, `nearer_px`, `farther_px`; one row per frame in the order of `frames`, then a row `mean` "
+      "`hole_fraction`, `compared_px`, `nearer_px`, `farther_px`, `nearer_fraction`, "
+      "`farther_fraction`; one row per frame in the order of `frames`, then a row `mean` "
       "with the arithmetic mean of each column. Output `flip`: the whole-frame FLIP error map of "
       "every frame, magma color-mapped, same names and files; `flip_covered`: the map of the "
       "covered-pixel comparison.\n\n"

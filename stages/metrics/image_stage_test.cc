@@ -233,7 +233,7 @@ TEST_F(ImageStageTest, SchemaDefaultPpdIsFlipDefault) {
   ASSERT_EQ(type->outputs.size(), 3u);
   EXPECT_EQ(type->outputs[1].type, "frames");
   EXPECT_EQ(type->outputs[2].name, "flip_covered");
-  EXPECT_EQ(type->version, 2);
+  EXPECT_EQ(type->version, 3);
 }
 
 TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
