@@ -152,8 +152,10 @@ Status Run(StageContext& ctx) {
         sums[k] += values[k];
       }
       table.rows.push_back(std::move(row));
-      maps.frames.push_back(Frame{frame.entry, FlipErrorColorMap(flip)});
-      covered_maps.frames.push_back(Frame{frame.entry, FlipErrorColorMap(covered_flip)});
+      FrameEntry map_entry = frame.entry;
+      map_entry.depth_file.clear();  // the maps are pictures of errors, without depth
+      maps.frames.push_back(Frame{map_entry, FlipErrorColorMap(flip), {}});
+      covered_maps.frames.push_back(Frame{map_entry, FlipErrorColorMap(covered_flip), {}});
       ctx.progress(0.1 + 0.8 * double(i + 1) / double(test.frames.size()));
     }
   }

@@ -140,7 +140,10 @@ class ImageStageTest : public StageTest {
     std::filesystem::create_directories(d);
     ASSERT_TRUE(WriteFrames(d.string(), set).ok());
     std::map<std::string, std::string> files = {{"frames.json", (d / "frames.json").string()}};
-    for (const Frame& f : set.frames) files[f.entry.file] = (d / f.entry.file).string();
+    for (const Frame& f : set.frames) {
+      files[f.entry.file] = (d / f.entry.file).string();
+      if (!f.entry.depth_file.empty()) files[f.entry.depth_file] = (d / f.entry.depth_file).string();
+    }
     ctx.AddInput(port, "frames", files, {{"renderer", "test"}});
   }
 };
@@ -272,6 +275,30 @@ TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
   EXPECT_EQ(ctx.counters_.at("hole_px"), 24);
   EXPECT_TRUE(std::holds_alternative<std::monostate>(table->get(0, "nearer_px")));  // no depth maps
   ASSERT_TRUE(ctx.files_.count("flip_covered/frames.json"));
+
+  // The same with depth maps: 2 m everywhere in the reference, the test's
+  // top-left 8 x 8 of the covered square 0.5 m nearer.
+  for (FrameSet* set : {&reference, &test}) {
+    set->frames[0].entry.depth_file = "v.depth.exr";
+    set->frames[0].depth = Image::Make(64, 64, 1, Image::PixelType::kF32);
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x)
+        set->frames[0].depth.at_f32(x, y, 0) = set == &test && x >= 10 && x < 18 && y >= 10 && y < 18 ? 1.5f : 2.0f;
+  }
+  std::filesystem::create_directories(dir_ / "depth");
+  FakeContext with_depth(dir_ / "depth", nlohmann::json::object());
+  AddFrames(with_depth, "frames", "test_d", test);
+  AddFrames(with_depth, "reference", "ref_d", reference);
+  const Status status = Run("metrics.image", with_depth);
+  ASSERT_TRUE(status.ok()) << status.message();
+  Expected<Table> depth_table = ReadTable(with_depth.outputs_.at("table"));
+  ASSERT_TRUE(depth_table.ok());
+  EXPECT_EQ(TableNumber(depth_table->get(0, "nearer_px")), 64);
+  EXPECT_EQ(TableNumber(depth_table->get(0, "farther_px")), 0);
+  EXPECT_DOUBLE_EQ(TableNumber(depth_table->get(0, "nearer_fraction")), 64.0 / (44 * 44));
+  Expected<FrameSet> maps = ReadFrames(with_depth.files_.at("flip_covered/frames.json"));
+  ASSERT_TRUE(maps.ok()) << maps.status().message();
+  EXPECT_TRUE(maps->frames[0].entry.depth_file.empty());
 }
 
 }  // namespace
