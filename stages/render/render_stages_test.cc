@@ -275,6 +275,27 @@ TEST_F(RenderStagesTest, SplatsWriteTheSameFramesAsRenderFramesWouldNameThem) {
   EXPECT_EQ(front.at_u8(0, 0, 3), 0);
 }
 
+TEST_F(RenderStagesTest, SplatsOfIsolatedPointsStaySmall) {
+  // The grid plus one stray point 1 m in front of it, half a meter off the
+  // grid's edge: its 8th neighbour is ~1 m away, but its splat is capped at
+  // 4 median spacings (4 x 7.07 cm x 0.75), not a 75 cm disk.
+  PointCloud cloud = QuadPoints();
+  cloud.positions.insert(cloud.positions.end(), {1.5f, 4.0f, 0.0f});
+  cloud.colors.insert(cloud.colors.end(), {255, 255, 255});
+  FakeContext ctx(dir_, {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}});
+  ctx.AddInput("points", "points", WriteInputPoints("stray", cloud));
+  ASSERT_TRUE(Run("render.splats", ctx).ok());
+  EXPECT_EQ(ctx.counters_["radii_capped"], 1);
+  const Image& front = Frames(ctx)->frames[0].image;
+  // The stray point projects to x = 32 + 1.5 / 4 * 55.4 = 52.8 px with a
+  // radius of 0.21 / 4 * 55.4 = 2.9 px (uncapped: 10 px).
+  int white = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) white += front.at_u8(x, y, 0) == 255 && front.at_u8(x, y, 2) == 255;
+  EXPECT_GT(white, 10);
+  EXPECT_LT(white, 40);
+}
+
 TEST_F(RenderStagesTest, SplatsReportBadInput) {
   FakeContext ctx(dir_, Params(Viewpoints()));
   PointCloud two;

@@ -61,6 +61,12 @@ constexpr const char* kSchema = R"({
       "default": 0.75,
       "description": "Splat radius = radius_scale * local spacing, meters. 0.75 * sqrt(2) steps covers a square grid without gaps (it needs 0.71 steps) with little blur; larger closes sparser scans and blurs more."
     },
+    "max_radius_spacings": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 4,
+      "description": "Largest local spacing a splat takes, in medians of the cloud's local spacings: an isolated point (a flying pixel at a depth edge, a stray return) has a huge k-NN distance and would be drawn as a large disk of surface nobody saw. 4 leaves a one-station scan's far field (spacing grows with range) its size."
+    },
     "depth_tolerance": {
       "type": "number",
       "minimum": 0,
@@ -87,6 +93,7 @@ constexpr const char* kSchema = R"({
 struct Options {
   SplatOptions splat;
   bool depth = false;
+  double max_radius_spacings = 0;
   int size = 0;
   int k = 0;
   double radius_scale = 0;
@@ -99,6 +106,9 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 8, 1, 64));
   PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth", false));
   PB_ASSIGN_OR_RETURN(options.radius_scale, NumberParam(ctx, kId, "radius_scale", 0.75));
+  PB_ASSIGN_OR_RETURN(options.max_radius_spacings, NumberParam(ctx, kId, "max_radius_spacings", 4.0));
+  if (!(options.max_radius_spacings > 0))
+    return Status::Invalid(std::string(kId) + ": 'max_radius_spacings' must be > 0");
   PB_ASSIGN_OR_RETURN(options.splat.depth_tolerance, NumberParam(ctx, kId, "depth_tolerance", 2.0));
   PB_ASSIGN_OR_RETURN(options.splat.max_radius_px, NumberParam(ctx, kId, "max_radius_px", 32.0));
   if (!(options.radius_scale > 0)) return Status::Invalid(std::string(kId) + ": 'radius_scale' must be > 0");
@@ -129,13 +139,23 @@ Status Run(StageContext& ctx) {
 
   tbb::task_arena arena(std::max(1, ctx.threads()));
   std::vector<float> radius;
+  size_t capped = 0;
   {
     PB_PHASE(ctx, "spacing");
     Expected<std::vector<float>> spacing = Status::Internal("not run");
     arena.execute([&] { spacing = LocalSpacing(cloud, options.k); });
     if (!spacing.ok()) return spacing.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
     radius = std::move(*spacing);
-    for (float& r : radius) r = float(r * options.radius_scale);
+    std::vector<float> sorted = radius;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    const double cap = options.max_radius_spacings * double(sorted[sorted.size() / 2]);
+    for (float& r : radius) {
+      if (double(r) > cap) {
+        r = float(cap);
+        ++capped;
+      }
+      r = float(r * options.radius_scale);
+    }
   }
   ctx.progress(0.35);
 
@@ -187,6 +207,7 @@ Status Run(StageContext& ctx) {
   ctx.counter("frames", double(views.size()));
   ctx.counter("points", double(cloud.size()));
   ctx.counter("splats_drawn", double(drawn));
+  ctx.counter("radii_capped", double(capped));
   ctx.counter("median_radius_m", median_radius_m);
   ctx.counter("pixels", pixels);
   ctx.progress(1.0);
@@ -202,7 +223,8 @@ StageType SplatsStage() {
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
       "Draws every point of `points` as a disk facing the camera, of radius `radius_scale` * its "
-      "local spacing (the distance to its `k`-th nearest other point), with the camera, sample grid, "
+      "local spacing (the distance to its `k`-th nearest other point, at most `max_radius_spacings` "
+      "medians of the cloud's local spacings: isolated points stay small), with the camera, sample grid, "
       "resolve and encoding of render.frames (docs/render.md): `supersample`^2 samples per pixel "
       "averaged in linear light, 8-bit sRGB RGBA, alpha 255 where a splat covers any sample of the "
       "pixel, 0 elsewhere. Per sample the nearest splat wins, and every splat within "
@@ -213,7 +235,8 @@ StageType SplatsStage() {
       "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>), the same names and "
       "files as render.frames with the same viewpoints, so metrics.image compares them; with "
       "`depth`, also <name>.depth.exr (the front splats' view depth in meters, 0 on background).\n\n"
-      "Counters: `frames`, `points`, `splats_drawn` (over all frames), `median_radius_m`, `pixels`. "
+      "Counters: `frames`, `points`, `splats_drawn` (over all frames), `radii_capped`, "
+      "`median_radius_m`, `pixels`. "
       "Phases: `io`, `spacing`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);
   type.inputs = {{"points", "points", "The colored scan (points.ply).", false}};
