@@ -97,7 +97,8 @@ std::vector<std::string> DiffComponents(const json& before, const json& after) {
   return out;
 }
 
-Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache) {
+Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache,
+                                             const PlanOptions& options) {
   std::vector<PlanLine> lines;
   // Output artifact digests of stages that hit, by "stage.port".
   std::map<std::string, std::string> known;
@@ -135,8 +136,18 @@ Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache) {
     PB_ASSIGN_OR_RETURN(json comps, KeyComponents(node, wf.salt, digests, cache));
     const Digest key = KeyOf(comps);
     line.key = key.Hex();
-    std::optional<CacheEntry> entry = cache.Lookup(key);
-    if (entry) {
+    const bool forced = options.force.count(id) > 0;
+    std::optional<CacheEntry> entry = forced ? std::nullopt : cache.Lookup(key);
+    if (forced) {
+      line.state = PlanLine::State::kMiss;
+      line.reasons.push_back(cache.Lookup(key)
+                                 ? "forced (--force): in the cache, but runs again; its result "
+                                   "replaces the entry"
+                                 : "forced (--force); not in the cache either");
+    } else if (!entry && options.planned_keys && options.planned_keys->count(line.key)) {
+      line.state = PlanLine::State::kEarlierRun;
+      line.reasons.push_back("computed by an earlier run of this campaign (same key); a hit by then");
+    } else if (entry) {
       line.state = PlanLine::State::kHit;
       for (const auto& [port, art] : entry->outputs) known[id + "." + port] = art.ComputeDigest().Hex();
     } else {
@@ -149,6 +160,8 @@ Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache) {
         for (const std::string& r : diff) line.reasons.push_back(r);
       }
     }
+    if (line.state == PlanLine::State::kMiss && options.planned_keys)
+      options.planned_keys->insert(line.key);
     lines.push_back(line);
   }
   return lines;
