@@ -22,23 +22,38 @@ namespace {
 
 using nlohmann::json;
 
-// Collects `file:line:column: message` lines.
+// Collects `file:line:column: message` lines. Those about `sorted_file` are
+// listed first, in the order of the file; the others (a scene, the command
+// line) follow in the order they were found.
 class Errors {
  public:
+  explicit Errors(std::string sorted_file = "") : sorted_file_(std::move(sorted_file)) {}
   void Add(const SourcePos& pos, const std::string& message) {
-    lines_.push_back(pos.ToString() + ": " + message);
+    lines_.push_back({pos, pos.ToString() + ": " + message});
   }
-  void AddRaw(const std::string& line) { lines_.push_back(line); }
+  void AddRaw(const std::string& line) { lines_.push_back({SourcePos{}, line}); }
   bool empty() const { return lines_.empty(); }
   size_t size() const { return lines_.size(); }
   Status ToStatus() const {
+    std::vector<const Line*> in_file, others;
+    for (const Line& l : lines_)
+      (!sorted_file_.empty() && l.pos.file == sorted_file_ ? in_file : others).push_back(&l);
+    std::stable_sort(in_file.begin(), in_file.end(), [](const Line* a, const Line* b) {
+      return std::pair(a->pos.line, a->pos.column) < std::pair(b->pos.line, b->pos.column);
+    });
+    in_file.insert(in_file.end(), others.begin(), others.end());
     std::string msg;
-    for (size_t i = 0; i < lines_.size(); ++i) msg += (i ? "\n" : "") + lines_[i];
+    for (size_t i = 0; i < in_file.size(); ++i) msg += (i ? "\n" : "") + in_file[i]->text;
     return Status::Invalid(msg);
   }
 
  private:
-  std::vector<std::string> lines_;
+  struct Line {
+    SourcePos pos;
+    std::string text;
+  };
+  std::string sorted_file_;
+  std::vector<Line> lines_;
 };
 
 size_t EditDistance(const std::string& a, const std::string& b) {
@@ -288,7 +303,7 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   PB_ASSIGN_OR_RETURN(YamlDocument doc, ParseYamlFile(path));
   static const JsonSchema schema =
       JsonSchema::Parse(WorkflowSchemaJson(), "workflow schema").value();
-  Errors errors;
+  Errors errors(doc.file);
   if (!doc.value.is_object()) {
     errors.Add(doc.PositionOf(""), "a workflow must be a mapping with 'stages'");
     return errors.ToStatus();
