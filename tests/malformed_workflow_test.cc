@@ -1,6 +1,7 @@
 // Malformed workflows (tests/workflows/bad/*.yaml): `validate` and `run` both
 // exit 2, name the offending token as FILE:LINE:COLUMN (FILE as passed on the
 // command line), say what is wrong, and execute nothing.
+#include <algorithm>
 #include <filesystem>
 #include <set>
 #include <string>
@@ -48,6 +49,7 @@ const std::vector<BadCase>& Cases() {
       {"with_is_list.yaml", 6, 11, "expected an object or a string, got an array"},
       {"bad_set.yaml", 0, 0, "--set nosuch.voxel=0.1: no stage 'nosuch' in the workflow",
        {"--set", "nosuch.voxel=0.1"}},
+      {"several_errors.yaml", 2, 1, "unknown key 'output'"},
   };
   return cases;
 }
@@ -120,6 +122,36 @@ TEST(MalformedWorkflowFiles, EveryFileHasACaseAndDocumentsItsPosition) {
   }
   EXPECT_EQ(files, covered);
   EXPECT_GE(covered.size(), 14u);
+}
+
+// A file without `name:` and with mistakes of every kind: schema, parameter,
+// stage type, reference and cycle errors come together, in file order, each
+// once (validate and run alike).
+TEST(MalformedWorkflowFiles, SeveralErrorsAreReportedTogetherInFileOrder) {
+  const std::string rel = kBadDir + "several_errors.yaml";
+  const std::vector<std::string> expected = {
+      rel + ":2:1: unknown key 'output'",
+      rel + ":6:29: stage 'read' (io.read_points): unknown key 'colour'",
+      rel + ":8:11: unknown stage type 'points.downsampel' (did you mean 'points.downsample'?)",
+      rel + ":12:19: cycle: b -> a -> b",
+      rel + ":18:19: input 'points' of stage 'stats' names unknown stage 'raed' (did you mean 'read'?)",
+  };
+  TempDir tmp;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"validate", rel},
+        {"run", rel, "--cache", tmp / "cache", "--out", tmp / "out"}}) {
+    const RunResult r = pbtest::Run(args, {}, SourceDir());
+    EXPECT_EQ(r.exit_code, 2) << r.Describe();
+    size_t at = 0;
+    for (const std::string& line : expected) {
+      const size_t found = r.err.find(line, at);
+      EXPECT_NE(found, std::string::npos) << "missing or out of order: " << line << "\n" << r.Describe();
+      if (found != std::string::npos) at = found;
+    }
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 5) << r.Describe();
+    EXPECT_EQ(r.err.find("missing required key 'name'"), std::string::npos) << r.Describe();
+  }
+  EXPECT_TRUE(ListFiles(tmp / "cache/entries").empty());
 }
 
 // The good neighbours of the bad files are good: the committed PLY reads.
