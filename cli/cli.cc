@@ -3,12 +3,12 @@
 #include <unistd.h>
 
 #include <CLI/CLI.hpp>
+#include <algorithm>
 #include <chrono>
 #include <cstdio>
 #include <ctime>
-#include <set>
-#include <algorithm>
 #include <iostream>
+#include <set>
 #include <thread>
 
 #include "base/env.h"

@@ -4,6 +4,7 @@
 #include <cctype>
 #include <chrono>
 #include <cstdio>
+#include <mutex>
 #include <thread>
 
 #include "base/env.h"
@@ -62,6 +63,7 @@ class ContextImpl : public StageContext {
     for (char& c : text)
       if (c == '\n' || c == '\r') c = ' ';  // one line each on the progress line and in the report
     if (text.empty()) return;
+    std::lock_guard<std::mutex> lock(warnings_mu_);  // stages may warn from worker threads
     if (log_warnings_) std::fprintf(stderr, "warning: %s\n", text.c_str());
     if (static_cast<int>(warnings_.size()) < kMaxStageWarnings) warnings_.push_back(std::move(text));
     else ++dropped_warnings_;
@@ -106,6 +108,7 @@ class ContextImpl : public StageContext {
   const ProgressFn& progress_;
   const bool log_warnings_;
   Clock::time_point start_;
+  std::mutex warnings_mu_;
   std::vector<std::string> warnings_;
   int dropped_warnings_ = 0;
   std::map<std::string, Cache::StagedOutput> outputs_;
