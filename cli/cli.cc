@@ -361,7 +361,7 @@ Examples:
   pointbake run WF.yaml --force bake               re-run 'bake' although it is cached
   pointbake campaign configs/campaigns/demo.yaml -n   what a campaign would run
   pointbake stages points.normals                  a stage type's ports and parameters
-  pointbake COMMAND --help                         the options of one command
+  pointbake COMMAND --help, pointbake help COMMAND   the options of one command
 
 Environment:
   POINTBAKE_CACHE   the cache folder (else $XDG_CACHE_HOME/pointbake, else ~/.cache/pointbake)
@@ -379,6 +379,16 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
     std::fprintf(stderr, "internal error registering built-in stages: %s\n", e.c_str());
   // The hidden child-process entry point, kept out of CLI11 for speed.
   if (argc == 3 && std::string(argv[1]) == "__stage") return RunStageSubcommand(argv[2], registry);
+  // `pointbake help [COMMAND...]` is `pointbake [COMMAND...] --help`.
+  std::vector<char*> help_args;
+  if (argc >= 2 && std::string(argv[1]) == "help") {
+    static char help_flag[] = "--help";
+    help_args.push_back(argv[0]);
+    for (int i = 2; i < argc; ++i) help_args.push_back(argv[i]);
+    help_args.push_back(help_flag);
+    argc = static_cast<int>(help_args.size());
+    argv = help_args.data();
+  }
   // Extra commands parse their own arguments.
   if (argc >= 2)
     for (const CliCommand& command : extra)

@@ -681,6 +681,11 @@ TEST_F(Cli, HelpNamesTheProgramEnvironmentExitCodesAndUnknownCommands) {
     EXPECT_TRUE(r.out.empty()) << r.Describe();
   }
   EXPECT_NE(pbtest::Run({"rnu"}).err.find("(did you mean 'run'?)"), std::string::npos);
+  // `help COMMAND` is `COMMAND --help`.
+  const RunResult help_run = pbtest::Run({"help", "run"});
+  EXPECT_EQ(help_run.exit_code, 0) << help_run.Describe();
+  EXPECT_EQ(help_run.out, run_help.out);
+  EXPECT_EQ(pbtest::Run({"help"}).out, help.out);
   const RunResult none = pbtest::Run({});
   EXPECT_EQ(none.exit_code, 2);
   EXPECT_NE(none.err.find("Usage: pointbake"), std::string::npos) << none.Describe();
