@@ -47,7 +47,8 @@ constexpr const char* kCacheHelp =
 
 void AddWorkflowOptions(CLI::App* cmd, RunFlags& f) {
   cmd->add_option("WORKFLOW", f.workflow, "Workflow YAML file")->required();
-  cmd->add_option("--scene", f.scene, "Scene file (overrides the workflow's scene:)")->type_name("FILE");
+  cmd->add_option("--scene", f.scene, "Scene file (overrides the workflow's scene:)")
+      ->type_name("FILE");
   cmd->add_option("--set", f.sets, "Override a parameter (repeatable)")
       ->type_name("STAGE.PARAM=VALUE")
       ->allow_extra_args(false);
@@ -70,9 +71,12 @@ void AddSelectionOptions(CLI::App* cmd, RunFlags& f) {
 
 void AddRunOptions(CLI::App* cmd, RunFlags& f) {
   AddSelectionOptions(cmd, f);
-  cmd->add_option("-j,--jobs", f.jobs, "Stages run in parallel")->check(CLI::Range(1, 256))->type_name("N");
+  cmd->add_option("-j,--jobs", f.jobs, "Stages run in parallel")
+      ->check(CLI::Range(1, 256))
+      ->type_name("N");
   cmd->add_option("--mem", f.mem, "Memory budget for parallel stages, e.g. 16G")->type_name("SIZE");
-  cmd->add_option("--out", f.out_dir, "Output folder (default out/<workflow name>)")->type_name("DIR");
+  cmd->add_option("--out", f.out_dir, "Output folder (default out/<workflow name>)")
+      ->type_name("DIR");
   cmd->add_option("--threads", f.threads, "Threads per stage (default: all cores)")->type_name("N");
 }
 
@@ -104,17 +108,24 @@ struct PlanCounts {
   void Add(const std::vector<PlanLine>& plan) {
     for (const PlanLine& line : plan) {
       switch (line.state) {
-        case PlanLine::State::kHit: ++hit; break;
-        case PlanLine::State::kMiss: ++run; break;
-        case PlanLine::State::kDependsOnUpstream: ++maybe; break;
-        case PlanLine::State::kEarlierRun: ++earlier; break;
+        case PlanLine::State::kHit:
+          ++hit;
+          break;
+        case PlanLine::State::kMiss:
+          ++run;
+          break;
+        case PlanLine::State::kDependsOnUpstream:
+          ++maybe;
+          break;
+        case PlanLine::State::kEarlierRun:
+          ++earlier;
+          break;
       }
     }
   }
   std::string Text() const {
     std::string text = std::to_string(hit) + " cached, " + std::to_string(run) + " to run, " +
-                       std::to_string(maybe) +
-                       " to run unless upstream outputs come out unchanged";
+                       std::to_string(maybe) + " to run unless upstream outputs come out unchanged";
     if (earlier > 0) text += ", " + std::to_string(earlier) + " computed by an earlier run";
     return text;
   }
@@ -127,10 +138,10 @@ void PrintPlanLines(const std::vector<PlanLine>& plan, bool reasons_for_hits, bo
   for (const PlanLine& line : plan) {
     const bool hit = line.state == PlanLine::State::kHit;
     if (hit && skip_hits) continue;
-    const char* what = hit                                            ? "hit"
-                       : line.state == PlanLine::State::kMiss         ? "run"
-                       : line.state == PlanLine::State::kEarlierRun   ? "reuse"
-                                                                      : "run?";
+    const char* what = hit                                          ? "hit"
+                       : line.state == PlanLine::State::kMiss       ? "run"
+                       : line.state == PlanLine::State::kEarlierRun ? "reuse"
+                                                                    : "run?";
     std::printf("%s%-5s %-20s %-22s %s\n", indent, what, line.stage.c_str(), line.type.c_str(),
                 line.key.empty() ? "(key known once inputs are)" : line.key.substr(0, 16).c_str());
     if (reasons_for_hits || !hit)
@@ -285,12 +296,15 @@ void AddCampaignOptions(CLI::App* cmd, CampaignFlags& f) {
   cmd->add_option("-j,--jobs", f.run.jobs, "Stages run in parallel within a run")
       ->check(CLI::Range(1, 256))
       ->type_name("N");
-  cmd->add_option("--mem", f.run.mem, "Memory budget for parallel stages, e.g. 16G")->type_name("SIZE");
+  cmd->add_option("--mem", f.run.mem, "Memory budget for parallel stages, e.g. 16G")
+      ->type_name("SIZE");
   cmd->add_option("--cache", f.run.cache_dir, kCacheHelp)->type_name("DIR");
   cmd->add_flag("-n,--dry-run", f.run.dry_run,
                 "Show what each run would run and what is cached; run nothing");
-  cmd->add_option("--out", f.run.out_dir, "Output folder (default out/<campaign name>)")->type_name("DIR");
-  cmd->add_option("--threads", f.run.threads, "Threads per stage (default: all cores)")->type_name("N");
+  cmd->add_option("--out", f.run.out_dir, "Output folder (default out/<campaign name>)")
+      ->type_name("DIR");
+  cmd->add_option("--threads", f.run.threads, "Threads per stage (default: all cores)")
+      ->type_name("N");
   cmd->add_flag("--keep-going", f.run.keep_going, "After a failure, still run independent stages");
   cmd->add_flag("-q,--quiet", f.run.quiet, "Print failures and summaries only");
 }
@@ -415,8 +429,10 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
   CampaignFlags campaign_explain_flags;
   CLI::App* campaign_explain = campaign->add_subcommand(
       "explain", "Per run and stage: cached or not, and why (runs nothing)");
-  campaign_explain->add_option("FILE", campaign_explain_flags.file, "Campaign YAML file")->required();
-  campaign_explain->add_option("--cache", campaign_explain_flags.run.cache_dir, kCacheHelp)->type_name("DIR");
+  campaign_explain->add_option("FILE", campaign_explain_flags.file, "Campaign YAML file")
+      ->required();
+  campaign_explain->add_option("--cache", campaign_explain_flags.run.cache_dir, kCacheHelp)
+      ->type_name("DIR");
   CLI::App* demo = app.add_subcommand(
       "demo", "Run the demo campaign (synthetic scenes, the four workflows); report in out/demo/report/");
   AddCampaignOptions(demo, demo_flags);
@@ -460,7 +476,8 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
     if (std::find(names.begin(), names.end(), argv[1]) == names.end()) {
       std::string list;
       for (const std::string& n : names) list += (list.empty() ? "" : ", ") + n;
-      std::fprintf(stderr, "pointbake: unknown command '%s'%s\ncommands: %s (see `pointbake --help`)\n",
+      std::fprintf(stderr,
+                   "pointbake: unknown command '%s'%s\ncommands: %s (see `pointbake --help`)\n",
                    argv[1], DidYouMean(argv[1], names).c_str(), list.c_str());
       return 2;
     }
@@ -482,7 +499,8 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
   }
   if (*campaign) {
     if (campaign_flags.file.empty())
-      return Fail(Status::Invalid("campaign: a campaign FILE is required (see `pointbake campaign --help`)"));
+      return Fail(Status::Invalid(
+          "campaign: a campaign FILE is required (see `pointbake campaign --help`)"));
     return CmdCampaign(campaign_flags, registry, report);
   }
   if (*demo) {

@@ -43,12 +43,8 @@ nlohmann::json ResultToJson(const JobResult& r) {
   nlohmann::json outs = nlohmann::json::object();
   for (const auto& [port, out] : r.outputs)
     outs[port] = {{"type", out.type}, {"files", out.files}, {"meta", out.meta}};
-  return {{"ok", r.status.ok()},
-          {"error", r.status.message()},
-          {"outputs", outs},
-          {"counters", r.counters},
-          {"phases", r.phases},
-          {"warnings", r.warnings},
+  return {{"ok", r.status.ok()},    {"error", r.status.message()}, {"outputs", outs},
+          {"counters", r.counters}, {"phases", r.phases},          {"warnings", r.warnings},
           {"wall_s", r.wall_s}};
 }
 

@@ -130,13 +130,15 @@ Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache,
     if (!waiting.empty()) {
       if (planned_earlier) {
         line.state = PlanLine::State::kEarlierRun;
-        line.reasons.push_back("an earlier run of this campaign computes it (same stage after the same stages)");
+        line.reasons.push_back(
+            "an earlier run of this campaign computes it (same stage after the same stages)");
       } else {
         line.state = PlanLine::State::kDependsOnUpstream;
         std::string names;
         for (const auto& s : waiting) names += (names.empty() ? "'" : ", '") + s + "'";
-        line.reasons.push_back("runs after " + names +
-                               " re-run; stays cached if their outputs come out unchanged (early cutoff)");
+        line.reasons.push_back(
+            "runs after " + names +
+            " re-run; stays cached if their outputs come out unchanged (early cutoff)");
         // Parameter changes can still be named.
         if (history && history->contains("components")) {
           json before = (*history)["components"], after = comps;
@@ -161,7 +163,8 @@ Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache,
       for (const auto& [port, art] : entry->outputs) known[id + "." + port] = art.ComputeDigest().Hex();
     } else if (planned_earlier) {
       line.state = PlanLine::State::kEarlierRun;
-      line.reasons.push_back("computed by an earlier run of this campaign (same key); a hit by then");
+      line.reasons.push_back(
+          "computed by an earlier run of this campaign (same key); a hit by then");
     } else {
       line.state = PlanLine::State::kMiss;
       if (!history || !history->contains("components")) {

@@ -81,7 +81,8 @@ void ProgressPrinter::OnStageEnd(const StageOutcome& o, int done, int total) {
     std::fprintf(stderr, "[%d/%d] %-7s %s (%s)%s\n", done, total, StateName(o.state), o.id.c_str(),
                  o.type.c_str(), figures.c_str());
     if (!quiet_)
-      for (const std::string& w : o.warnings) std::fprintf(stderr, "        warning: %s\n", w.c_str());
+      for (const std::string& w : o.warnings)
+        std::fprintf(stderr, "        warning: %s\n", w.c_str());
     if (!o.error.empty() && o.state != StageOutcome::State::kSkipped)
       std::fprintf(stderr, "        error: %s\n", o.error.c_str());
     if (failed && !o.result.log_tail.empty())

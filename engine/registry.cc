@@ -157,7 +157,8 @@ std::string YamlValue(const OrderedJson& v) {
 std::string TypeText(const OrderedJson& prop) {
   if (prop.contains("enum")) {
     std::string out = "one of: ";
-    for (size_t i = 0; i < prop["enum"].size(); ++i) out += (i ? ", " : "") + YamlValue(prop["enum"][i]);
+    for (size_t i = 0; i < prop["enum"].size(); ++i)
+      out += (i ? ", " : "") + YamlValue(prop["enum"][i]);
     return out;
   }
   std::string out;
@@ -238,8 +239,8 @@ std::string DescribeStage(const StageType& type) {
   }
 
   // A stage of this type in a workflow, with every parameter at its default.
-  out << "\nin a workflow:\n  my_" << type.id.substr(type.id.find('.') + 1) << ":\n    uses: "
-      << type.id << "\n";
+  out << "\nin a workflow:\n  my_" << type.id.substr(type.id.find('.') + 1)
+      << ":\n    uses: " << type.id << "\n";
   if (!type.inputs.empty()) {
     out << "    in:\n";
     for (const auto& p : type.inputs)

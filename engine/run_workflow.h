@@ -23,7 +23,7 @@ struct WorkflowRunOptions {
   bool in_process = false;        // debugging: no child processes
   std::vector<std::string> sets;  // recorded in run.json's options
   std::set<std::string> force;    // --force: run these stages whatever the cache holds
-  std::vector<std::string> until; // --until (recorded; the workflow is already cut)
+  std::vector<std::string> until;  // --until (recorded; the workflow is already cut)
 };
 
 struct WorkflowRunSummary {

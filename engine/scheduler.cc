@@ -16,14 +16,10 @@ using Clock = std::chrono::steady_clock;
 // The figures kept with a cache entry. `warnings` only when there are some,
 // so entries of stages without warnings keep their earlier form.
 nlohmann::json RecordOf(const JobResult& r) {
-  nlohmann::json record = {{"wall_s", r.wall_s},
-          {"user_s", r.user_s},
-          {"sys_s", r.sys_s},
-          {"peak_rss_bytes", r.peak_rss_bytes},
-          {"read_bytes", r.read_bytes},
-          {"write_bytes", r.write_bytes},
-          {"counters", r.counters},
-          {"phases", r.phases}};
+  nlohmann::json record = {{"wall_s", r.wall_s},         {"user_s", r.user_s},
+                           {"sys_s", r.sys_s},           {"peak_rss_bytes", r.peak_rss_bytes},
+                           {"read_bytes", r.read_bytes}, {"write_bytes", r.write_bytes},
+                           {"counters", r.counters},     {"phases", r.phases}};
   if (!r.warnings.empty()) record["warnings"] = r.warnings;
   return record;
 }

@@ -167,17 +167,17 @@ stages:
 // Warnings travel with the outcome, are kept with the cache entry (not in the
 // key), come back on a hit, and reach the run record.
 TEST_F(SchedulerTest, WarningsReachTheRecordAndComeBackOnHits) {
-  registry_.Register(StageType{.id = "t.warn",
-                               .summary = "warns",
-                               .params_schema = R"({"type":"object","properties":{"n":{"type":"integer","default":2}}})",
-                               .outputs = {{"out", "table"}},
-                               .run = [](StageContext& ctx) {
-                                 const int n = ctx.params()["n"].get<int>();
-                                 for (int i = 0; i < n; ++i)
-                                   ctx.warning("careful #" + std::to_string(i) + "\n");
-                                 std::ofstream(ctx.output_path("out", "table.json")) << "w";
-                                 return Status::Ok();
-                               }});
+  registry_.Register(StageType{
+      .id = "t.warn",
+      .summary = "warns",
+      .params_schema = R"({"type":"object","properties":{"n":{"type":"integer","default":2}}})",
+      .outputs = {{"out", "table"}},
+      .run = [](StageContext& ctx) {
+        const int n = ctx.params()["n"].get<int>();
+        for (int i = 0; i < n; ++i) ctx.warning("careful #" + std::to_string(i) + "\n");
+        std::ofstream(ctx.output_path("out", "table.json")) << "w";
+        return Status::Ok();
+      }});
   const std::string yaml = R"(name: warn
 stages:
   w: { uses: t.warn }
@@ -231,7 +231,8 @@ stages:
   EXPECT_EQ(states["len"], "hit");
   EXPECT_EQ(states["up"], "ran");
   for (const auto& o : forced) EXPECT_EQ(o.forced, o.id == "src" || o.id == "c") << o.id;
-  const std::string c_digest = forced[0].id == "c" ? forced[0].outputs.at("out").ComputeDigest().Hex() : "";
+  const std::string c_digest =
+      forced[0].id == "c" ? forced[0].outputs.at("out").ComputeDigest().Hex() : "";
   ASSERT_FALSE(c_digest.empty());
   // The forced result replaced the entry: the next run hits it.
   auto after = Run(yaml);

@@ -79,8 +79,8 @@ class StageContext {
   // progress line and the campaign report, and are kept with the cache entry,
   // so a cache hit shows them again. The engine keeps the first
   // kMaxStageWarnings and counts the rest. Use it instead of stderr, which
-  // only reaches the stage's log. Safe to call from the stage's threads. (Declared last: plugins built against an
-  // earlier header, which never call it, keep working.)
+  // only reaches the stage's log. Safe to call from the stage's threads. (Declared last: plugins
+  // built against an earlier header, which never call it, keep working.)
   virtual void warning(std::string_view message) = 0;
 };
 

@@ -65,8 +65,10 @@ class ContextImpl : public StageContext {
     if (text.empty()) return;
     std::lock_guard<std::mutex> lock(warnings_mu_);  // stages may warn from worker threads
     if (log_warnings_) std::fprintf(stderr, "warning: %s\n", text.c_str());
-    if (static_cast<int>(warnings_.size()) < kMaxStageWarnings) warnings_.push_back(std::move(text));
-    else ++dropped_warnings_;
+    if (static_cast<int>(warnings_.size()) < kMaxStageWarnings)
+      warnings_.push_back(std::move(text));
+    else
+      ++dropped_warnings_;
   }
 
   double Seconds() const {

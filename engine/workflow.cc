@@ -371,8 +371,9 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
 
   // A whole `with: ${scene.KEY}` becomes the scene's mapping before --set
   // applies, so overrides reach its parameters (e.g. --set scan.points=...).
-  json stages = doc.value.contains("stages") && doc.value["stages"].is_object() ? doc.value["stages"]
-                                                                               : json::object();
+  json stages = doc.value.contains("stages") && doc.value["stages"].is_object()
+                    ? doc.value["stages"]
+                    : json::object();
   std::set<std::string> with_from_scene;
   for (auto& [id, spec] : stages.items()) {
     if (!spec.is_object() || !spec.contains("with") || !spec["with"].is_string() ||
@@ -417,12 +418,14 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   for (auto& [id, spec] : stages.items()) {
     const std::string sp = "/stages/" + PointerToken(id);
     // The schema said what is wrong with a stage without a usable `uses:`.
-    if (!spec.is_object() || !spec.contains("uses") || rejected(sp + "/uses") || rejected(sp + "/when"))
+    if (!spec.is_object() || !spec.contains("uses") || rejected(sp + "/uses") ||
+        rejected(sp + "/when"))
       continue;
     StageNode node;
     node.id = id;
     node.pos = doc.KeyPositionOf(sp);
-    if (spec.contains("group") && spec["group"].is_string()) node.group = spec["group"].get<std::string>();
+    if (spec.contains("group") && spec["group"].is_string())
+      node.group = spec["group"].get<std::string>();
     const size_t errors_before = errors.size();
     std::set<std::string> from_scene;
     if (spec.contains("when")) {
@@ -479,8 +482,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     }
     const json& param_schema = registry.ParamsSchema(uses).json();
     with = ApplyDefaults(param_schema, with);
-    for (const SchemaError& e : with_rejected ? std::vector<SchemaError>{}
-                                              : registry.ParamsSchema(uses).Validate(with)) {
+    for (const SchemaError& e :
+         with_rejected ? std::vector<SchemaError>{} : registry.ParamsSchema(uses).Validate(with)) {
       const std::string pointer = sp + "/with" + e.pointer;
       SourcePos pos = pos_of(pointer);
       if (e.about_key && pos.file.rfind("<command line>", 0) != 0) pos = doc.KeyPositionOf(pointer);
@@ -530,7 +533,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
                                               JoinNames(names) + ")");
         continue;
       }
-      if (!ref.is_string() || rejected(ip) || ref.get<std::string>().find('.') == std::string::npos) {
+      if (!ref.is_string() || rejected(ip) ||
+          ref.get<std::string>().find('.') == std::string::npos) {
         rejected_inputs.insert(port);
         continue;
       }
@@ -674,7 +678,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   return wf;
 }
 
-Status CheckStageIds(const Workflow& wf, const std::vector<std::string>& ids, const std::string& flag) {
+Status CheckStageIds(const Workflow& wf, const std::vector<std::string>& ids,
+                     const std::string& flag) {
   const std::vector<std::string> known = KeysOf(wf.stages);
   Errors errors;
   for (const std::string& id : ids) {
@@ -714,7 +719,8 @@ Status KeepUpstreamOf(Workflow& wf, const std::vector<std::string>& targets) {
       const bool named = std::any_of(wf.outputs.begin(), wf.outputs.end(), [&](const auto& o) {
         return o.second == std::pair<std::string, std::string>{id, p.name};
       });
-      if (!named && !wf.outputs.count(id + "." + p.name)) wf.outputs[id + "." + p.name] = {id, p.name};
+      if (!named && !wf.outputs.count(id + "." + p.name))
+        wf.outputs[id + "." + p.name] = {id, p.name};
     }
   }
   return Status::Ok();

@@ -288,15 +288,15 @@ stages:
   const std::string m = wf.status().message();
   const std::string f = dir_.path() + "/wf.yaml:";
   for (const std::string& expected : {
-           f + "1:7: must match pattern",                       // schema: name
-           f + "2:1: unknown key 'output'",                     // schema: top level
-           f + "4:32: stage 'src' (t.text): unknown key 'txt'", // parameters
+           f + "1:7: must match pattern",                        // schema: name
+           f + "2:1: unknown key 'output'",                      // schema: top level
+           f + "4:32: stage 'src' (t.text): unknown key 'txt'",  // parameters
            f + "5:17: unknown stage type 't.uper' (did you mean 't.upper'?)",
-           f + "6:33: cycle: b -> a -> b",                      // graph
+           f + "6:33: cycle: b -> a -> b",  // graph
            f + "8:36: input 'in' of stage 'lost' names unknown stage 'nowhere'",
-           f + "9:38: must match pattern",                      // schema: the reference
+           f + "9:38: must match pattern",  // schema: the reference
            f + "10:34: expected an object or a string, got an array",
-           f + "11:21: must match pattern",                     // schema: uses
+           f + "11:21: must match pattern",  // schema: uses
        })
     EXPECT_NE(m.find(expected), std::string::npos) << "missing: " << expected << "\n" << m;
   // Each problem once: no "missing required input" for the rejected
@@ -330,11 +330,13 @@ outputs: { length: len.out, other: side.out }
 
   const Status bad = KeepUpstreamOf(*wf, {"uq"});
   ASSERT_FALSE(bad.ok());
-  EXPECT_NE(bad.message().find("<command line>: --until uq: no stage 'uq' in workflow demo (did you mean 'up'?)"),
+  EXPECT_NE(bad.message().find(
+                "<command line>: --until uq: no stage 'uq' in workflow demo (did you mean 'up'?)"),
             std::string::npos)
       << bad.message();
   const Status force = CheckStageIds(*wf, {"src", "len"}, "--force");
-  EXPECT_NE(force.message().find("--force len: no stage 'len'"), std::string::npos) << force.message();
+  EXPECT_NE(force.message().find("--force len: no stage 'len'"), std::string::npos)
+      << force.message();
   EXPECT_TRUE(CheckStageIds(*wf, {"src"}, "--force").ok());
 }
 

@@ -540,9 +540,11 @@ TEST_F(Cli, WarningsReachProgressRecordSummaryAndLog) {
   const RunResult r = RunWf(wf);
   ASSERT_EQ(r.exit_code, 0) << r.Describe();
   EXPECT_NE(r.err.find("[2/3] ran     w (test.warn)"), std::string::npos) << r.Describe();
-  EXPECT_NE(r.err.find("; 2 warnings\n        warning: colors dropped: not every scan has colorRed/Green/Blue\n"
-                       "        warning: 3 scans merged\n"),
-            std::string::npos)
+  EXPECT_NE(
+      r.err.find(
+          "; 2 warnings\n        warning: colors dropped: not every scan has colorRed/Green/Blue\n"
+          "        warning: 3 scans merged\n"),
+      std::string::npos)
       << r.Describe();
   EXPECT_NE(r.out.find("warny: 3 stages, 3 ran, 0 cached, 0 failed, 0 not run, 2 warnings in "),
             std::string::npos)
@@ -633,7 +635,8 @@ TEST_F(Cli, ForceAndUntil) {
   const RunResult plan = RunWf(wf, "plan", {"-n", "--force", "src"});
   ASSERT_EQ(plan.exit_code, 0) << plan.Describe();
   EXPECT_NE(plan.out.find("run   src"), std::string::npos) << plan.out;
-  EXPECT_NE(plan.out.find("forced (--force): in the cache, but runs again"), std::string::npos) << plan.out;
+  EXPECT_NE(plan.out.find("forced (--force): in the cache, but runs again"), std::string::npos)
+      << plan.out;
   EXPECT_NE(plan.out.find("run?  up"), std::string::npos) << plan.out;
   EXPECT_FALSE(Exists(P("plan/run.json")));
 
@@ -641,7 +644,8 @@ TEST_F(Cli, ForceAndUntil) {
   for (const char* flag : {"--force", "--until"}) {
     const RunResult bad = RunWf(wf, "bad", {flag, "uq"});
     EXPECT_EQ(bad.exit_code, 2) << bad.Describe();
-    EXPECT_NE(bad.err.find(std::string("<command line>: ") + flag + " uq: no stage 'uq' in workflow chain (did you mean 'up'?)"),
+    EXPECT_NE(bad.err.find(std::string("<command line>: ") + flag +
+                           " uq: no stage 'uq' in workflow chain (did you mean 'up'?)"),
               std::string::npos)
         << bad.Describe();
     EXPECT_FALSE(Exists(P("bad/run.json")));
@@ -652,31 +656,37 @@ TEST_F(Cli, ForceAndUntil) {
 TEST_F(Cli, HelpNamesTheProgramEnvironmentExitCodesAndUnknownCommands) {
   const RunResult help = pbtest::Run({"--help"});
   EXPECT_EQ(help.exit_code, 0) << help.Describe();
-  for (const char* text : {"Usage: pointbake [OPTIONS] SUBCOMMAND", "Examples:", "pointbake run WF.yaml --until",
-                           "POINTBAKE_CACHE", "XDG_CACHE_HOME", "Exit status: 0 done; 1 a stage",
-                           "2 bad input or usage", "docs/engine.md"})
+  for (const char* text :
+       {"Usage: pointbake [OPTIONS] SUBCOMMAND", "Examples:", "pointbake run WF.yaml --until",
+        "POINTBAKE_CACHE", "XDG_CACHE_HOME", "Exit status: 0 done; 1 a stage",
+        "2 bad input or usage", "docs/engine.md"})
     EXPECT_NE(help.out.find(text), std::string::npos) << text << "\n" << help.out;
   EXPECT_EQ(help.out.find(Binary()), std::string::npos) << "usage shows the binary's path";
 
   const RunResult run_help = pbtest::Run({"run", "--help"});
   EXPECT_EQ(run_help.exit_code, 0);
-  EXPECT_NE(run_help.out.find("Usage: pointbake run [OPTIONS] WORKFLOW"), std::string::npos) << run_help.out;
+  EXPECT_NE(run_help.out.find("Usage: pointbake run [OPTIONS] WORKFLOW"), std::string::npos)
+      << run_help.out;
   EXPECT_NE(run_help.out.find("--force STAGE"), std::string::npos) << run_help.out;
-  EXPECT_EQ(run_help.out.find("Examples:"), std::string::npos) << "the footer belongs to the top level";
+  EXPECT_EQ(run_help.out.find("Examples:"), std::string::npos)
+      << "the footer belongs to the top level";
 
   // explain lists only options that change what it prints.
   const RunResult explain_help = pbtest::Run({"explain", "--help"});
   EXPECT_EQ(explain_help.exit_code, 0);
   for (const char* option : {"--jobs", "--mem", "--out", "--threads", "--keep-going"})
-    EXPECT_EQ(explain_help.out.find(option), std::string::npos) << option << "\n" << explain_help.out;
+    EXPECT_EQ(explain_help.out.find(option), std::string::npos) << option << "\n"
+                                                                << explain_help.out;
   for (const char* option : {"--scene", "--set", "--cache", "--force", "--until"})
-    EXPECT_NE(explain_help.out.find(option), std::string::npos) << option << "\n" << explain_help.out;
+    EXPECT_NE(explain_help.out.find(option), std::string::npos) << option << "\n"
+                                                                << explain_help.out;
 
   for (const std::vector<std::string>& args :
        {std::vector<std::string>{"serve", "--help"}, {"nosuchcmd"}, {"rnu", "x.yaml"}}) {
     const RunResult r = pbtest::Run(args);
     EXPECT_EQ(r.exit_code, 2) << r.Describe();
-    EXPECT_NE(r.err.find("pointbake: unknown command '" + args[0] + "'"), std::string::npos) << r.Describe();
+    EXPECT_NE(r.err.find("pointbake: unknown command '" + args[0] + "'"), std::string::npos)
+        << r.Describe();
     EXPECT_NE(r.err.find("commands: run, campaign,"), std::string::npos) << r.Describe();
     EXPECT_TRUE(r.out.empty()) << r.Describe();
   }
@@ -706,14 +716,16 @@ TEST_F(Cli, StagesShowsReadableParametersAndASnippet) {
   ASSERT_EQ(rp.exit_code, 0) << rp.Describe();
   const std::string params = rp.out.substr(rp.out.find("parameters:"));
   EXPECT_EQ(params.find("  path : string  required"), params.find('\n') + 1) << params;
-  EXPECT_NE(params.find("format : one of: auto, ply, pcd, xyz, ptx, e57, las  default auto"), std::string::npos)
+  EXPECT_NE(params.find("format : one of: auto, ply, pcd, xyz, ptx, e57, las  default auto"),
+            std::string::npos)
       << params;
   EXPECT_NE(params.find("      path: <string>   # required\n"), std::string::npos) << params;
   // Stable: the same text twice.
   EXPECT_EQ(pbtest::Run({"stages", "io.read_points"}).out, rp.out);
   const RunResult typo = pbtest::Run({"stages", "points.normal"});
   EXPECT_EQ(typo.exit_code, 2);
-  EXPECT_NE(typo.err.find("(did you mean 'points.normals'?)"), std::string::npos) << typo.Describe();
+  EXPECT_NE(typo.err.find("(did you mean 'points.normals'?)"), std::string::npos)
+      << typo.Describe();
 }
 
 // A workflow without `name:` is named after its file.
@@ -724,7 +736,8 @@ stages:
 )");
   const RunResult v = pbtest::Run({"validate", "proj/no_name.yaml"}, {}, tmp_.path());
   EXPECT_EQ(v.exit_code, 0) << v.Describe();
-  const RunResult r = pbtest::Run({"run", "proj/no_name.yaml", "--cache", P("cache")}, {}, tmp_.path());
+  const RunResult r =
+      pbtest::Run({"run", "proj/no_name.yaml", "--cache", P("cache")}, {}, tmp_.path());
   ASSERT_EQ(r.exit_code, 0) << r.Describe();
   EXPECT_NE(r.out.find("record in out/no_name/run.json"), std::string::npos) << r.Describe();
   EXPECT_EQ(ReadJson(P("out/no_name/run.json")).value("workflow", ""), "no_name");
@@ -754,11 +767,14 @@ stages:
   };
   const RunResult dry = campaign({"campaign", P("proj/c.yaml"), "-n"});
   ASSERT_EQ(dry.exit_code, 0) << dry.Describe();
-  EXPECT_NE(dry.out.find("campaign c: 2 runs; dry run, nothing runs"), std::string::npos) << dry.out;
-  EXPECT_NE(dry.out.find("[1/2] s1/a: 0 cached, 1 to run, 1 to run unless"), std::string::npos) << dry.out;
-  EXPECT_NE(dry.out.find("[2/2] s1/b: 0 cached, 0 to run, 1 to run unless upstream outputs come out "
-                         "unchanged, 1 computed by an earlier run"),
-            std::string::npos)
+  EXPECT_NE(dry.out.find("campaign c: 2 runs; dry run, nothing runs"), std::string::npos)
+      << dry.out;
+  EXPECT_NE(dry.out.find("[1/2] s1/a: 0 cached, 1 to run, 1 to run unless"), std::string::npos)
+      << dry.out;
+  EXPECT_NE(
+      dry.out.find("[2/2] s1/b: 0 cached, 0 to run, 1 to run unless upstream outputs come out "
+                   "unchanged, 1 computed by an earlier run"),
+      std::string::npos)
       << dry.out;
   EXPECT_NE(dry.out.find("  reuse src "), std::string::npos) << dry.out;
   EXPECT_EQ(CountEntries(P("cache")), 0);
@@ -774,10 +790,13 @@ stages:
   EXPECT_FALSE(manifest["runs"][0].contains("warnings"));
 
   // Everything cached now; explain gives the reasons for hits too.
-  const RunResult explain = pbtest::Run({"campaign", "explain", P("proj/c.yaml"), "--cache", P("cache")});
+  const RunResult explain =
+      pbtest::Run({"campaign", "explain", P("proj/c.yaml"), "--cache", P("cache")});
   ASSERT_EQ(explain.exit_code, 0) << explain.Describe();
-  EXPECT_NE(explain.out.find("campaign c: 4 cached, 0 to run, 0 to run unless upstream outputs come out unchanged\n"),
-            std::string::npos)
+  EXPECT_NE(
+      explain.out.find(
+          "campaign c: 4 cached, 0 to run, 0 to run unless upstream outputs come out unchanged\n"),
+      std::string::npos)
       << explain.out;
   EXPECT_NE(explain.out.find("  hit   w "), std::string::npos) << explain.out;
   // A dry run with everything cached lists no stage.

@@ -323,7 +323,8 @@ std::string SpeedUpSentence(const std::vector<SpeedUpMean>& means) {
 }
 
 bool AnyWarnings(const Campaign& c) {
-  return std::any_of(c.rows.begin(), c.rows.end(), [](const Row& r) { return !r.warnings.empty(); });
+  return std::any_of(c.rows.begin(), c.rows.end(),
+                     [](const Row& r) { return !r.warnings.empty(); });
 }
 constexpr const char* kNoWarnings = "No stage of any run reported a warning.";
 
@@ -411,8 +412,10 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
   h += "\n<h2>Quality against ground truth</h2>" + HtmlTable(vs_truth);
   h += "\n<h2>Faces, textures and FPS estimate</h2>" + HtmlTable(fps);
   h += "\n<h2>Warnings</h2>";
-  if (!AnyWarnings(c)) h += "<p>" + std::string(kNoWarnings) + "</p>";
-  else h += "<ul>";
+  if (!AnyWarnings(c))
+    h += "<p>" + std::string(kNoWarnings) + "</p>";
+  else
+    h += "<ul>";
   for (const Row& r : c.rows)
     for (const auto& [stage, text] : r.warnings)
       h += "<li>" + EscapeHtml(DisplayName(r)) + " on " + EscapeHtml(r.scene) + ", stage <code>" +

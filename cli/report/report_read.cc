@@ -138,7 +138,8 @@ Status ReadRunWarnings(const std::string& path, Row& row) {
   if (!run.is_object() || !run.contains("stages") || !run["stages"].is_array())
     return Status::Corrupt(path + ": no \"stages\" array");
   for (const Json& stage : run["stages"]) {
-    if (!stage.is_object() || !stage.contains("warnings") || !stage["warnings"].is_array()) continue;
+    if (!stage.is_object() || !stage.contains("warnings") || !stage["warnings"].is_array())
+      continue;
     const std::string id = stage.contains("stage") && stage["stage"].is_string()
                                ? stage["stage"].get<std::string>()
                                : "?";
@@ -322,7 +323,8 @@ Json RowJson(const Row& r) {
             {"vs_hpm", quality(r.vs_hpm)},
             {"vs_truth", quality(r.vs_truth)}};
   Json warnings = Json::array();
-  for (const auto& [stage, text] : r.warnings) warnings.push_back({{"stage", stage}, {"warning", text}});
+  for (const auto& [stage, text] : r.warnings)
+    warnings.push_back({{"stage", stage}, {"warning", text}});
   j["warnings"] = warnings;
   if (!r.error.empty()) j["error"] = r.error;
   return j;

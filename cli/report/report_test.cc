@@ -274,8 +274,8 @@ TEST_F(ReportTest, WarningsOfEveryRunAreListed) {
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
   const Json r = Results();
   EXPECT_EQ(r["rows"][0]["warnings"], Json::array());  // hpm
-  EXPECT_EQ(r["rows"][1]["warnings"],
-            Json({{{"stage", "bake"}, {"warning", "first"}}, {{"stage", "bake"}, {"warning", "second"}}}));
+  EXPECT_EQ(r["rows"][1]["warnings"], Json({{{"stage", "bake"}, {"warning", "first"}},
+                                            {{"stage", "bake"}, {"warning", "second"}}}));
   ASSERT_EQ(r["rows"][2]["warnings"].size(), 1u);
   EXPECT_EQ(r["rows"][2]["warnings"][0]["stage"], "normals");
 
@@ -289,13 +289,17 @@ TEST_F(ReportTest, WarningsOfEveryRunAreListed) {
   EXPECT_THAT(md, HasSubstr("- LPM on room, stage `bake`: first"));
   EXPECT_THAT(md, HasSubstr("- Point transfer on room, stage `normals`: depth 9 makes"));
   const std::string html = ReadText(Path("report/report.html"));
-  EXPECT_THAT(html, HasSubstr("<code>normals</code>: depth 9 makes 1.2 mm cells, finer than &lt;spacing&gt;"));
+  EXPECT_THAT(
+      html,
+      HasSubstr("<code>normals</code>: depth 9 makes 1.2 mm cells, finer than &lt;spacing&gt;"));
 
   // Without warnings the section says so.
   WriteCampaign(true);
-  WriteJson(RunDir("point_transfer") + "/run.json", Json::parse(ReadText(RunDir("hpm") + "/run.json")));
+  WriteJson(RunDir("point_transfer") + "/run.json",
+            Json::parse(ReadText(RunDir("hpm") + "/run.json")));
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report2")).ok());
-  EXPECT_THAT(ReadText(Path("report2/report.md")), HasSubstr("No stage of any run reported a warning."));
+  EXPECT_THAT(ReadText(Path("report2/report.md")),
+              HasSubstr("No stage of any run reported a warning."));
 }
 
 TEST_F(ReportTest, CsvHasOneRowPerRunWithEmptyFieldsForUnknowns) {

@@ -1,7 +1,5 @@
 #include "stages/export/export_io.h"
 
-#include "stages/builtin.h"
-
 #include <algorithm>
 #include <cassert>
 #include <cmath>
@@ -10,6 +8,7 @@
 #include <iterator>
 #include <string>
 
+#include "stages/builtin.h"
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/core/text_parse.h"
 #include "stages/mesh_io.h"

@@ -107,8 +107,8 @@ TEST_F(MeshStagesTest, DecimateWithinBudgetWarns) {
   const Status status = Run("mesh.decimate", ctx);
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(ctx.counters_["faces_out"], 800);
-  EXPECT_EQ(ctx.warnings_,
-            std::vector<std::string>{"the input has 800 faces, within the budget of 5000: unchanged"});
+  EXPECT_EQ(ctx.warnings_, std::vector<std::string>{
+                               "the input has 800 faces, within the budget of 5000: unchanged"});
   FakeContext halved(dir_ / "halved", {{"ratio", 0.5}});
   halved.AddInput("mesh", "mesh", WriteGrid("grid2.ply"));
   ASSERT_TRUE(Run("mesh.decimate", halved).ok());
