@@ -120,15 +120,21 @@ TEST_F(BakeStagesTest, FromPointsBakesThePointsAndWritesExrOnRequest) {
 TEST_F(BakeStagesTest, FromPointsWarnsWhenNoPointReachesTheMesh) {
   PointCloud far = Points();
   for (size_t i = 2; i < far.positions.size(); i += 3) far.positions[i] += 1.0f;  // 1 m above
-  FakeContext ctx(dir_, {{"size", 16}, {"gutter", 0}, {"normal_format", "png"},
-                         {"interpolation", "nearest"}, {"max_distance", 4.0},
-                         {"max_angle_deg", 90.0}, {"idw_neighbors", 4}, {"splat_sigma", 1.0}});
+  FakeContext ctx(dir_, {{"size", 16},
+                         {"gutter", 0},
+                         {"normal_format", "png"},
+                         {"interpolation", "nearest"},
+                         {"max_distance", 4.0},
+                         {"max_angle_deg", 90.0},
+                         {"idw_neighbors", 4},
+                         {"splat_sigma", 1.0}});
   ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
   ctx.AddInput("points", "points", WriteInputPoints("points", far), {{"spacing_m", 1.0 / 64}});
   ASSERT_TRUE(Run("bake.from_points", ctx).ok());
   EXPECT_EQ(ctx.counters_["points_assigned"], 0);
   ASSERT_EQ(ctx.warnings_.size(), 1u);
-  EXPECT_THAT(ctx.warnings_[0], HasSubstr("no point lies within 62.5 mm and 90 degrees of the mesh"));
+  EXPECT_THAT(ctx.warnings_[0],
+              HasSubstr("no point lies within 62.5 mm and 90 degrees of the mesh"));
 }
 
 TEST_F(BakeStagesTest, FromPointsMeasuresSpacingWhenTheMetaHasNone) {
