@@ -226,9 +226,10 @@ CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const Campaig
     run_options.sets = run.sets;
     const WorkflowRunSummary s =
         RunWorkflowInto(*wf, cache, run_options, JoinPath(result.out_dir, run.dir));
-    std::printf("  %s: %d stages, %d ran, %d cached, %d failed, %d not run in %s\n", run.name.c_str(),
-                s.stages, s.ran, s.hit, s.failed, s.skipped, FormatSeconds(s.total_s).c_str());
+    std::printf("  %s: %s in %s\n", run.name.c_str(), SummaryCounts(s).c_str(),
+                FormatSeconds(s.total_s).c_str());
     row["status"] = s.ok() ? "ok" : "failed";
+    if (s.warnings > 0) row["warnings"] = s.warnings;
     if (!s.outputs.ok()) row["error"] = s.outputs.message();
     else if (!s.ok()) row["error"] = std::to_string(s.failed) + " stage(s) failed, " +
                                      std::to_string(s.skipped) + " not run; see " + run.dir + "/run.json";

@@ -43,11 +43,8 @@ nlohmann::json ResultToJson(const JobResult& r) {
   nlohmann::json outs = nlohmann::json::object();
   for (const auto& [port, out] : r.outputs)
     outs[port] = {{"type", out.type}, {"files", out.files}, {"meta", out.meta}};
-  return {{"ok", r.status.ok()},
-          {"error", r.status.message()},
-          {"outputs", outs},
-          {"counters", r.counters},
-          {"phases", r.phases},
+  return {{"ok", r.status.ok()},    {"error", r.status.message()}, {"outputs", outs},
+          {"counters", r.counters}, {"phases", r.phases},          {"warnings", r.warnings},
           {"wall_s", r.wall_s}};
 }
 
@@ -198,6 +195,9 @@ JobResult LocalProcessExecutor::Run(const JobSpec& job, const ProgressFn& progre
   }
   result.counters = j.value("counters", nlohmann::json::object());
   result.phases = j.value("phases", nlohmann::json::array());
+  if (j.contains("warnings") && j["warnings"].is_array())
+    for (const auto& w : j["warnings"])
+      if (w.is_string()) result.warnings.push_back(w.get<std::string>());
   if (!j.value("ok", false)) {
     result.status = Status::Invalid(j.value("error", std::string("stage failed")));
     result.log_tail = LastLines(log_path, 20);
@@ -262,7 +262,7 @@ int RunStageSubcommand(const std::string& job_path, Registry& registry) {
       const int n = std::snprintf(line, sizeof line, "P %.4f\n", f);
       (void)!::write(fd, line, static_cast<size_t>(n));
     };
-    result = RunStageHere(job, progress);
+    result = RunStageHere(job, progress, /*log_warnings=*/true);
   }
   if (!result.status.ok()) std::fprintf(stderr, "error: %s\n", result.status.message().c_str());
   Status st = Env::Default()->WriteFileAtomic(

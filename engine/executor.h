@@ -37,6 +37,7 @@ struct JobResult {
   uint64_t peak_rss_bytes = 0;
   uint64_t read_bytes = 0, write_bytes = 0;  // rchar/wchar of /proc/<pid>/io
   std::string log_tail;                      // last lines of the log on failure
+  std::vector<std::string> warnings;         // StageContext::warning, in order
 };
 
 using ProgressFn = std::function<void(double fraction)>;

@@ -97,48 +97,74 @@ std::vector<std::string> DiffComponents(const json& before, const json& after) {
   return out;
 }
 
-Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache) {
+Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache,
+                                             const PlanOptions& options) {
   std::vector<PlanLine> lines;
-  // Output artifact digests of stages that hit, by "stage.port".
+  // By "stage.port": the artifact digest of a stage that hits, else a
+  // stand-in "pending:<key>.<port>" for the output a run would produce. A
+  // stand-in makes its dependents' keys symbolic: never in the cache, but
+  // equal across the runs of a campaign that share the same upstream chain.
   std::map<std::string, std::string> known;
-  std::set<std::string> unknown_stages;
+  constexpr const char* kPending = "pending:";
   for (const std::string& id : wf.order) {
     const StageNode& node = wf.stages.at(id);
     PlanLine line;
     line.stage = id;
     line.type = node.type->id;
     std::map<std::string, std::string> digests;
-    std::vector<std::string> waiting;
+    std::set<std::string> waiting;  // upstream stages whose outputs are pending
     for (const auto& [port, in] : node.inputs) {
-      auto it = known.find(in.from_stage + "." + in.from_port);
-      if (it == known.end()) waiting.push_back(in.from_stage);
-      else digests[port] = it->second;
+      const std::string& digest = known.at(in.from_stage + "." + in.from_port);
+      if (digest.rfind(kPending, 0) == 0) waiting.insert(in.from_stage);
+      digests[port] = digest;
     }
     const std::optional<json> history = cache.LoadHistory(wf.name, id);
+    PB_ASSIGN_OR_RETURN(json comps, KeyComponents(node, wf.salt, digests, cache));
+    const std::string key = KeyOf(comps).Hex();
+    auto pending_outputs = [&] {
+      for (const PortSpec& p : node.type->outputs)
+        known[id + "." + p.name] = kPending + key + "." + p.name;
+      if (options.planned_keys) options.planned_keys->insert(key);
+    };
+    const bool planned_earlier = options.planned_keys && options.planned_keys->count(key) > 0;
     if (!waiting.empty()) {
-      line.state = PlanLine::State::kDependsOnUpstream;
-      std::set<std::string> w(waiting.begin(), waiting.end());
-      std::string names;
-      for (const auto& s : w) names += (names.empty() ? "'" : ", '") + s + "'";
-      line.reasons.push_back("runs after " + names +
-                             " re-run; stays cached if their outputs come out unchanged (early cutoff)");
-      // Parameter changes can still be named.
-      if (history && history->contains("components")) {
-        PB_ASSIGN_OR_RETURN(json comps, KeyComponents(node, wf.salt, {}, cache));
-        json before = (*history)["components"];
-        before["inputs"] = json::object();
-        for (const std::string& r : DiffComponents(before, comps)) line.reasons.push_back(r);
+      if (planned_earlier) {
+        line.state = PlanLine::State::kEarlierRun;
+        line.reasons.push_back(
+            "an earlier run of this campaign computes it (same stage after the same stages)");
+      } else {
+        line.state = PlanLine::State::kDependsOnUpstream;
+        std::string names;
+        for (const auto& s : waiting) names += (names.empty() ? "'" : ", '") + s + "'";
+        line.reasons.push_back(
+            "runs after " + names +
+            " re-run; stays cached if their outputs come out unchanged (early cutoff)");
+        // Parameter changes can still be named.
+        if (history && history->contains("components")) {
+          json before = (*history)["components"], after = comps;
+          before["inputs"] = after["inputs"] = json::object();
+          for (const std::string& r : DiffComponents(before, after)) line.reasons.push_back(r);
+        }
       }
+      pending_outputs();
       lines.push_back(line);
       continue;
     }
-    PB_ASSIGN_OR_RETURN(json comps, KeyComponents(node, wf.salt, digests, cache));
-    const Digest key = KeyOf(comps);
-    line.key = key.Hex();
-    std::optional<CacheEntry> entry = cache.Lookup(key);
-    if (entry) {
+    line.key = key;
+    const bool forced = options.force.count(id) > 0;
+    std::optional<CacheEntry> entry = cache.Lookup(KeyOf(comps));
+    if (forced) {
+      line.state = PlanLine::State::kMiss;
+      line.reasons.push_back(entry ? "forced (--force): in the cache, but runs again; its result "
+                                     "replaces the entry"
+                                   : "forced (--force); not in the cache either");
+    } else if (entry) {
       line.state = PlanLine::State::kHit;
       for (const auto& [port, art] : entry->outputs) known[id + "." + port] = art.ComputeDigest().Hex();
+    } else if (planned_earlier) {
+      line.state = PlanLine::State::kEarlierRun;
+      line.reasons.push_back(
+          "computed by an earlier run of this campaign (same key); a hit by then");
     } else {
       line.state = PlanLine::State::kMiss;
       if (!history || !history->contains("components")) {
@@ -149,6 +175,7 @@ Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache) {
         for (const std::string& r : diff) line.reasons.push_back(r);
       }
     }
+    if (line.state != PlanLine::State::kHit) pending_outputs();
     lines.push_back(line);
   }
   return lines;

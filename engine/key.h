@@ -18,6 +18,7 @@
 
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -42,11 +43,23 @@ std::vector<std::string> DiffComponents(const nlohmann::json& before, const nloh
 struct PlanLine {
   std::string stage;
   std::string type;
-  enum class State { kHit, kMiss, kDependsOnUpstream } state = State::kMiss;
+  // kHit: in the cache. kMiss: runs. kDependsOnUpstream: runs unless the
+  // stages before it re-run and write the same bytes (early cutoff); its key
+  // is known only then. kEarlierRun: an earlier run of the same campaign
+  // computes this key, so this run finds it in the cache.
+  enum class State { kHit, kMiss, kDependsOnUpstream, kEarlierRun } state = State::kMiss;
   std::string key;  // hex, empty when not yet computable
   std::vector<std::string> reasons;
 };
 
-Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& workflow, Cache& cache);
+struct PlanOptions {
+  std::set<std::string> force;  // stage ids that run whatever the cache holds (--force)
+  // Campaigns: keys the runs planned so far will compute. Read (a key in it
+  // is kEarlierRun) and extended (with this plan's kMiss keys); may be null.
+  std::set<std::string>* planned_keys = nullptr;
+};
+
+Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& workflow, Cache& cache,
+                                             const PlanOptions& options = {});
 
 }  // namespace pb

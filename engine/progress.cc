@@ -74,8 +74,15 @@ void ProgressPrinter::OnStageEnd(const StageOutcome& o, int done, int total) {
       figures = "  " + FormatSeconds(o.result.wall_s) + ", cpu " +
                 FormatSeconds(o.result.user_s + o.result.sys_s) + ", peak " +
                 FormatBytes(o.result.peak_rss_bytes);
+    if (!o.warnings.empty())
+      figures += std::string(figures.empty() ? "  " : "; ") + std::to_string(o.warnings.size()) +
+                 (o.warnings.size() == 1 ? " warning" : " warnings") +
+                 (o.state == StageOutcome::State::kHit ? " (from the cached run)" : "");
     std::fprintf(stderr, "[%d/%d] %-7s %s (%s)%s\n", done, total, StateName(o.state), o.id.c_str(),
                  o.type.c_str(), figures.c_str());
+    if (!quiet_)
+      for (const std::string& w : o.warnings)
+        std::fprintf(stderr, "        warning: %s\n", w.c_str());
     if (!o.error.empty() && o.state != StageOutcome::State::kSkipped)
       std::fprintf(stderr, "        error: %s\n", o.error.c_str());
     if (failed && !o.result.log_tail.empty())

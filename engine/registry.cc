@@ -122,6 +122,76 @@ Status Registry::LoadPlugin(const std::string& path) {
   return Status::Ok();
 }
 
+namespace {
+
+using OrderedJson = nlohmann::ordered_json;
+
+// A YAML-ish rendering of a value: plain words bare, other strings quoted,
+// lists and mappings in flow style.
+std::string YamlValue(const OrderedJson& v) {
+  if (v.is_string()) {
+    const std::string text = v.get<std::string>();
+    static const std::regex plain("^[A-Za-z_/][A-Za-z0-9_./-]*$");
+    static const std::regex reserved("^(true|false|yes|no|on|off|null|~)$", std::regex::icase);
+    if (std::regex_match(text, plain) && !std::regex_match(text, reserved)) return text;
+    return v.dump();
+  }
+  if (v.is_array()) {
+    std::string out = "[";
+    for (size_t i = 0; i < v.size(); ++i) out += (i ? ", " : "") + YamlValue(v[i]);
+    return out + "]";
+  }
+  if (v.is_object()) {
+    std::string out = "{";
+    bool first = true;
+    for (const auto& [k, x] : v.items()) {
+      out += (first ? "" : ", ") + k + ": " + YamlValue(x);
+      first = false;
+    }
+    return out + "}";
+  }
+  return v.dump();
+}
+
+// "number", "integer or null", "array of number", "one of: a, b".
+std::string TypeText(const OrderedJson& prop) {
+  if (prop.contains("enum")) {
+    std::string out = "one of: ";
+    for (size_t i = 0; i < prop["enum"].size(); ++i)
+      out += (i ? ", " : "") + YamlValue(prop["enum"][i]);
+    return out;
+  }
+  std::string out;
+  if (prop.contains("type")) {
+    const OrderedJson& t = prop["type"];
+    if (t.is_string()) {
+      out = t.get<std::string>();
+    } else if (t.is_array()) {
+      for (size_t i = 0; i < t.size(); ++i) out += (i ? " or " : "") + YamlValue(t[i]);
+    }
+  } else if (prop.contains("oneOf") || prop.contains("anyOf")) {
+    const OrderedJson& alts = prop.contains("oneOf") ? prop["oneOf"] : prop["anyOf"];
+    for (size_t i = 0; i < alts.size(); ++i) out += (i ? " or " : "") + TypeText(alts[i]);
+  } else {
+    out = "any";
+  }
+  if (out == "array" && prop.contains("items") && prop["items"].is_object())
+    out += " of " + TypeText(prop["items"]);
+  return out;
+}
+
+// "> 0", ">= 1, <= 16": the bounds a number must keep.
+std::string BoundsText(const OrderedJson& prop) {
+  std::string out;
+  for (const auto& [key, sign] : {std::pair{"exclusiveMinimum", ">"}, std::pair{"minimum", ">="},
+                                  std::pair{"exclusiveMaximum", "<"}, std::pair{"maximum", "<="}})
+    if (prop.contains(key) && prop[key].is_number())
+      out += std::string(out.empty() ? "" : ", ") + sign + " " + prop[key].dump();
+  return out;
+}
+
+}  // namespace
+
 std::string DescribeStage(const StageType& type) {
   std::ostringstream out;
   out << type.id << "  (version " << type.version << ")\n  " << type.summary << "\n";
@@ -135,23 +205,57 @@ std::string DescribeStage(const StageType& type) {
   };
   ports("inputs", type.inputs);
   ports("outputs", type.outputs);
-  out << "\nparameters:\n";
-  nlohmann::json schema = nlohmann::json::parse(type.params_schema, nullptr, false);
+  // Parameters in a stable order: the required ones, then the others, each
+  // in the order the stage's schema declares them (ordered_json keeps it).
+  const OrderedJson schema = OrderedJson::parse(type.params_schema, nullptr, false);
   std::vector<std::string> required;
-  if (schema.contains("required"))
+  if (schema.is_object() && schema.contains("required") && schema["required"].is_array())
     for (const auto& r : schema["required"]) required.push_back(r.get<std::string>());
-  if (!schema.contains("properties") || schema["properties"].empty()) out << "  (none)\n";
-  const nlohmann::json properties = schema.value("properties", nlohmann::json::object());
-  for (const auto& [name, prop] : properties.items()) {
-    out << "  " << name;
-    if (prop.contains("type")) out << " : " << prop["type"].dump();
-    if (prop.contains("enum")) out << " one of " << prop["enum"].dump();
-    if (std::find(required.begin(), required.end(), name) != required.end()) out << "  (required)";
-    if (prop.contains("default")) out << "  default " << prop["default"].dump();
-    if (prop.value("x-affects-output", true) == false) out << "  [not in cache key]";
+  const OrderedJson properties = schema.is_object() && schema.contains("properties")
+                                     ? schema["properties"]
+                                     : OrderedJson::object();
+  auto is_required = [&](const std::string& name) {
+    return std::find(required.begin(), required.end(), name) != required.end();
+  };
+  std::vector<std::string> names;
+  for (const auto& [name, prop] : properties.items())
+    if (is_required(name)) names.push_back(name);
+  for (const auto& [name, prop] : properties.items())
+    if (!is_required(name)) names.push_back(name);
+
+  out << "\nparameters:\n";
+  if (names.empty()) out << "  (none)\n";
+  for (const std::string& name : names) {
+    const OrderedJson& prop = properties[name];
+    out << "  " << name << " : " << TypeText(prop);
+    if (const std::string bounds = BoundsText(prop); !bounds.empty()) out << " (" << bounds << ")";
+    if (is_required(name)) out << "  required";
+    if (prop.contains("default")) out << "  default " << YamlValue(prop["default"]);
+    if (prop.value("x-path", false)) out << "  [a file path; its content enters the cache key]";
+    if (!prop.value("x-affects-output", true)) out << "  [not in the cache key]";
     out << "\n";
-    if (prop.contains("description"))
+    if (prop.contains("description") && prop["description"].is_string())
       out << "      " << prop["description"].get<std::string>() << "\n";
+  }
+
+  // A stage of this type in a workflow, with every parameter at its default.
+  out << "\nin a workflow:\n  my_" << type.id.substr(type.id.find('.') + 1)
+      << ":\n    uses: " << type.id << "\n";
+  if (!type.inputs.empty()) {
+    out << "    in:\n";
+    for (const auto& p : type.inputs)
+      out << "      " << p.name << ": STAGE.PORT   # " << p.type << (p.optional ? ", optional" : "")
+          << "\n";
+  }
+  if (!names.empty()) {
+    out << "    with:\n";
+    for (const std::string& name : names) {
+      const OrderedJson& prop = properties[name];
+      if (prop.contains("default"))
+        out << "      " << name << ": " << YamlValue(prop["default"]) << "\n";
+      else
+        out << "      " << name << ": <" << TypeText(prop) << ">   # required\n";
+    }
   }
   return out.str();
 }

@@ -20,6 +20,8 @@ nlohmann::json StageRecordJson(const StageOutcome& o) {
     j["phases"] = r.phases;
   }
   if (o.state == StageOutcome::State::kHit) j["cached_run"] = o.cached_record;
+  if (!o.warnings.empty()) j["warnings"] = o.warnings;
+  if (o.forced) j["forced"] = true;
   if (!o.error.empty()) j["error"] = o.error;
   if (!o.result.log_tail.empty()) j["log_tail"] = o.result.log_tail;
   nlohmann::json outs = nlohmann::json::object();

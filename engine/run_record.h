@@ -3,7 +3,10 @@
 //               stages: [{stage, type, status (hit|ran|failed|skipped), key,
 //               start_s, end_s, wall_s, user_s, sys_s, peak_rss_bytes,
 //               read_bytes, write_bytes, counters, phases, error, cached_run,
-//               group (the stage's `group:`, when it has one)}],
+//               group (the stage's `group:`, when it has one), warnings
+//               (when the stage gave any: an array of one-line strings; for
+//               a hit, those of the run that made the entry), forced (true
+//               when --force made it run)}],
 //               disabled_stages: [ids left out by `when:`] (when any)}
 //   run.jsonl   one line per stage, same fields (for appending tools / jq)
 //   trace.json  Chrome trace events (chrome://tracing, Perfetto): one lane

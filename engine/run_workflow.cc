@@ -22,6 +22,15 @@ std::string UtcTimestamp() {
 
 std::string SelfExe() { return "/proc/self/exe"; }
 
+std::string SummaryCounts(const WorkflowRunSummary& s) {
+  std::string text = std::to_string(s.stages) + " stages, " + std::to_string(s.ran) + " ran, " +
+                     std::to_string(s.hit) + " cached, " + std::to_string(s.failed) + " failed, " +
+                     std::to_string(s.skipped) + " not run";
+  if (s.warnings > 0)
+    text += ", " + std::to_string(s.warnings) + (s.warnings == 1 ? " warning" : " warnings");
+  return text;
+}
+
 WorkflowRunSummary RunWorkflowInto(const Workflow& wf, Cache& cache, const WorkflowRunOptions& o,
                                    const std::string& out_dir) {
   WorkflowRunSummary summary;
@@ -32,6 +41,7 @@ WorkflowRunSummary RunWorkflowInto(const Workflow& wf, Cache& cache, const Workf
   opts.mem_budget_bytes = o.mem_budget_bytes;
   opts.keep_going = o.keep_going;
   opts.threads_per_stage = o.threads_per_stage;
+  opts.force = o.force;
   opts.log_dir = ResolvePath(".", out_dir + "/logs");
   LocalProcessExecutor local(SelfExe());
   InProcessExecutor in_process;
@@ -50,6 +60,8 @@ WorkflowRunSummary RunWorkflowInto(const Workflow& wf, Cache& cache, const Workf
                           {{"jobs", o.jobs}, {"mem_budget_bytes", o.mem_budget_bytes},
                            {"keep_going", o.keep_going}, {"sets", o.sets}, {"scene", wf.scene_file}}},
                          {"host", {{"cores", std::thread::hardware_concurrency()}}}};
+  if (!o.force.empty()) info["options"]["force"] = o.force;
+  if (!o.until.empty()) info["options"]["until"] = o.until;
   summary.outputs = WriteRunOutputs(wf, outcomes, info, cache, out_dir, &summary.written);
   summary.stages = static_cast<int>(outcomes.size());
   for (const auto& s : outcomes) {
@@ -57,6 +69,7 @@ WorkflowRunSummary RunWorkflowInto(const Workflow& wf, Cache& cache, const Workf
     if (s.state == StageOutcome::State::kHit) ++summary.hit;
     if (s.state == StageOutcome::State::kFailed) ++summary.failed;
     if (s.state == StageOutcome::State::kSkipped) ++summary.skipped;
+    summary.warnings += static_cast<int>(s.warnings.size());
   }
   return summary;
 }

@@ -4,6 +4,7 @@
 #pragma once
 
 #include <cstdint>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -21,15 +22,22 @@ struct WorkflowRunOptions {
   bool quiet = false;             // progress: failures and the summary only
   bool in_process = false;        // debugging: no child processes
   std::vector<std::string> sets;  // recorded in run.json's options
+  std::set<std::string> force;    // --force: run these stages whatever the cache holds
+  std::vector<std::string> until;  // --until (recorded; the workflow is already cut)
 };
 
 struct WorkflowRunSummary {
   int stages = 0, ran = 0, hit = 0, failed = 0, skipped = 0;
+  int warnings = 0;  // over every stage, hits' cached warnings included
   double total_s = 0;
   std::vector<std::string> written;  // output files copied or kept
   Status outputs;                    // writing the records and outputs
   bool ok() const { return failed == 0 && skipped == 0 && outputs.ok(); }
 };
+
+// The counts of a summary line: "7 stages, 7 ran, 0 cached, 0 failed, 0 not
+// run" and ", 2 warnings" when there are some.
+std::string SummaryCounts(const WorkflowRunSummary& summary);
 
 // Now as an ISO 8601 UTC timestamp ("2026-11-21T23:47:34Z"), for records.
 std::string UtcTimestamp();

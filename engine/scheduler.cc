@@ -13,15 +13,23 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
+// The figures kept with a cache entry. `warnings` only when there are some,
+// so entries of stages without warnings keep their earlier form.
 nlohmann::json RecordOf(const JobResult& r) {
-  return {{"wall_s", r.wall_s},
-          {"user_s", r.user_s},
-          {"sys_s", r.sys_s},
-          {"peak_rss_bytes", r.peak_rss_bytes},
-          {"read_bytes", r.read_bytes},
-          {"write_bytes", r.write_bytes},
-          {"counters", r.counters},
-          {"phases", r.phases}};
+  nlohmann::json record = {{"wall_s", r.wall_s},         {"user_s", r.user_s},
+                           {"sys_s", r.sys_s},           {"peak_rss_bytes", r.peak_rss_bytes},
+                           {"read_bytes", r.read_bytes}, {"write_bytes", r.write_bytes},
+                           {"counters", r.counters},     {"phases", r.phases}};
+  if (!r.warnings.empty()) record["warnings"] = r.warnings;
+  return record;
+}
+
+std::vector<std::string> WarningsOf(const nlohmann::json& record) {
+  std::vector<std::string> out;
+  if (record.is_object() && record.contains("warnings") && record["warnings"].is_array())
+    for (const auto& w : record["warnings"])
+      if (w.is_string()) out.push_back(w.get<std::string>());
+  return out;
 }
 
 }  // namespace
@@ -78,8 +86,11 @@ void Scheduler::RunOne(StageOutcome& out, const std::map<std::string, StageOutco
     out.state = StageOutcome::State::kHit;
     out.outputs = std::move(entry.outputs);
     out.cached_record = entry.record;
+    out.warnings = WarningsOf(entry.record);
   };
-  if (std::optional<CacheEntry> entry = cache_.Lookup(key)) return hit(std::move(*entry));
+  out.forced = options.force.count(out.id) > 0;
+  if (!out.forced)
+    if (std::optional<CacheEntry> entry = cache_.Lookup(key)) return hit(std::move(*entry));
 
   // Another run may be computing the same key: wait for it, then reuse.
   bool would_block = false;
@@ -93,7 +104,8 @@ void Scheduler::RunOne(StageOutcome& out, const std::map<std::string, StageOutco
     out.error = lock.status().message();
     return;
   }
-  if (std::optional<CacheEntry> entry = cache_.Lookup(key)) return hit(std::move(*entry));
+  if (!out.forced)
+    if (std::optional<CacheEntry> entry = cache_.Lookup(key)) return hit(std::move(*entry));
 
   if (observer_) observer_->OnStageStart(out.id, node.type->id);
   Expected<std::string> staging = cache_.NewStagingDir(key);
@@ -108,6 +120,7 @@ void Scheduler::RunOne(StageOutcome& out, const std::map<std::string, StageOutco
     if (observer_) observer_->OnStageProgress(out.id, f);
   };
   out.result = executor_.Run(job, progress);
+  out.warnings = out.result.warnings;
   if (!out.result.status.ok()) {
     out.state = StageOutcome::State::kFailed;
     out.error = out.result.status.message();

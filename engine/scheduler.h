@@ -5,6 +5,7 @@
 
 #include <map>
 #include <nlohmann/json.hpp>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -20,6 +21,10 @@ struct RunOptions {
   bool keep_going = false;        // run independent stages after a failure
   int threads_per_stage = 0;      // 0: all cores
   std::string log_dir;            // <log_dir>/<stage>.log; empty: inside the staging folder
+  // Stage ids run even if their key is in the cache (--force); the new
+  // result replaces the entry. Their dependents follow the usual rule: they
+  // hit if the forced stage's outputs come out unchanged (early cutoff).
+  std::set<std::string> force;
 };
 
 struct StageOutcome {
@@ -35,6 +40,10 @@ struct StageOutcome {
   double start_s = 0, end_s = 0;            // seconds since the run started
   int slot = 0;                             // lane in the trace
   std::string error;
+  // The stage's warnings (StageContext::warning): this run's for kRan and
+  // kFailed; for kHit those of the run that made the entry, kept with it.
+  std::vector<std::string> warnings;
+  bool forced = false;  // run because of RunOptions::force
 };
 
 const char* StateName(StageOutcome::State state);

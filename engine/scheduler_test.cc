@@ -3,9 +3,12 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <fstream>
+#include <set>
 #include <thread>
 
 #include "engine/key.h"
+#include "engine/run_record.h"
 #include "engine/test_util.h"
 
 namespace pb {
@@ -159,6 +162,130 @@ stages:
   EXPECT_EQ(executor_.ran().size(), 8u);
   EXPECT_LE(executor_.max_concurrent_.load(), 2);
   EXPECT_GE(executor_.max_concurrent_.load(), 1);
+}
+
+// Warnings travel with the outcome, are kept with the cache entry (not in the
+// key), come back on a hit, and reach the run record.
+TEST_F(SchedulerTest, WarningsReachTheRecordAndComeBackOnHits) {
+  registry_.Register(StageType{
+      .id = "t.warn",
+      .summary = "warns",
+      .params_schema = R"({"type":"object","properties":{"n":{"type":"integer","default":2}}})",
+      .outputs = {{"out", "table"}},
+      .run = [](StageContext& ctx) {
+        const int n = ctx.params()["n"].get<int>();
+        for (int i = 0; i < n; ++i) ctx.warning("careful #" + std::to_string(i) + "\n");
+        std::ofstream(ctx.output_path("out", "table.json")) << "w";
+        return Status::Ok();
+      }});
+  const std::string yaml = R"(name: warn
+stages:
+  w: { uses: t.warn }
+  len: { uses: t.len, in: { in: w.out } }
+)";
+  auto first = Run(yaml);
+  ASSERT_EQ(States(first)["w"], "ran");
+  ASSERT_EQ(first[0].id, "w");  // topological order
+  EXPECT_EQ(first[0].warnings, (std::vector<std::string>{"careful #0", "careful #1"}));
+  EXPECT_TRUE(first[1].warnings.empty());
+  const nlohmann::json record = RunRecordJson(workflow_, first, nlohmann::json::object());
+  EXPECT_EQ(record["stages"][0]["warnings"], nlohmann::json({"careful #0", "careful #1"}));
+  EXPECT_FALSE(record["stages"][1].contains("warnings")) << record.dump();
+
+  auto second = Run(yaml);
+  ASSERT_EQ(States(second)["w"], "hit");
+  EXPECT_EQ(second[0].warnings, first[0].warnings);
+
+  // Past the limit: the first kMaxStageWarnings and a count of the rest.
+  auto many = Run(yaml, {"w.n=" + std::to_string(kMaxStageWarnings + 7)});
+  ASSERT_EQ(many[0].warnings.size(), static_cast<size_t>(kMaxStageWarnings) + 1);
+  EXPECT_EQ(many[0].warnings.back(), "... and 7 more warnings (see the stage's log)");
+}
+
+// --force: the stage runs though cached, and its result replaces the entry;
+// dependents keep the usual rule (early cutoff when the bytes are the same).
+TEST_F(SchedulerTest, ForceRerunsAStageAndReplacesItsEntry) {
+  static int counter = 0;
+  registry_.Register(StageType{.id = "t.counter",
+                               .summary = "a new text each run",
+                               .outputs = {{"out", "table"}},
+                               .run = [](StageContext& ctx) {
+                                 std::ofstream(ctx.output_path("out", "table.json")) << ++counter;
+                                 return Status::Ok();
+                               }});
+  const std::string yaml = R"(name: force
+stages:
+  src: { uses: t.text, with: { text: abc } }
+  len: { uses: t.len, in: { in: src.out } }
+  c: { uses: t.counter }
+  up: { uses: t.upper, in: { in: c.out } }
+)";
+  Run(yaml);
+  executor_.ran();
+  RunOptions opts;
+  opts.force = {"src", "c"};
+  auto forced = Run(yaml, {}, opts);
+  // src writes the same bytes: len hits. c writes a new number: up re-runs.
+  EXPECT_EQ(executor_.ran(), (std::vector<std::string>{"c", "src", "up"}));
+  auto states = States(forced);
+  EXPECT_EQ(states["len"], "hit");
+  EXPECT_EQ(states["up"], "ran");
+  for (const auto& o : forced) EXPECT_EQ(o.forced, o.id == "src" || o.id == "c") << o.id;
+  const std::string c_digest =
+      forced[0].id == "c" ? forced[0].outputs.at("out").ComputeDigest().Hex() : "";
+  ASSERT_FALSE(c_digest.empty());
+  // The forced result replaced the entry: the next run hits it.
+  auto after = Run(yaml);
+  EXPECT_TRUE(executor_.ran().empty());
+  EXPECT_EQ(after[0].id, "c");
+  EXPECT_EQ(after[0].outputs.at("out").ComputeDigest().Hex(), c_digest);
+
+  // The plan says so.
+  PlanOptions plan_opts;
+  plan_opts.force = {"c"};
+  auto plan = PlanWorkflow(workflow_, *cache_, plan_opts).value();
+  EXPECT_EQ(plan[0].stage, "c");
+  EXPECT_EQ(plan[0].state, PlanLine::State::kMiss);
+  ASSERT_FALSE(plan[0].reasons.empty());
+  EXPECT_NE(plan[0].reasons[0].find("forced (--force): in the cache"), std::string::npos);
+  EXPECT_EQ(plan[1].state, PlanLine::State::kHit);  // src
+  for (const auto& line : plan)
+    if (line.stage == "up") EXPECT_EQ(line.state, PlanLine::State::kDependsOnUpstream);
+}
+
+// Campaign plans: what an earlier run computes counts as "reuse" later,
+// along the whole shared chain, not only its first stage.
+TEST_F(SchedulerTest, PlansOfACampaignShareKeysAcrossRuns) {
+  const std::string a = R"(name: a
+stages:
+  src: { uses: t.text, with: { text: abc } }
+  up: { uses: t.upper, in: { in: src.out } }
+  len: { uses: t.len, in: { in: up.out } }
+)";
+  const std::string b = R"(name: b
+stages:
+  src: { uses: t.text, with: { text: abc } }
+  up: { uses: t.upper, in: { in: src.out } }
+  other: { uses: t.text, with: { text: zzz } }
+)";
+  std::set<std::string> planned;
+  PlanOptions opts;
+  opts.planned_keys = &planned;
+  auto wa = LoadWorkflow(dir_.Write("a.yaml", a), {}, registry_).value();
+  auto wb = LoadWorkflow(dir_.Write("b.yaml", b), {}, registry_).value();
+  auto pa = PlanWorkflow(wa, *cache_, opts).value();
+  auto pb = PlanWorkflow(wb, *cache_, opts).value();
+  std::map<std::string, PlanLine::State> sa, sb;
+  for (const auto& l : pa) sa[l.stage] = l.state;
+  for (const auto& l : pb) sb[l.stage] = l.state;
+  EXPECT_EQ(sa["src"], PlanLine::State::kMiss);
+  EXPECT_EQ(sa["up"], PlanLine::State::kDependsOnUpstream);
+  EXPECT_EQ(sb["src"], PlanLine::State::kEarlierRun);
+  EXPECT_EQ(sb["up"], PlanLine::State::kEarlierRun);
+  EXPECT_EQ(sb["other"], PlanLine::State::kMiss);
+  // Without a campaign nothing is shared.
+  auto alone = PlanWorkflow(wb, *cache_).value();
+  for (const auto& l : alone) EXPECT_NE(l.state, PlanLine::State::kEarlierRun) << l.stage;
 }
 
 }  // namespace

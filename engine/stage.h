@@ -73,7 +73,18 @@ class StageContext {
   virtual void end_phase(std::string_view name) = 0;
   // Threads the stage may use (--threads; default: all cores).
   virtual int threads() const = 0;
+  // A warning for the user, one line: the result exists but may not be what
+  // the workflow meant (a reader dropped colors, a budget above the input
+  // left the mesh unchanged). Warnings reach the run record (run.json), the
+  // progress line and the campaign report, and are kept with the cache entry,
+  // so a cache hit shows them again. The engine keeps the first
+  // kMaxStageWarnings and counts the rest. Use it instead of stderr, which
+  // only reaches the stage's log. Safe to call from the stage's threads. (Declared last: plugins
+  // built against an earlier header, which never call it, keep working.)
+  virtual void warning(std::string_view message) = 0;
 };
+
+inline constexpr int kMaxStageWarnings = 50;
 
 // Records a named phase for the enclosing scope: PB_PHASE(ctx, "io");
 class ScopedPhase {

@@ -1,7 +1,10 @@
 #include "engine/stage_context.h"
 
 #include <algorithm>
+#include <cctype>
 #include <chrono>
+#include <cstdio>
+#include <mutex>
 #include <thread>
 
 #include "base/env.h"
@@ -13,8 +16,8 @@ using Clock = std::chrono::steady_clock;
 
 class ContextImpl : public StageContext {
  public:
-  ContextImpl(const JobSpec& job, const ProgressFn& progress)
-      : job_(job), progress_(progress), start_(Clock::now()) {}
+  ContextImpl(const JobSpec& job, const ProgressFn& progress, bool log_warnings)
+      : job_(job), progress_(progress), log_warnings_(log_warnings), start_(Clock::now()) {}
 
   const nlohmann::json& params() const override { return job_.params; }
   bool has_input(std::string_view port) const override {
@@ -54,6 +57,19 @@ class ContextImpl : public StageContext {
     if (job_.threads > 0) return job_.threads;
     return std::max(1u, std::thread::hardware_concurrency());
   }
+  void warning(std::string_view message) override {
+    std::string text(message);
+    while (!text.empty() && std::isspace(static_cast<unsigned char>(text.back()))) text.pop_back();
+    for (char& c : text)
+      if (c == '\n' || c == '\r') c = ' ';  // one line each on the progress line and in the report
+    if (text.empty()) return;
+    std::lock_guard<std::mutex> lock(warnings_mu_);  // stages may warn from worker threads
+    if (log_warnings_) std::fprintf(stderr, "warning: %s\n", text.c_str());
+    if (static_cast<int>(warnings_.size()) < kMaxStageWarnings)
+      warnings_.push_back(std::move(text));
+    else
+      ++dropped_warnings_;
+  }
 
   double Seconds() const {
     return std::chrono::duration<double>(Clock::now() - start_).count();
@@ -82,13 +98,21 @@ class ContextImpl : public StageContext {
     result.counters = counters_;
     result.phases = phases_;
     result.wall_s = Seconds();
+    result.warnings = warnings_;
+    if (dropped_warnings_ > 0)
+      result.warnings.push_back("... and " + std::to_string(dropped_warnings_) +
+                                " more warnings (see the stage's log)");
     return result;
   }
 
  private:
   const JobSpec& job_;
   const ProgressFn& progress_;
+  const bool log_warnings_;
   Clock::time_point start_;
+  std::mutex warnings_mu_;
+  std::vector<std::string> warnings_;
+  int dropped_warnings_ = 0;
   std::map<std::string, Cache::StagedOutput> outputs_;
   nlohmann::json counters_ = nlohmann::json::object();
   nlohmann::json phases_ = nlohmann::json::array();
@@ -97,8 +121,8 @@ class ContextImpl : public StageContext {
 
 }  // namespace
 
-JobResult RunStageHere(const JobSpec& job, const ProgressFn& progress) {
-  ContextImpl ctx(job, progress);
+JobResult RunStageHere(const JobSpec& job, const ProgressFn& progress, bool log_warnings) {
+  ContextImpl ctx(job, progress, log_warnings);
   Status status;
   try {
     status = job.type->run(ctx);

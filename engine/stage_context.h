@@ -7,6 +7,8 @@
 namespace pb {
 
 // Runs `job` here. Output files of port P are <staging_dir>/P/<file>.
-JobResult RunStageHere(const JobSpec& job, const ProgressFn& progress);
+// `log_warnings`: also write each warning to stderr as "warning: TEXT" (the
+// child process, whose stderr is the stage's log).
+JobResult RunStageHere(const JobSpec& job, const ProgressFn& progress, bool log_warnings = false);
 
 }  // namespace pb

@@ -1,9 +1,11 @@
 #include "engine/workflow.h"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <functional>
+#include <optional>
 #include <queue>
 #include <set>
 #include <sstream>
@@ -20,23 +22,38 @@ namespace {
 
 using nlohmann::json;
 
-// Collects `file:line:column: message` lines.
+// Collects `file:line:column: message` lines. Those about `sorted_file` are
+// listed first, in the order of the file; the others (a scene, the command
+// line) follow in the order they were found.
 class Errors {
  public:
+  explicit Errors(std::string sorted_file = "") : sorted_file_(std::move(sorted_file)) {}
   void Add(const SourcePos& pos, const std::string& message) {
-    lines_.push_back(pos.ToString() + ": " + message);
+    lines_.push_back({pos, pos.ToString() + ": " + message});
   }
-  void AddRaw(const std::string& line) { lines_.push_back(line); }
+  void AddRaw(const std::string& line) { lines_.push_back({SourcePos{}, line}); }
   bool empty() const { return lines_.empty(); }
   size_t size() const { return lines_.size(); }
   Status ToStatus() const {
+    std::vector<const Line*> in_file, others;
+    for (const Line& l : lines_)
+      (!sorted_file_.empty() && l.pos.file == sorted_file_ ? in_file : others).push_back(&l);
+    std::stable_sort(in_file.begin(), in_file.end(), [](const Line* a, const Line* b) {
+      return std::pair(a->pos.line, a->pos.column) < std::pair(b->pos.line, b->pos.column);
+    });
+    in_file.insert(in_file.end(), others.begin(), others.end());
     std::string msg;
-    for (size_t i = 0; i < lines_.size(); ++i) msg += (i ? "\n" : "") + lines_[i];
+    for (size_t i = 0; i < in_file.size(); ++i) msg += (i ? "\n" : "") + in_file[i]->text;
     return Status::Invalid(msg);
   }
 
  private:
-  std::vector<std::string> lines_;
+  struct Line {
+    SourcePos pos;
+    std::string text;
+  };
+  std::string sorted_file_;
+  std::vector<Line> lines_;
 };
 
 size_t EditDistance(const std::string& a, const std::string& b) {
@@ -51,7 +68,9 @@ size_t EditDistance(const std::string& a, const std::string& b) {
   return prev[b.size()];
 }
 
-std::string Suggest(const std::string& word, const std::vector<std::string>& candidates) {
+}  // namespace
+
+std::string DidYouMean(const std::string& word, const std::vector<std::string>& candidates) {
   std::string best;
   size_t best_d = std::max<size_t>(2, word.size() / 3) + 1;
   for (const auto& c : candidates) {
@@ -59,6 +78,12 @@ std::string Suggest(const std::string& word, const std::vector<std::string>& can
     if (d < best_d) best_d = d, best = c;
   }
   return best.empty() ? "" : " (did you mean '" + best + "'?)";
+}
+
+namespace {
+
+std::string Suggest(const std::string& word, const std::vector<std::string>& candidates) {
+  return DidYouMean(word, candidates);
 }
 
 std::string JoinNames(const std::vector<std::string>& names) {
@@ -230,6 +255,19 @@ Status ApplySet(const std::string& set, json& stages) {
 
 }  // namespace
 
+std::string DefaultWorkflowName(const std::string& path) {
+  std::string stem = path.substr(path.find_last_of('/') + 1);
+  const size_t dot = stem.rfind('.');
+  if (dot != std::string::npos && dot > 0) stem.resize(dot);
+  std::string name;
+  for (char c : stem) {
+    const bool alnum = std::isalnum(static_cast<unsigned char>(c)) != 0;
+    if (name.empty() && !alnum) continue;  // a name starts with a letter or digit
+    name += alnum || c == '_' || c == '.' || c == '-' ? c : '_';
+  }
+  return name.empty() ? "workflow" : name;
+}
+
 const nlohmann::json& WorkflowSchemaJson() {
   static const json schema = json::parse(kWorkflowSchemaText);
   return schema;
@@ -265,24 +303,37 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   PB_ASSIGN_OR_RETURN(YamlDocument doc, ParseYamlFile(path));
   static const JsonSchema schema =
       JsonSchema::Parse(WorkflowSchemaJson(), "workflow schema").value();
-  Errors errors;
+  Errors errors(doc.file);
   if (!doc.value.is_object()) {
-    errors.Add(doc.PositionOf(""), "a workflow must be a mapping with 'name' and 'stages'");
+    errors.Add(doc.PositionOf(""), "a workflow must be a mapping with 'stages'");
     return errors.ToStatus();
   }
-  ReportSchemaErrors(doc, schema.Validate(doc.value), "", errors);
-  if (!errors.empty()) return errors.ToStatus();
+  // The checks below go on after schema errors, so one pass reports both; a
+  // value the schema rejected is skipped there, not reported a second time.
+  const std::vector<SchemaError> schema_errors = schema.Validate(doc.value);
+  ReportSchemaErrors(doc, schema_errors, "", errors);
+  auto rejected = [&](const std::string& pointer) {
+    for (const SchemaError& e : schema_errors)
+      if (e.pointer == pointer || e.pointer.rfind(pointer + "/", 0) == 0) return true;
+    return false;
+  };
+  auto string_at = [&](const char* key) -> std::optional<std::string> {
+    if (!doc.value.contains(key) || !doc.value[key].is_string() || rejected(std::string("/") + key))
+      return std::nullopt;
+    return doc.value[key].get<std::string>();
+  };
 
   Workflow wf;
   wf.file = ResolvePath(".", path);
   const std::string dir = DirName(wf.file);
-  wf.name = doc.value["name"].get<std::string>();
-  wf.salt = doc.value.value("salt", "");
+  wf.name = string_at("name").value_or(DefaultWorkflowName(wf.file));
+  wf.salt = string_at("salt").value_or("");
 
   // Plugins first: they add stage types.
-  if (doc.value.contains("plugins")) {
+  if (doc.value.contains("plugins") && doc.value["plugins"].is_array()) {
     const json& plugins = doc.value["plugins"];
     for (size_t i = 0; i < plugins.size(); ++i) {
+      if (!plugins[i].is_string()) continue;  // reported by the schema
       const std::string abs = ResolvePath(dir, plugins[i].get<std::string>());
       Status st = registry.LoadPlugin(abs);
       if (!st.ok()) errors.Add(doc.PositionOf("/plugins/" + std::to_string(i)), st.message());
@@ -297,8 +348,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   SourcePos scene_pos{"--scene", 0, 0};
   if (!options.scene_file.empty()) {
     scene_path = ResolvePath(".", options.scene_file);
-  } else if (doc.value.contains("scene")) {
-    scene_path = ResolvePath(dir, doc.value["scene"].get<std::string>());
+  } else if (const std::optional<std::string> scene_file = string_at("scene")) {
+    scene_path = ResolvePath(dir, *scene_file);
     scene_pos = doc.PositionOf("/scene");
   }
   if (!scene_path.empty()) {
@@ -320,10 +371,14 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
 
   // A whole `with: ${scene.KEY}` becomes the scene's mapping before --set
   // applies, so overrides reach its parameters (e.g. --set scan.points=...).
-  json stages = doc.value["stages"];
+  json stages = doc.value.contains("stages") && doc.value["stages"].is_object()
+                    ? doc.value["stages"]
+                    : json::object();
   std::set<std::string> with_from_scene;
   for (auto& [id, spec] : stages.items()) {
-    if (!spec.contains("with") || !spec["with"].is_string()) continue;
+    if (!spec.is_object() || !spec.contains("with") || !spec["with"].is_string() ||
+        rejected("/stages/" + PointerToken(id) + "/with"))
+      continue;
     std::set<std::string> unused;
     SubstituteScene(spec["with"], "", doc, "/stages/" + PointerToken(id) + "/with", scene_ctx, unused,
                     errors);
@@ -362,10 +417,15 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   std::set<std::string> disabled;
   for (auto& [id, spec] : stages.items()) {
     const std::string sp = "/stages/" + PointerToken(id);
+    // The schema said what is wrong with a stage without a usable `uses:`.
+    if (!spec.is_object() || !spec.contains("uses") || rejected(sp + "/uses") ||
+        rejected(sp + "/when"))
+      continue;
     StageNode node;
     node.id = id;
     node.pos = doc.KeyPositionOf(sp);
-    node.group = spec.value("group", "");
+    if (spec.contains("group") && spec["group"].is_string())
+      node.group = spec["group"].get<std::string>();
     const size_t errors_before = errors.size();
     std::set<std::string> from_scene;
     if (spec.contains("when")) {
@@ -399,7 +459,10 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
                      " (see `pointbake stages`)");
       continue;
     }
-    json with = spec.contains("with") ? spec["with"] : json::object();
+    // A `with:` the schema rejected leaves the parameters unchecked; the
+    // stage's inputs are still checked.
+    const bool with_rejected = rejected(sp + "/with");
+    json with = spec.contains("with") && !with_rejected ? spec["with"] : json::object();
     if (!with.is_object()) {
       if (!with.is_string())  // an unresolved ${scene...} was reported above
         errors.Add(doc.PositionOf(sp + "/with"), "stage '" + id + "': with: the scene gives " +
@@ -419,7 +482,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     }
     const json& param_schema = registry.ParamsSchema(uses).json();
     with = ApplyDefaults(param_schema, with);
-    for (const SchemaError& e : registry.ParamsSchema(uses).Validate(with)) {
+    for (const SchemaError& e :
+         with_rejected ? std::vector<SchemaError>{} : registry.ParamsSchema(uses).Validate(with)) {
       const std::string pointer = sp + "/with" + e.pointer;
       SourcePos pos = pos_of(pointer);
       if (e.about_key && pos.file.rfind("<command line>", 0) != 0) pos = doc.KeyPositionOf(pointer);
@@ -453,7 +517,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     node.params = std::move(with);
 
     // Inputs.
-    const json in = spec.contains("in") ? spec["in"] : json::object();
+    const json in = spec.contains("in") && spec["in"].is_object() ? spec["in"] : json::object();
+    std::set<std::string> rejected_inputs;  // named, but the schema rejected the reference
     for (auto& [port, ref] : in.items()) {
       const std::string ip = sp + "/in/" + PointerToken(port);
       const auto& inputs = node.type->inputs;
@@ -468,13 +533,18 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
                                               JoinNames(names) + ")");
         continue;
       }
+      if (!ref.is_string() || rejected(ip) ||
+          ref.get<std::string>().find('.') == std::string::npos) {
+        rejected_inputs.insert(port);
+        continue;
+      }
       const std::string text = ref.get<std::string>();
       const size_t dot = text.find('.');
       InputRef input{text.substr(0, dot), text.substr(dot + 1), doc.PositionOf(ip)};
       node.inputs[port] = input;
     }
     for (const PortSpec& p : node.type->inputs)
-      if (!p.optional && !node.inputs.count(p.name))
+      if (!p.optional && !node.inputs.count(p.name) && !rejected_inputs.count(p.name))
         errors.Add(node.pos, "stage '" + id + "' (" + uses + ") is missing required input '" +
                                  p.name + "' (" + p.type + "); add `in: { " + p.name +
                                  ": STAGE.PORT }`");
@@ -524,8 +594,11 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   }
 
   // Outputs.
-  if (doc.value.contains("outputs")) {
+  if (doc.value.contains("outputs") && doc.value["outputs"].is_object()) {
     for (auto& [name, ref] : doc.value["outputs"].items()) {
+      if (!ref.is_string() || rejected("/outputs/" + PointerToken(name)) ||
+          ref.get<std::string>().find('.') == std::string::npos)
+        continue;  // reported by the schema
       const std::string text = ref.get<std::string>();
       const std::string st = text.substr(0, text.find('.'));
       const std::string port = text.substr(text.find('.') + 1);
@@ -548,7 +621,6 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
   }
 
   wf.disabled.assign(disabled.begin(), disabled.end());
-  if (!errors.empty()) return errors.ToStatus();
 
   // Topological order (Kahn, ties by name) and cycle detection.
   std::map<std::string, int> indegree;
@@ -593,8 +665,8 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
     for (const auto& [port, input] : consumer.inputs)
       if (input.from_stage == cycle.front()) pos = input.pos;
     errors.Add(pos, "cycle: " + text);
-    return errors.ToStatus();
   }
+  if (!errors.empty()) return errors.ToStatus();
 
   // Default outputs: every output of every stage nothing consumes.
   if (!doc.value.contains("outputs")) {
@@ -604,6 +676,54 @@ Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& opti
           wf.outputs[id + "." + p.name] = {id, p.name};
   }
   return wf;
+}
+
+Status CheckStageIds(const Workflow& wf, const std::vector<std::string>& ids,
+                     const std::string& flag) {
+  const std::vector<std::string> known = KeysOf(wf.stages);
+  Errors errors;
+  for (const std::string& id : ids) {
+    if (wf.stages.count(id)) continue;
+    if (std::find(wf.disabled.begin(), wf.disabled.end(), id) != wf.disabled.end())
+      errors.AddRaw("<command line>: " + flag + " " + id + ": stage '" + id +
+                    "' is left out of this run by its `when:`");
+    else
+      errors.AddRaw("<command line>: " + flag + " " + id + ": no stage '" + id + "' in workflow " +
+                    wf.name + Suggest(id, known) + " (stages: " + JoinNames(known) + ")");
+  }
+  return errors.empty() ? Status::Ok() : errors.ToStatus();
+}
+
+Status KeepUpstreamOf(Workflow& wf, const std::vector<std::string>& targets) {
+  PB_RETURN_IF_ERROR(CheckStageIds(wf, targets, "--until"));
+  std::set<std::string> keep;
+  std::vector<std::string> todo(targets.begin(), targets.end());
+  while (!todo.empty()) {
+    const std::string id = todo.back();
+    todo.pop_back();
+    if (!keep.insert(id).second) continue;
+    for (const std::string& dep : wf.stages.at(id).deps) todo.push_back(dep);
+  }
+  for (auto it = wf.stages.begin(); it != wf.stages.end();)
+    it = keep.count(it->first) ? std::next(it) : wf.stages.erase(it);
+  std::vector<std::string> order;
+  for (const std::string& id : wf.order)
+    if (keep.count(id)) order.push_back(id);
+  wf.order = std::move(order);
+  for (auto it = wf.outputs.begin(); it != wf.outputs.end();)
+    it = keep.count(it->second.first) ? std::next(it) : wf.outputs.erase(it);
+  // What the run was cut short for is worth a copy in the output folder.
+  for (const std::string& id : targets) {
+    const StageNode& node = wf.stages.at(id);
+    for (const PortSpec& p : node.type->outputs) {
+      const bool named = std::any_of(wf.outputs.begin(), wf.outputs.end(), [&](const auto& o) {
+        return o.second == std::pair<std::string, std::string>{id, p.name};
+      });
+      if (!named && !wf.outputs.count(id + "." + p.name))
+        wf.outputs[id + "." + p.name] = {id, p.name};
+    }
+  }
+  return Status::Ok();
 }
 
 std::string WorkflowToDot(const Workflow& wf) {

@@ -6,7 +6,9 @@
 // schemas (schemas/), unknown stage types, parameters against each stage
 // type's schema, `${scene.KEY}` references, `--set` overrides, unknown stages
 // and ports in `in:`, artifact type mismatches between ports, missing required
-// inputs and cycles. All errors of a file are reported together.
+// inputs and cycles. All errors of a file are reported together: schema
+// errors do not hide the graph's (a value the schema rejected is not checked
+// again).
 #pragma once
 
 #include <map>
@@ -39,7 +41,7 @@ struct StageNode {
 };
 
 struct Workflow {
-  std::string name;
+  std::string name;  // `name:`, else DefaultWorkflowName(file)
   std::string file;  // absolute path of the workflow file
   std::string scene_file;
   nlohmann::json scene;  // null when there is none
@@ -65,12 +67,31 @@ struct LoadOptions {
 Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& options,
                                 Registry& registry);
 
+// " (did you mean 'X'?)" for the candidate closest to `word` within a few
+// edits, else "".
+std::string DidYouMean(const std::string& word, const std::vector<std::string>& candidates);
+
+// A workflow without `name:` is named after its file: the stem, with
+// characters a name may not hold replaced by '_' ("my flow.yaml" -> "my_flow").
+std::string DefaultWorkflowName(const std::string& path);
+
 // Validates a scene file on its own.
 Expected<nlohmann::json> LoadScene(const std::string& path);
 
 // The embedded schemas (schemas/*.json, compiled into the binary).
 const nlohmann::json& WorkflowSchemaJson();
 const nlohmann::json& SceneSchemaJson();
+
+// Fails, as `<command line>: FLAG ID: ...` with a "did you mean", unless every
+// id names a stage of the workflow (a stage its `when:` leaves out is named
+// as such).
+Status CheckStageIds(const Workflow& workflow, const std::vector<std::string>& ids,
+                     const std::string& flag);
+
+// `run --until`: keeps only `targets` and the stages they need (upstream,
+// transitively). Named outputs of stages left out are dropped; each target's
+// outputs are added as `<stage>.<port>` unless an output names them already.
+Status KeepUpstreamOf(Workflow& workflow, const std::vector<std::string>& targets);
 
 // Graphviz DOT of the DAG: one node per stage (id and type), one edge per
 // input, labeled port -> port.

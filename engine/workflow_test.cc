@@ -2,6 +2,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "engine/test_util.h"
@@ -252,6 +253,91 @@ stages:
   EXPECT_NE(missing.status().message().find("wf.yaml:3:3: stage 'a' (t.upper) is missing required input 'in'"),
             std::string::npos)
       << missing.status().message();
+}
+
+TEST_F(WorkflowTest, NameDefaultsToTheFileStem) {
+  auto wf = LoadWorkflow(dir_.Write("my flow.v2.yaml", "stages:\n  src: { uses: t.text }\n"), {},
+                         registry_);
+  ASSERT_TRUE(wf.ok()) << wf.status().message();
+  EXPECT_EQ(wf->name, "my_flow.v2");
+  EXPECT_EQ(DefaultWorkflowName("/a/b/quickstart.yaml"), "quickstart");
+  EXPECT_EQ(DefaultWorkflowName("/a/.hidden.yml"), "hidden");
+  EXPECT_EQ(DefaultWorkflowName("/a/__.yaml"), "workflow");
+  // A name given wins.
+  auto named = Load("name: given\nstages:\n  src: { uses: t.text }\n");
+  ASSERT_TRUE(named.ok()) << named.status().message();
+  EXPECT_EQ(named->name, "given");
+}
+
+// Schema errors used to stop loading; now the graph is checked too, and a
+// value the schema rejected is not reported a second time.
+TEST_F(WorkflowTest, SchemaAndGraphErrorsAreReportedTogether) {
+  auto wf = Load(R"(name: "bad name!"
+output: { x: src.out }
+stages:
+  src: { uses: t.text, with: { txt: a } }
+  typo: { uses: t.uper, in: { in: src.out } }
+  a: { uses: t.upper, in: { in: b.out } }
+  b: { uses: t.upper, in: { in: a.out } }
+  lost: { uses: t.upper, in: { in: nowhere.out } }
+  badref: { uses: t.upper, in: { in: "no dot" } }
+  badwith: { uses: t.text, with: [1, 2] }
+  Bad-Uses: { uses: T.Text }
+)");
+  ASSERT_FALSE(wf.ok());
+  const std::string m = wf.status().message();
+  const std::string f = dir_.path() + "/wf.yaml:";
+  for (const std::string& expected : {
+           f + "1:7: must match pattern",                        // schema: name
+           f + "2:1: unknown key 'output'",                      // schema: top level
+           f + "4:32: stage 'src' (t.text): unknown key 'txt'",  // parameters
+           f + "5:17: unknown stage type 't.uper' (did you mean 't.upper'?)",
+           f + "6:33: cycle: b -> a -> b",  // graph
+           f + "8:36: input 'in' of stage 'lost' names unknown stage 'nowhere'",
+           f + "9:38: must match pattern",  // schema: the reference
+           f + "10:34: expected an object or a string, got an array",
+           f + "11:21: must match pattern",  // schema: uses
+       })
+    EXPECT_NE(m.find(expected), std::string::npos) << "missing: " << expected << "\n" << m;
+  // Each problem once: no "missing required input" for the rejected
+  // reference, no type error for the rejected `with:`, no "unknown stage
+  // type" for the rejected `uses:`.
+  EXPECT_EQ(m.find("missing required input"), std::string::npos) << m;
+  EXPECT_EQ(m.find("unknown stage type 'T.Text'"), std::string::npos) << m;
+  EXPECT_EQ(std::count(m.begin(), m.end(), '\n') + 1, 9) << m;
+  // In the order of the file.
+  EXPECT_EQ(m.rfind(f + "1:7:", 0), 0u) << m;
+  EXPECT_LT(m.find(f + "5:17:"), m.find(f + "6:33:")) << m;
+  EXPECT_LT(m.find(f + "10:34:"), m.find(f + "11:21:")) << m;
+}
+
+TEST_F(WorkflowTest, KeepUpstreamOfCutsTheWorkflowForUntil) {
+  auto wf = Load(R"(name: demo
+stages:
+  src: { uses: t.text, with: { text: abc } }
+  up: { uses: t.upper, in: { in: src.out } }
+  len: { uses: t.len, in: { in: up.out } }
+  side: { uses: t.text }
+outputs: { length: len.out, other: side.out }
+)");
+  ASSERT_TRUE(wf.ok()) << wf.status().message();
+  ASSERT_TRUE(KeepUpstreamOf(*wf, {"up"}).ok());
+  EXPECT_EQ(wf->order, (std::vector<std::string>{"src", "up"}));
+  EXPECT_EQ(wf->stages.size(), 2u);
+  // The target's output is copied; outputs of stages left out are not.
+  ASSERT_EQ(wf->outputs.size(), 1u);
+  EXPECT_EQ(wf->outputs.at("up.out"), (std::pair<std::string, std::string>{"up", "out"}));
+
+  const Status bad = KeepUpstreamOf(*wf, {"uq"});
+  ASSERT_FALSE(bad.ok());
+  EXPECT_NE(bad.message().find(
+                "<command line>: --until uq: no stage 'uq' in workflow demo (did you mean 'up'?)"),
+            std::string::npos)
+      << bad.message();
+  const Status force = CheckStageIds(*wf, {"src", "len"}, "--force");
+  EXPECT_NE(force.message().find("--force len: no stage 'len'"), std::string::npos)
+      << force.message();
+  EXPECT_TRUE(CheckStageIds(*wf, {"src"}, "--force").ok());
 }
 
 }  // namespace

@@ -1,7 +1,7 @@
 // Test doubles for running stages without the engine or child processes: a
 // registry that holds stage types by id, and a StageContext that keeps
 // outputs in a temporary directory and records what the stage reports
-// (meta, counters, phases, progress) for the test to assert on.
+// (meta, counters, phases, progress, warnings) for the test to assert on.
 #pragma once
 
 #include <gtest/gtest.h>
@@ -63,8 +63,10 @@ class FakeContext : public StageContext {
   void begin_phase(std::string_view name) override;
   void end_phase(std::string_view name) override;
   int threads() const override { return threads_; }
+  void warning(std::string_view message) override { warnings_.emplace_back(message); }
 
   std::map<std::string, std::string> outputs_;  // port -> its last file
+  std::vector<std::string> warnings_;           // in order
   std::map<std::string, std::string> files_;    // "port/file" -> path
   std::map<std::string, nlohmann::json> meta_;
   std::map<std::string, double> counters_;

@@ -521,5 +521,292 @@ stages:
   EXPECT_EQ(StageStatus(RunJson(), "scan"), "ran") << "content change must re-run";
 }
 
+// Warnings (StageContext::warning) reach the progress line, the summary,
+// run.json and the stage's log; a cache hit shows them again; a stage
+// without warnings keeps its record and entry as before.
+constexpr const char* kWarnings = R"(name: warny
+plugins: [$PLUGIN]
+stages:
+  src: { uses: test.source, with: { text: hello } }
+  w:
+    uses: test.warn
+    in: { in: src.out }
+    with: { warnings: ["colors dropped: not every scan has colorRed/Green/Blue", "3 scans merged"] }
+  len: { uses: test.length, in: { in: w.out } }
+)";
+
+TEST_F(Cli, WarningsReachProgressRecordSummaryAndLog) {
+  const std::string wf = WriteWorkflow(P("proj/warny.yaml"), kWarnings);
+  const RunResult r = RunWf(wf);
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_NE(r.err.find("[2/3] ran     w (test.warn)"), std::string::npos) << r.Describe();
+  EXPECT_NE(
+      r.err.find(
+          "; 2 warnings\n        warning: colors dropped: not every scan has colorRed/Green/Blue\n"
+          "        warning: 3 scans merged\n"),
+      std::string::npos)
+      << r.Describe();
+  EXPECT_NE(r.out.find("warny: 3 stages, 3 ran, 0 cached, 0 failed, 0 not run, 2 warnings in "),
+            std::string::npos)
+      << r.Describe();
+  const Json run = RunJson();
+  EXPECT_EQ(StageRecord(run, "w")["warnings"],
+            Json({"colors dropped: not every scan has colorRed/Green/Blue", "3 scans merged"}));
+  EXPECT_FALSE(StageRecord(run, "src").contains("warnings")) << StageRecord(run, "src").dump();
+  EXPECT_NE(ReadFile(P("out/logs/w.log")).find("warning: 3 scans merged"), std::string::npos);
+  // Cache entries: the record keeps the warnings; entries of stages without
+  // any keep their earlier form (no "warnings" member).
+  int with = 0, without = 0;
+  for (const std::string& f : ListFiles(P("cache/entries"))) {
+    const Json entry = ReadJson(P("cache/entries/") + f);
+    (entry["record"].contains("warnings") ? with : without)++;
+  }
+  EXPECT_EQ(with, 1);
+  EXPECT_EQ(without, 2);
+
+  // A hit shows them again, marked as such.
+  const RunResult hit = RunWf(wf, "out2");
+  ASSERT_EQ(hit.exit_code, 0) << hit.Describe();
+  EXPECT_NE(hit.err.find("[2/3] hit     w (test.warn)  2 warnings (from the cached run)\n"
+                         "        warning: colors dropped"),
+            std::string::npos)
+      << hit.Describe();
+  EXPECT_EQ(StageRecord(RunJson("out2"), "w")["warnings"].size(), 2u);
+  EXPECT_NE(hit.out.find("0 ran, 3 cached, 0 failed, 0 not run, 2 warnings in"), std::string::npos);
+
+  // --quiet: the count, not the text.
+  const RunResult quiet = RunWf(wf, "out3", {"-q"});
+  EXPECT_EQ(quiet.err.find("warning:"), std::string::npos) << quiet.Describe();
+  EXPECT_NE(quiet.out.find("2 warnings"), std::string::npos) << quiet.Describe();
+
+  // A failed stage's warnings are kept too.
+  const RunResult failed = RunWf(wf, "out4", {"--set", "w.fail=true"});
+  EXPECT_EQ(failed.exit_code, 1) << failed.Describe();
+  const Json frec = StageRecord(RunJson("out4"), "w");
+  EXPECT_EQ(frec.value("status", ""), "failed");
+  EXPECT_EQ(frec["warnings"].size(), 2u) << frec.dump();
+}
+
+// --force re-runs a cached stage and replaces its entry; early cutoff holds
+// downstream. --until runs only what a stage needs and copies its outputs.
+TEST_F(Cli, ForceAndUntil) {
+  std::string yaml = kChain;
+  yaml.insert(yaml.find("outputs:"), R"(  stamp: { uses: test.stamp }
+  shout: { uses: test.concat, in: { a: stamp.out }, with: { suffix: "!" } }
+)");
+  yaml += "  stamp: stamp.out\n  shout: shout.out\n";
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), yaml);
+  // --until: only src, up and len; len's output is named already.
+  const RunResult until = RunWf(wf, "out", {"--until", "len"});
+  ASSERT_EQ(until.exit_code, 0) << until.Describe();
+  EXPECT_EQ(Statuses(RunJson()), "src=ran up=ran len=ran ") << until.Describe();
+  EXPECT_TRUE(Exists(P("out/length.json")));
+  EXPECT_FALSE(Exists(P("out/other.json")));
+  EXPECT_EQ(RunJson()["options"]["until"], Json({"len"}));
+  // The target's output, under the name the workflow gives it.
+  ASSERT_EQ(RunWf(wf, "out_up", {"--until", "up"}).exit_code, 0);
+  EXPECT_EQ(TextOf(P("out_up/greeting.json")), "hello world");
+  EXPECT_FALSE(Exists(P("out_up/length.json")));
+
+  ASSERT_EQ(RunWf(wf, "full").exit_code, 0);
+  const std::string stamp = TextOf(P("full/stamp.json"));
+  // Forcing a stage that writes the same bytes: its dependents hit.
+  const RunResult same = RunWf(wf, "forced", {"--force", "src"});
+  ASSERT_EQ(same.exit_code, 0) << same.Describe();
+  const Json f1 = RunJson("forced");
+  EXPECT_EQ(StageStatus(f1, "src"), "ran");
+  EXPECT_TRUE(StageRecord(f1, "src").value("forced", false));
+  EXPECT_EQ(StageStatus(f1, "up"), "hit") << Statuses(f1);
+  EXPECT_EQ(StageStatus(f1, "len"), "hit") << Statuses(f1);
+  // Forcing a stage that writes new bytes: its dependents run, and the new
+  // result replaces the entry, so the next plain run hits it.
+  const RunResult fresh = RunWf(wf, "forced2", {"--force", "stamp"});
+  ASSERT_EQ(fresh.exit_code, 0) << fresh.Describe();
+  EXPECT_EQ(StageStatus(RunJson("forced2"), "shout"), "ran") << Statuses(RunJson("forced2"));
+  const std::string new_stamp = TextOf(P("forced2/stamp.json"));
+  EXPECT_NE(new_stamp, stamp);
+  const RunResult after = RunWf(wf, "after");
+  ASSERT_EQ(after.exit_code, 0) << after.Describe();
+  EXPECT_NE(after.out.find(" 0 ran,"), std::string::npos) << after.Describe();
+  EXPECT_EQ(TextOf(P("after/stamp.json")), new_stamp);
+  EXPECT_EQ(TextOf(P("after/shout.json")), new_stamp + "!");
+
+  // The plan says what --force does; -n is --dry-run.
+  const RunResult plan = RunWf(wf, "plan", {"-n", "--force", "src"});
+  ASSERT_EQ(plan.exit_code, 0) << plan.Describe();
+  EXPECT_NE(plan.out.find("run   src"), std::string::npos) << plan.out;
+  EXPECT_NE(plan.out.find("forced (--force): in the cache, but runs again"), std::string::npos)
+      << plan.out;
+  EXPECT_NE(plan.out.find("run?  up"), std::string::npos) << plan.out;
+  EXPECT_FALSE(Exists(P("plan/run.json")));
+
+  // Unknown ids: exit 2, named against the command line, nothing runs.
+  for (const char* flag : {"--force", "--until"}) {
+    const RunResult bad = RunWf(wf, "bad", {flag, "uq"});
+    EXPECT_EQ(bad.exit_code, 2) << bad.Describe();
+    EXPECT_NE(bad.err.find(std::string("<command line>: ") + flag +
+                           " uq: no stage 'uq' in workflow chain (did you mean 'up'?)"),
+              std::string::npos)
+        << bad.Describe();
+    EXPECT_FALSE(Exists(P("bad/run.json")));
+  }
+}
+
+// Help, usage and unknown commands.
+TEST_F(Cli, HelpNamesTheProgramEnvironmentExitCodesAndUnknownCommands) {
+  const RunResult help = pbtest::Run({"--help"});
+  EXPECT_EQ(help.exit_code, 0) << help.Describe();
+  for (const char* text :
+       {"Usage: pointbake [OPTIONS] SUBCOMMAND", "Examples:", "pointbake run WF.yaml --until",
+        "POINTBAKE_CACHE", "XDG_CACHE_HOME", "Exit status: 0 done; 1 a stage",
+        "2 bad input or usage", "docs/engine.md"})
+    EXPECT_NE(help.out.find(text), std::string::npos) << text << "\n" << help.out;
+  EXPECT_EQ(help.out.find(Binary()), std::string::npos) << "usage shows the binary's path";
+
+  const RunResult run_help = pbtest::Run({"run", "--help"});
+  EXPECT_EQ(run_help.exit_code, 0);
+  EXPECT_NE(run_help.out.find("Usage: pointbake run [OPTIONS] WORKFLOW"), std::string::npos)
+      << run_help.out;
+  EXPECT_NE(run_help.out.find("--force STAGE"), std::string::npos) << run_help.out;
+  EXPECT_EQ(run_help.out.find("Examples:"), std::string::npos)
+      << "the footer belongs to the top level";
+
+  // explain lists only options that change what it prints.
+  const RunResult explain_help = pbtest::Run({"explain", "--help"});
+  EXPECT_EQ(explain_help.exit_code, 0);
+  for (const char* option : {"--jobs", "--mem", "--out", "--threads", "--keep-going"})
+    EXPECT_EQ(explain_help.out.find(option), std::string::npos) << option << "\n"
+                                                                << explain_help.out;
+  for (const char* option : {"--scene", "--set", "--cache", "--force", "--until"})
+    EXPECT_NE(explain_help.out.find(option), std::string::npos) << option << "\n"
+                                                                << explain_help.out;
+
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"serve", "--help"}, {"nosuchcmd"}, {"rnu", "x.yaml"}}) {
+    const RunResult r = pbtest::Run(args);
+    EXPECT_EQ(r.exit_code, 2) << r.Describe();
+    EXPECT_NE(r.err.find("pointbake: unknown command '" + args[0] + "'"), std::string::npos)
+        << r.Describe();
+    EXPECT_NE(r.err.find("commands: run, campaign,"), std::string::npos) << r.Describe();
+    EXPECT_TRUE(r.out.empty()) << r.Describe();
+  }
+  EXPECT_NE(pbtest::Run({"rnu"}).err.find("(did you mean 'run'?)"), std::string::npos);
+  // `help COMMAND` is `COMMAND --help`.
+  const RunResult help_run = pbtest::Run({"help", "run"});
+  EXPECT_EQ(help_run.exit_code, 0) << help_run.Describe();
+  EXPECT_EQ(help_run.out, run_help.out);
+  EXPECT_EQ(pbtest::Run({"help"}).out, help.out);
+  const RunResult none = pbtest::Run({});
+  EXPECT_EQ(none.exit_code, 2);
+  EXPECT_NE(none.err.find("Usage: pointbake"), std::string::npos) << none.Describe();
+}
+
+// `stages ID`: parameters required first, then in the schema's order, with
+// plain types, bounds and defaults, and a snippet to paste into a workflow.
+TEST_F(Cli, StagesShowsReadableParametersAndASnippet) {
+  const RunResult ds = pbtest::Run({"stages", "points.downsample"});
+  ASSERT_EQ(ds.exit_code, 0) << ds.Describe();
+  EXPECT_NE(ds.out.find("  voxel : number (> 0)  default 0.01\n"), std::string::npos) << ds.out;
+  EXPECT_EQ(ds.out.find("\"number\""), std::string::npos) << ds.out;
+  EXPECT_NE(ds.out.find("in a workflow:\n  my_downsample:\n    uses: points.downsample\n    in:\n"
+                        "      points: STAGE.PORT   # points\n    with:\n      voxel: 0.01\n"),
+            std::string::npos)
+      << ds.out;
+  const RunResult rp = pbtest::Run({"stages", "io.read_points"});
+  ASSERT_EQ(rp.exit_code, 0) << rp.Describe();
+  const std::string params = rp.out.substr(rp.out.find("parameters:"));
+  EXPECT_EQ(params.find("  path : string  required"), params.find('\n') + 1) << params;
+  EXPECT_NE(params.find("format : one of: auto, ply, pcd, xyz, ptx, e57, las  default auto"),
+            std::string::npos)
+      << params;
+  EXPECT_NE(params.find("      path: <string>   # required\n"), std::string::npos) << params;
+  // Stable: the same text twice.
+  EXPECT_EQ(pbtest::Run({"stages", "io.read_points"}).out, rp.out);
+  const RunResult typo = pbtest::Run({"stages", "points.normal"});
+  EXPECT_EQ(typo.exit_code, 2);
+  EXPECT_NE(typo.err.find("(did you mean 'points.normals'?)"), std::string::npos)
+      << typo.Describe();
+}
+
+// A workflow without `name:` is named after its file.
+TEST_F(Cli, WorkflowNameDefaultsToTheFileStem) {
+  WriteWorkflow(P("proj/no_name.yaml"), R"(plugins: [$PLUGIN]
+stages:
+  src: { uses: test.source, with: { text: hi } }
+)");
+  const RunResult v = pbtest::Run({"validate", "proj/no_name.yaml"}, {}, tmp_.path());
+  EXPECT_EQ(v.exit_code, 0) << v.Describe();
+  const RunResult r =
+      pbtest::Run({"run", "proj/no_name.yaml", "--cache", P("cache")}, {}, tmp_.path());
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_NE(r.out.find("record in out/no_name/run.json"), std::string::npos) << r.Describe();
+  EXPECT_EQ(ReadJson(P("out/no_name/run.json")).value("workflow", ""), "no_name");
+}
+
+// `campaign --dry-run` / `-n` and `campaign explain`: per run, what would
+// run and what is cached; what an earlier run computes counts as reuse.
+TEST_F(Cli, CampaignDryRunAndExplain) {
+  WriteFile(P("proj/scene.yaml"), "name: s1\n");
+  WriteWorkflow(P("proj/a.yaml"), R"(name: a
+plugins: [$PLUGIN]
+stages:
+  src: { uses: test.source, with: { text: hello } }
+  up: { uses: test.concat, in: { a: src.out }, with: { suffix: " a" } }
+)");
+  WriteWorkflow(P("proj/b.yaml"), R"(name: b
+plugins: [$PLUGIN]
+stages:
+  src: { uses: test.source, with: { text: hello } }
+  w: { uses: test.warn, in: { in: src.out }, with: { warnings: ["watch out"] } }
+)");
+  WriteFile(P("proj/c.yaml"), "name: c\nscenes: [scene.yaml]\nworkflows: [a.yaml, b.yaml]\n");
+  const std::vector<std::string> base = {"--cache", P("cache"), "--out", P("camp")};
+  auto campaign = [&](std::vector<std::string> args) {
+    args.insert(args.end(), base.begin(), base.end());
+    return pbtest::Run(args);
+  };
+  const RunResult dry = campaign({"campaign", P("proj/c.yaml"), "-n"});
+  ASSERT_EQ(dry.exit_code, 0) << dry.Describe();
+  EXPECT_NE(dry.out.find("campaign c: 2 runs; dry run, nothing runs"), std::string::npos)
+      << dry.out;
+  EXPECT_NE(dry.out.find("[1/2] s1/a: 0 cached, 1 to run, 1 to run unless"), std::string::npos)
+      << dry.out;
+  EXPECT_NE(
+      dry.out.find("[2/2] s1/b: 0 cached, 0 to run, 1 to run unless upstream outputs come out "
+                   "unchanged, 1 computed by an earlier run"),
+      std::string::npos)
+      << dry.out;
+  EXPECT_NE(dry.out.find("  reuse src "), std::string::npos) << dry.out;
+  EXPECT_EQ(CountEntries(P("cache")), 0);
+  EXPECT_FALSE(Exists(P("camp/campaign.json")));
+
+  const RunResult real = campaign({"campaign", P("proj/c.yaml"), "-q"});
+  ASSERT_EQ(real.exit_code, 0) << real.Describe();
+  EXPECT_NE(real.out.find("s1/b: 2 stages, 1 ran, 1 cached, 0 failed, 0 not run, 1 warning in"),
+            std::string::npos)
+      << real.out;
+  const Json manifest = ReadJson(P("camp/campaign.json"));
+  EXPECT_EQ(manifest["runs"][1].value("warnings", 0), 1) << manifest.dump(1);
+  EXPECT_FALSE(manifest["runs"][0].contains("warnings"));
+
+  // Everything cached now; explain gives the reasons for hits too.
+  const RunResult explain =
+      pbtest::Run({"campaign", "explain", P("proj/c.yaml"), "--cache", P("cache")});
+  ASSERT_EQ(explain.exit_code, 0) << explain.Describe();
+  EXPECT_NE(
+      explain.out.find(
+          "campaign c: 4 cached, 0 to run, 0 to run unless upstream outputs come out unchanged\n"),
+      std::string::npos)
+      << explain.out;
+  EXPECT_NE(explain.out.find("  hit   w "), std::string::npos) << explain.out;
+  // A dry run with everything cached lists no stage.
+  const RunResult cached = campaign({"campaign", P("proj/c.yaml"), "--dry-run"});
+  EXPECT_EQ(cached.out.find("  hit "), std::string::npos) << cached.out;
+  // No file: a usage error.
+  const RunResult nofile = pbtest::Run({"campaign", "-n"});
+  EXPECT_EQ(nofile.exit_code, 2) << nofile.Describe();
+  EXPECT_NE(nofile.err.find("a campaign FILE is required"), std::string::npos) << nofile.Describe();
+}
+
 }  // namespace
 }  // namespace pbtest

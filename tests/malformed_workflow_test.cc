@@ -1,12 +1,13 @@
 // Malformed workflows (tests/workflows/bad/*.yaml): `validate` and `run` both
 // exit 2, name the offending token as FILE:LINE:COLUMN (FILE as passed on the
 // command line), say what is wrong, and execute nothing.
+#include <gtest/gtest.h>
+
+#include <algorithm>
 #include <filesystem>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <gtest/gtest.h>
 
 #include "tests/cli_test_util.h"
 
@@ -42,12 +43,17 @@ const std::vector<BadCase>& Cases() {
       {"wrong_param_type.yaml", 10, 20,
        "stage 'down' (points.downsample): expected a number, got the string \"coarse\""},
       {"unknown_parameter.yaml", 6, 29, "unknown key 'colour'"},
-      {"param_out_of_range.yaml", 11, 14, "stage 'down' (points.downsample): must be > 0, got -0.5"},
+      {"param_out_of_range.yaml", 11, 14,
+       "stage 'down' (points.downsample): must be > 0, got -0.5"},
       {"scene_missing_key.yaml", 12, 14, "has no key 'nokey'"},
       {"scene_without_scene.yaml", 11, 14, "the workflow names no scene"},
       {"with_is_list.yaml", 6, 11, "expected an object or a string, got an array"},
-      {"bad_set.yaml", 0, 0, "--set nosuch.voxel=0.1: no stage 'nosuch' in the workflow",
+      {"bad_set.yaml",
+       0,
+       0,
+       "--set nosuch.voxel=0.1: no stage 'nosuch' in the workflow",
        {"--set", "nosuch.voxel=0.1"}},
+      {"several_errors.yaml", 2, 1, "unknown key 'output'"},
   };
   return cases;
 }
@@ -120,6 +126,39 @@ TEST(MalformedWorkflowFiles, EveryFileHasACaseAndDocumentsItsPosition) {
   }
   EXPECT_EQ(files, covered);
   EXPECT_GE(covered.size(), 14u);
+}
+
+// A file without `name:` and with mistakes of every kind: schema, parameter,
+// stage type, reference and cycle errors come together, in file order, each
+// once (validate and run alike).
+TEST(MalformedWorkflowFiles, SeveralErrorsAreReportedTogetherInFileOrder) {
+  const std::string rel = kBadDir + "several_errors.yaml";
+  const std::vector<std::string> expected = {
+      rel + ":2:1: unknown key 'output'",
+      rel + ":6:29: stage 'read' (io.read_points): unknown key 'colour'",
+      rel + ":8:11: unknown stage type 'points.downsampel' (did you mean 'points.downsample'?)",
+      rel + ":12:19: cycle: b -> a -> b",
+      rel +
+          ":18:19: input 'points' of stage 'stats' names unknown stage 'raed' (did you mean "
+          "'read'?)",
+  };
+  TempDir tmp;
+  for (const std::vector<std::string>& args :
+       {std::vector<std::string>{"validate", rel},
+        {"run", rel, "--cache", tmp / "cache", "--out", tmp / "out"}}) {
+    const RunResult r = pbtest::Run(args, {}, SourceDir());
+    EXPECT_EQ(r.exit_code, 2) << r.Describe();
+    size_t at = 0;
+    for (const std::string& line : expected) {
+      const size_t found = r.err.find(line, at);
+      EXPECT_NE(found, std::string::npos) << "missing or out of order: " << line << "\n"
+                                          << r.Describe();
+      if (found != std::string::npos) at = found;
+    }
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 5) << r.Describe();
+    EXPECT_EQ(r.err.find("missing required key 'name'"), std::string::npos) << r.Describe();
+  }
+  EXPECT_TRUE(ListFiles(tmp / "cache/entries").empty());
 }
 
 // The good neighbours of the bad files are good: the committed PLY reads.

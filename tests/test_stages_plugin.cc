@@ -108,6 +108,32 @@ extern "C" void pointbake_register_stages(pb::StageRegistry* registry) {
         return WriteText(ctx, "out", std::to_string(bytes));
       }});
   registry->Register(pb::StageType{
+      .id = "test.warn",
+      .version = 1,
+      .summary = "Passes its input text through (or writes `text`), reporting each of `warnings`",
+      .params_schema = R"({"type":"object","additionalProperties":false,
+        "properties":{"warnings":{"type":"array","items":{"type":"string"},"default":[]},
+                      "text":{"type":"string","default":"warned"},
+                      "fail":{"type":"boolean","default":false}}})",
+      .inputs = {{"in", "table", "", true}},
+      .outputs = {{"out", "table", ""}},
+      .run = [](pb::StageContext& ctx) -> pb::Status {
+        for (const auto& w : ctx.params()["warnings"]) ctx.warning(w.get<std::string>());
+        if (ctx.params()["fail"].get<bool>()) return pb::Status::Invalid("failed after warning");
+        return WriteText(ctx, "out",
+                         ctx.has_input("in") ? ReadText(ctx.input("in"))
+                                             : ctx.params()["text"].get<std::string>());
+      }});
+  registry->Register(pb::StageType{
+      .id = "test.stamp",
+      .version = 1,
+      .summary = "Writes a text that differs on every run (pid and clock): not reproducible",
+      .outputs = {{"out", "table", ""}},
+      .run = [](pb::StageContext& ctx) {
+        const auto ns = std::chrono::steady_clock::now().time_since_epoch().count();
+        return WriteText(ctx, "out", std::to_string(::getpid()) + "-" + std::to_string(ns));
+      }});
+  registry->Register(pb::StageType{
       .id = "test.fail",
       .version = 1,
       .summary = "Fails with `message`, or crashes (abort) when `crash` is true",

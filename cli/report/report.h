@@ -20,7 +20,8 @@
 //         "sets": ["transfer.interpolation=splat"],    <- --set equivalents
 //         "dir": "runs/synthetic-room/point_transfer", <- relative to <out>
 //         "status": "ok" | "failed",   <- failed: some stage failed or the
-//         "error": "..."},             <- workflow did not load (message)
+//         "error": "...",              <- workflow did not load (message)
+//         "warnings": 2},              <- stages' warnings (absent when 0)
 //        ...]}
 //
 //   <out>/<run dir>/run.json: the run record (engine/run_record.h). Every
@@ -90,20 +91,25 @@
 //                  coverage_iou, hole_fraction, nearer_fraction,
 //                  farther_fraction}, scan_geometry:
 //                  {invented_area_fraction, missing_fraction,
-//                  boundary_edges_per_1000_faces}, error (failed runs only)}],
+//                  boundary_edges_per_1000_faces}, warnings:
+//                  [{stage, warning}] (the stages' warnings from run.json,
+//                  failed runs included; [] when none), error (failed
+//                  runs only)}],
 //                  "speedups": {"versus": "point_transfer", "per_scene":
 //                  [{scene, workflow, variant, ratio}], "geometric_mean":
 //                  [{workflow, variant, ratio, scenes}]}}
 //                  ratio = other run's total / point transfer's total (> 1:
 //                  point transfer is faster); unknown values are null
-//   results.csv   the same rows flattened, one header line; null = empty
-//   report.md     tables (times, RAM, quality, FPS, speed-ups), image links
+//   results.csv   the same rows flattened, one header line; null = empty;
+//                 `warnings` is the count
+//   report.md     tables (times, RAM, quality, FPS, speed-ups), the warnings
+//                 (run, stage, text), image links
 //   report.html   self-contained (inline CSS/SVG, images as data: URIs; no
 //                 network, no scripts): stacked time bars per scene,
 //                 peak-RAM bars, the quality, against-the-scan and FPS
-//                 tables, speed-up ratios, and per scene the frames side by
-//                 side (ground truth, the scan's splats, each workflow) with
-//                 zoomed crops and FLIP maps
+//                 tables, speed-up ratios, the warnings, and per scene the
+//                 frames side by side (ground truth, the scan's splats, each
+//                 workflow) with zoomed crops and FLIP maps
 //   images/       the thumbnails, crops and FLIP maps report.md links to
 #pragma once
 

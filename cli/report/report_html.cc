@@ -358,6 +358,12 @@ std::string SpeedUpSentence(const std::vector<SpeedUpMean>& means) {
          "over scenes; above 1\xC3\x97 point transfer is faster).";
 }
 
+bool AnyWarnings(const Campaign& c) {
+  return std::any_of(c.rows.begin(), c.rows.end(),
+                     [](const Row& r) { return !r.warnings.empty(); });
+}
+constexpr const char* kNoWarnings = "No stage of any run reported a warning.";
+
 std::string ReportMarkdown(const Campaign& c, const TextTable& times, const TextTable& vs_hpm,
                            const TextTable& vs_truth, const TextTable& vs_scan, const TextTable& fps, const TextTable& speed,
                            const std::string& speed_sentence,
@@ -373,6 +379,12 @@ std::string ReportMarkdown(const Campaign& c, const TextTable& times, const Text
   md += "\n## Quality against ground truth\n\n" + MarkdownTable(vs_truth);
   md += "\n## Against the scan\n\n" + std::string(kScanNote) + "\n\n" + MarkdownTable(vs_scan);
   md += "\n## Faces, textures and FPS estimate\n\n" + MarkdownTable(fps);
+  md += "\n## Warnings\n\n";
+  if (!AnyWarnings(c)) md += std::string(kNoWarnings) + "\n";
+  for (const Row& r : c.rows)
+    for (const auto& [stage, text] : r.warnings)
+      md += "- " + EscapeMd(DisplayName(r)) + " on " + EscapeMd(r.scene) + ", stage `" + stage +
+            "`: " + EscapeMd(text) + "\n";
   for (const SceneImages& s : images) {
     for (const ViewSection& v : s.views) {
       md += "\n## " + EscapeMd(s.scene) + ", view " + EscapeMd(v.view) + "\n\n";
@@ -437,6 +449,16 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
   h += "\n<h2>Quality against ground truth</h2>" + HtmlTable(vs_truth);
   h += "\n<h2>Against the scan</h2><p>" + EscapeHtml(kScanNote) + "</p>" + HtmlTable(vs_scan);
   h += "\n<h2>Faces, textures and FPS estimate</h2>" + HtmlTable(fps);
+  h += "\n<h2>Warnings</h2>";
+  if (!AnyWarnings(c))
+    h += "<p>" + std::string(kNoWarnings) + "</p>";
+  else
+    h += "<ul>";
+  for (const Row& r : c.rows)
+    for (const auto& [stage, text] : r.warnings)
+      h += "<li>" + EscapeHtml(DisplayName(r)) + " on " + EscapeHtml(r.scene) + ", stage <code>" +
+           EscapeHtml(stage) + "</code>: " + EscapeHtml(text) + "</li>";
+  if (AnyWarnings(c)) h += "</ul>";
   for (const SceneImages& s : images) {
     for (const ViewSection& v : s.views) {
       h +=

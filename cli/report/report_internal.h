@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "base/status.h"
@@ -68,6 +69,9 @@ struct Row {
   std::string device;
   std::array<Opt, kQualityCount> vs_hpm{}, vs_truth{};
   std::array<Opt, kScanCount> vs_scan{};
+  // The stages' warnings from run.json (StageContext::warning), in stage
+  // order: (stage id, text). Read for failed runs too.
+  std::vector<std::pair<std::string, std::string>> warnings;
   bool ok() const { return status == "ok"; }
 };
 

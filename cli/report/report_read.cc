@@ -130,6 +130,25 @@ Status ReadRunTimes(const std::string& path, Row& row) {
   return Status::Ok();
 }
 
+// The stages' `warnings` of run.json; a run without run.json (it did not
+// load) has none.
+Status ReadRunWarnings(const std::string& path, Row& row) {
+  if (!Env::Default()->Exists(path)) return Status::Ok();
+  PB_ASSIGN_OR_RETURN(Json run, ReadJsonFile(path));
+  if (!run.is_object() || !run.contains("stages") || !run["stages"].is_array())
+    return Status::Corrupt(path + ": no \"stages\" array");
+  for (const Json& stage : run["stages"]) {
+    if (!stage.is_object() || !stage.contains("warnings") || !stage["warnings"].is_array())
+      continue;
+    const std::string id = stage.contains("stage") && stage["stage"].is_string()
+                               ? stage["stage"].get<std::string>()
+                               : "?";
+    for (const Json& w : stage["warnings"])
+      if (w.is_string()) row.warnings.emplace_back(id, w.get<std::string>());
+  }
+  return Status::Ok();
+}
+
 // The "mean" row of a metrics.image table; absent file = all null.
 Status ReadQuality(const std::string& path, std::array<Opt, kQualityCount>& out) {
   if (!Env::Default()->Exists(path)) return Status::Ok();
@@ -233,6 +252,7 @@ Expected<Campaign> ReadCampaign(const std::string& campaign_dir) {
     return Status::Corrupt(path + ": " + e.what());
   }
   for (Row& row : c.rows) {
+    PB_RETURN_IF_ERROR(ReadRunWarnings(JoinPath(row.run_dir, "run.json"), row));
     if (!row.ok()) continue;  // failed runs: a row of nulls
     PB_RETURN_IF_ERROR(ReadRunTimes(JoinPath(row.run_dir, "run.json"), row));
     PB_RETURN_IF_ERROR(ReadQuality(JoinPath(row.run_dir, "vs_hpm.json"), row.vs_hpm));
@@ -340,6 +360,10 @@ Json RowJson(const Row& r) {
             {"vs_truth", quality(r.vs_truth)},
             {"vs_scan", scan(0, kScanImageCount)},
             {"scan_geometry", scan(kScanImageCount, kScanCount)}};
+  Json warnings = Json::array();
+  for (const auto& [stage, text] : r.warnings)
+    warnings.push_back({{"stage", stage}, {"warning", text}});
+  j["warnings"] = warnings;
   if (!r.error.empty()) j["error"] = r.error;
   return j;
 }
@@ -396,6 +420,7 @@ std::string ResultsCsv(const Campaign& c) {
   for (int i = 0; i < kScanCount; ++i)
     header.push_back((i < kScanImageCount ? "vs_scan_" : "scan_") + std::string(kScanColumns[size_t(i)]));
   header.push_back("error");
+  header.push_back("warnings");
   std::string out;
   for (size_t i = 0; i < header.size(); ++i) out += (i ? "," : "") + header[i];
   out += "\n";
@@ -414,6 +439,7 @@ std::string ResultsCsv(const Campaign& c) {
     for (int i = 0; i < kScanCount; ++i)
       values.push_back(j[i < kScanImageCount ? "vs_scan" : "scan_geometry"][kScanColumns[size_t(i)]]);
     values.push_back(r.error.empty() ? Json(nullptr) : Json(r.error));
+    values.push_back(Json(r.warnings.size()));
     for (size_t i = 0; i < values.size(); ++i) out += (i ? "," : "") + CsvField(values[i]);
     out += "\n";
   }

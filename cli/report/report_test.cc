@@ -258,6 +258,50 @@ std::vector<std::string> SplitCsvLine(const std::string& line) {
   return fields;
 }
 
+// The stages' warnings (run.json) reach results.json, results.csv (a count),
+// report.md and report.html, for failed runs too.
+TEST_F(ReportTest, WarningsOfEveryRunAreListed) {
+  WriteCampaign();
+  Json pt = Json::parse(ReadText(RunDir("point_transfer") + "/run.json"));
+  pt["stages"][1]["warnings"] = {"depth 9 makes 1.2 mm cells, finer than <spacing>"};
+  WriteJson(RunDir("point_transfer") + "/run.json", pt);
+  // The failed LPM run still wrote its record.
+  Json lpm_bake = Stage("bake", "bake", 1, 0, 5e8);
+  lpm_bake["status"] = "failed";
+  lpm_bake["warnings"] = {"first", "second"};
+  WriteJson(RunDir("lpm") + "/run.json",
+            {{"format", "pointbake-run 1"}, {"workflow", "lpm"}, {"stages", {lpm_bake}}});
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+  const Json r = Results();
+  EXPECT_EQ(r["rows"][0]["warnings"], Json::array());  // hpm
+  EXPECT_EQ(r["rows"][1]["warnings"], Json({{{"stage", "bake"}, {"warning", "first"}},
+                                            {{"stage", "bake"}, {"warning", "second"}}}));
+  ASSERT_EQ(r["rows"][2]["warnings"].size(), 1u);
+  EXPECT_EQ(r["rows"][2]["warnings"][0]["stage"], "normals");
+
+  const std::string csv = ReadText(Path("report/results.csv"));
+  const std::string header = csv.substr(0, csv.find('\n'));
+  EXPECT_EQ(header.substr(header.rfind(',') + 1), "warnings");
+  EXPECT_THAT(csv, HasSubstr(",2\n"));  // lpm's count ends its row
+
+  const std::string md = ReadText(Path("report/report.md"));
+  EXPECT_THAT(md, HasSubstr("## Warnings"));
+  EXPECT_THAT(md, HasSubstr("- LPM on room, stage `bake`: first"));
+  EXPECT_THAT(md, HasSubstr("- Point transfer on room, stage `normals`: depth 9 makes"));
+  const std::string html = ReadText(Path("report/report.html"));
+  EXPECT_THAT(
+      html,
+      HasSubstr("<code>normals</code>: depth 9 makes 1.2 mm cells, finer than &lt;spacing&gt;"));
+
+  // Without warnings the section says so.
+  WriteCampaign(true);
+  WriteJson(RunDir("point_transfer") + "/run.json",
+            Json::parse(ReadText(RunDir("hpm") + "/run.json")));
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report2")).ok());
+  EXPECT_THAT(ReadText(Path("report2/report.md")),
+              HasSubstr("No stage of any run reported a warning."));
+}
+
 TEST_F(ReportTest, CsvHasOneRowPerRunWithEmptyFieldsForUnknowns) {
   WriteCampaign();
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());

@@ -110,8 +110,31 @@ TEST_F(BakeStagesTest, FromPointsBakesThePointsAndWritesExrOnRequest) {
   EXPECT_NEAR(normal->at_f32(10, 10, 2), 1.0f, 1e-6);
   EXPECT_EQ(ctx.counters_["points"], 64 * 64);
   EXPECT_EQ(ctx.counters_["points_assigned"], 64 * 64);
+  EXPECT_TRUE(ctx.warnings_.empty());
   EXPECT_EQ(ctx.meta_["color"]["bake"]["spacing_source"], "meta");
   EXPECT_NEAR(ctx.meta_["color"]["bake"]["max_distance_m"].get<double>(), 4.0 / 64, 1e-12);
+}
+
+// Points that do not belong to the mesh: the maps come from the vertex
+// colors, and the stage says so through the warning channel.
+TEST_F(BakeStagesTest, FromPointsWarnsWhenNoPointReachesTheMesh) {
+  PointCloud far = Points();
+  for (size_t i = 2; i < far.positions.size(); i += 3) far.positions[i] += 1.0f;  // 1 m above
+  FakeContext ctx(dir_, {{"size", 16},
+                         {"gutter", 0},
+                         {"normal_format", "png"},
+                         {"interpolation", "nearest"},
+                         {"max_distance", 4.0},
+                         {"max_angle_deg", 90.0},
+                         {"idw_neighbors", 4},
+                         {"splat_sigma", 1.0}});
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
+  ctx.AddInput("points", "points", WriteInputPoints("points", far), {{"spacing_m", 1.0 / 64}});
+  ASSERT_TRUE(Run("bake.from_points", ctx).ok());
+  EXPECT_EQ(ctx.counters_["points_assigned"], 0);
+  ASSERT_EQ(ctx.warnings_.size(), 1u);
+  EXPECT_THAT(ctx.warnings_[0],
+              HasSubstr("no point lies within 62.5 mm and 90 degrees of the mesh"));
 }
 
 TEST_F(BakeStagesTest, FromPointsMeasuresSpacingWhenTheMetaHasNone) {

@@ -108,10 +108,12 @@ Status Run(StageContext& ctx) {
   }
   const AssignReport& assign = report.assign;
   if (assign.assigned == 0) {
-    std::fprintf(stderr,
-                 "%s: no point lies within %.1f mm and %.0f degrees of the mesh: the maps come "
-                 "from the vertex colors alone (does the mesh belong to these points?)\n",
-                 kId, from_points.max_distance_m * 1e3, from_points.max_angle_deg);
+    char text[320];
+    std::snprintf(text, sizeof text,
+                  "no point lies within %.1f mm and %.0f degrees of the mesh: the maps come "
+                  "from the vertex colors alone (does the mesh belong to these points?)",
+                  from_points.max_distance_m * 1e3, from_points.max_angle_deg);
+    ctx.warning(text);
   }
   ctx.counter("points", static_cast<double>(point_count));
   ctx.counter("points_assigned", static_cast<double>(assign.assigned));

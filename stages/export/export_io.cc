@@ -7,6 +7,7 @@
 #include <iterator>
 #include <string>
 
+#include "stages/builtin.h"
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/core/text_parse.h"
 #include "stages/mesh_io.h"

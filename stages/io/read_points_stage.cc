@@ -150,12 +150,11 @@ Status Run(StageContext& ctx) {
   if (!read.ok()) return read.status();
   const ScanReadResult& outcome = *read;
   const PointCloud& points = outcome.points;
-  // Warnings go to the stage's log (out/<workflow>/logs/<stage>.log).
+  // The readers' warnings name the file (some readers put it first already).
   for (const std::string& warning : outcome.warnings)
-    std::fprintf(stderr, "warning: %s: %s\n", path.c_str(), warning.c_str());
+    ctx.warning(warning.rfind(path, 0) == 0 ? warning : path + ": " + warning);
   if (outcome.dropped_points > 0)
-    std::fprintf(stderr, "warning: %s: dropped %llu invalid points\n", path.c_str(),
-                 static_cast<unsigned long long>(outcome.dropped_points));
+    ctx.warning(path + ": dropped " + std::to_string(outcome.dropped_points) + " invalid points");
 
   PB_RETURN_IF_ERROR(WriteOutputPoints(
       ctx, points,

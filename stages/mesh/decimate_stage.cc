@@ -76,10 +76,11 @@ Status Run(StageContext& ctx) {
   if (has_ratio) target = std::llround(ratio * static_cast<double>(mesh.face_count()));
   options.target_faces = static_cast<size_t>(target);
   if (mesh.face_count() <= options.target_faces) {
-    // Said in the log: a budget above the input is met by doing nothing, which
-    // in a workflow usually means the mesh before was smaller than planned.
-    std::fprintf(stderr, "%s: the input has %zu faces, within the budget of %zu: unchanged\n", kId,
-                 mesh.face_count(), options.target_faces);
+    // A budget above the input is met by doing nothing, which in a workflow
+    // usually means the mesh before was smaller than planned.
+    ctx.warning("the input has " + std::to_string(mesh.face_count()) +
+                " faces, within the budget of " + std::to_string(options.target_faces) +
+                ": unchanged");
   }
   options.progress = [&ctx](double fraction) { ctx.progress(0.2 + 0.7 * fraction); };
   DecimateReport report;

@@ -100,6 +100,21 @@ TEST_F(MeshStagesTest, DecimateByRatioFromAnyFileName) {
   EXPECT_GE(ctx.counters_["faces_out"], 380);
 }
 
+// A budget above the input leaves the mesh unchanged, and says so.
+TEST_F(MeshStagesTest, DecimateWithinBudgetWarns) {
+  FakeContext ctx(dir_ / "run", {{"target_faces", 5000}});
+  ctx.AddInput("mesh", "mesh", WriteGrid("grid.ply"));
+  const Status status = Run("mesh.decimate", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["faces_out"], 800);
+  EXPECT_EQ(ctx.warnings_, std::vector<std::string>{
+                               "the input has 800 faces, within the budget of 5000: unchanged"});
+  FakeContext halved(dir_ / "halved", {{"ratio", 0.5}});
+  halved.AddInput("mesh", "mesh", WriteGrid("grid2.ply"));
+  ASSERT_TRUE(Run("mesh.decimate", halved).ok());
+  EXPECT_TRUE(halved.warnings_.empty());
+}
+
 TEST_F(MeshStagesTest, DecimateReadsMeshPlyOfMultiFileInput) {
   // Like synth.scan's truth (mesh.ply + scene.json), plus a file that sorts
   // before mesh.ply: the stage must pick mesh.ply by name.

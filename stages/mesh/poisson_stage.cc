@@ -129,11 +129,13 @@ Status Run(StageContext& ctx) {
   poisson_meta["cell_m"] = cell_m;
   if (const double spacing = InputPointsSpacing(ctx); spacing > 0) {
     if (cell_m < spacing) {
-      std::fprintf(stderr,
-                   "%s: depth %d makes %.1f mm cells, finer than the points' spacing %.1f mm: "
-                   "expect small closed bubbles and non-manifold edges (mesh.clean removes "
-                   "them); a lower depth fits this scan better\n",
-                   kId, options.depth, cell_m * 1e3, spacing * 1e3);
+      char text[320];
+      std::snprintf(text, sizeof text,
+                    "depth %d makes %.1f mm cells, finer than the points' spacing %.1f mm: "
+                    "expect small closed bubbles and non-manifold edges (mesh.clean removes "
+                    "them); a lower depth fits this scan better",
+                    options.depth, cell_m * 1e3, spacing * 1e3);
+      ctx.warning(text);
     }
   }
 

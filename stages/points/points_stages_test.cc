@@ -161,6 +161,22 @@ TEST_F(PointsStagesTest, ReadPointsDropsInvalid) {
   ASSERT_TRUE(Run("io.read_points", lenient).ok());
   EXPECT_EQ(lenient.counters_["points"], 2);
   EXPECT_EQ(lenient.counters_["dropped_points"], 1);
+  // Said through the warning channel (run.json, progress line), naming the file.
+  EXPECT_EQ(lenient.warnings_, std::vector<std::string>{path + ": dropped 1 invalid points"});
+  EXPECT_TRUE(strict.warnings_.empty());
+}
+
+// A reader's warnings reach the warning channel, each naming the file once.
+TEST_F(PointsStagesTest, ReadPointsPassesReaderWarningsOn) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  const std::string path = data + "/ptx/multiple-and-transform.ptx";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
+  FakeContext ctx(dir_, {{"path", path}});
+  const Status status = Run("io.read_points", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.warnings_, std::vector<std::string>{path + ": 2 scans merged"});
+  EXPECT_EQ(ctx.counters_["warnings"], 1);
 }
 
 TEST_F(PointsStagesTest, ReadPointsUnsupportedExtension) {
