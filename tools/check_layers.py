@@ -27,7 +27,7 @@ ALLOWED = {
     G + "synth/": ["base/", G + "core/"],
     G + "uv/": ["base/", G + "core/"],
     G + "metrics/": ["base/", G + "core/"],
-    G + "mesh/": ["base/", G + "core/", G + "synth/"],
+    G + "mesh/": ["base/", G + "core/", G + "synth/", G + "points/"],
     G + "render/": ["base/", G + "core/", G + "synth/"],
     G + "bake/": ["base/", G + "core/", G + "synth/", G + "points/", G + "mesh/", G + "uv/"],
     "engine/": ["base/"],

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "stages/geometry/mesh/holes.h"
+
 namespace pb {
 namespace {
 
@@ -121,10 +123,12 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
   PB_RETURN_IF_ERROR(Validate(input));
   if (!(options.min_area_m2 >= 0) || options.min_component_faces < 0 ||
       !(options.min_component_fraction >= 0 && options.min_component_fraction <= 1) ||
-      !(options.min_component_area_m2 >= 0)) {
+      !(options.min_component_area_m2 >= 0) || options.hole_max_edges < 0 ||
+      !(options.hole_max_perimeter_m >= 0)) {
     return Status::Invalid(
         "mesh clean: need min_area_m2 >= 0, min_component_faces >= 0 and "
-        "min_component_fraction in [0, 1], min_component_area_m2 >= 0");
+        "min_component_fraction in [0, 1], min_component_area_m2 >= 0, hole_max_edges >= 0 "
+        "and hole_max_perimeter_m >= 0");
   }
   CleanReport local;
   CleanReport& r = report != nullptr ? *report : local;
@@ -265,7 +269,18 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
     }
   }
 
-  // 6. Unreferenced vertices.
+  // 6. Small holes.
+  {
+    HoleFillReport holes;
+    PB_RETURN_IF_ERROR(FillSmallHoles(
+        mesh, {.max_edges = options.hole_max_edges, .max_perimeter_m = options.hole_max_perimeter_m},
+        &holes));
+    r.boundary_loops = holes.loops;
+    r.holes_filled = holes.holes_filled;
+    r.hole_faces = holes.faces_added;
+  }
+
+  // 7. Unreferenced vertices.
   r.unreferenced_vertices = DropUnreferencedVertices(mesh);
   r.faces_out = mesh.face_count();
   r.vertices_out = mesh.vertex_count();
