@@ -44,6 +44,13 @@ constexpr const char* kSchema = R"({
       "default": 8,
       "description": "A connected unsupported region with fewer faces stays (mesh.clean would fill its hole again)."
     },
+    "smooth_passes": {
+      "type": "integer",
+      "minimum": 0,
+      "maximum": 100,
+      "default": 4,
+      "description": "Passes of border smoothing: a face with two or three edge neighbours on the other side of the cut flips (spurs go, notches come back unless beyond the full distance), so borders do not zigzag face by face; mesh.decimate holds borders and would spend faces on every zigzag. 0 keeps the raw cut."
+    },
     "spacing_neighbors": {
       "type": "integer",
       "minimum": 1,
@@ -68,6 +75,9 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.grow_fraction, NumberParam(ctx, kId, "grow_fraction"));
   PB_ASSIGN_OR_RETURN(options.min_region_faces,
                       IntegerParam(ctx, kId, "min_region_faces", std::nullopt, 0));
+  PB_ASSIGN_OR_RETURN(const int64_t smooth_passes,
+                      IntegerParam(ctx, kId, "smooth_passes", std::nullopt, 0, 100));
+  options.smooth_passes = static_cast<int>(smooth_passes);
   PB_ASSIGN_OR_RETURN(const int64_t neighbors,
                       IntegerParam(ctx, kId, "spacing_neighbors", std::nullopt, 1, 64));
   options.spacing_neighbors = static_cast<int>(neighbors);
@@ -95,6 +105,7 @@ Status Run(StageContext& ctx) {
                           {{"core_faces", report.core_faces},
                            {"weak_faces", report.weak_faces},
                            {"regions_removed", report.regions_removed},
+                           {"smoothed_faces", report.smoothed_faces},
                            {"faces_removed", report.faces_removed},
                            {"vertices_removed", report.vertices_removed},
                            {"mean_edge_m", report.mean_edge_m},
@@ -126,7 +137,7 @@ StageType TrimStage() {
       "edge lengths). Faces are removed by connected regions, with hysteresis: a region of "
       "faces farther than `grow_fraction` of that distance goes when it holds at least one face "
       "beyond the full distance and has at least `min_region_faces` faces; a single weakly "
-      "supported face or vertex never opens a hole. Unlike mesh.poisson's density-quantile "
+      "supported face or vertex never opens a hole. The cut is smoothed (`smooth_passes`) so borders do not zigzag face by face. Unlike mesh.poisson's density-quantile "
       "`trim`, the measure is local, so it suits one-station scans whose density falls with "
       "range. Follow with mesh.clean (manifold, small holes filled). Deterministic for any "
       "thread count.\n\n"

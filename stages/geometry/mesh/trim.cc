@@ -163,10 +163,11 @@ Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,
   PB_RETURN_IF_ERROR(Validate(points).WithContext("points"));
   if (!(options.max_distance_spacings >= 0) || !(options.max_distance_edges >= 0) ||
       !(options.grow_fraction > 0 && options.grow_fraction <= 1) ||
-      options.spacing_neighbors < 1 || options.min_region_faces < 0) {
+      options.spacing_neighbors < 1 || options.min_region_faces < 0 ||
+      options.smooth_passes < 0) {
     return Status::Invalid(
         "trim: need max_distance_spacings >= 0, max_distance_edges >= 0, grow_fraction in "
-        "(0, 1], spacing_neighbors >= 1 and min_region_faces >= 0");
+        "(0, 1], spacing_neighbors >= 1, min_region_faces >= 0 and smooth_passes >= 0");
   }
   TrimReport local;
   TrimReport& r = report ? *report : local;
@@ -240,10 +241,53 @@ Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,
     if (weak(f) && FindRoot(parent, f) == f && removed_region(f)) ++r.regions_removed;
   }
 
+  std::vector<uint8_t> removed(nf, 0);
+  for (uint32_t f = 0; f < nf; ++f) {
+    removed[f] = weak(f) && removed_region(FindRoot(parent, f));
+  }
+  // Border smoothing: a face-by-face cut zigzags at the size of a face, and
+  // mesh.decimate holds borders, so every zigzag would cost faces of the
+  // final mesh. Each pass flips, at once, every face whose three neighbours
+  // (through edges) include at least two on the other side: kept spurs go,
+  // removed notches come back. Faces on the mesh's own border count their
+  // missing neighbour as neither side.
+  std::vector<std::array<uint32_t, 3>> neighbor(nf, {UINT32_MAX, UINT32_MAX, UINT32_MAX});
+  for (size_t i = 1; i < edges.size(); ++i) {
+    if (edges[i].first != edges[i - 1].first) continue;
+    if (i + 1 < edges.size() && edges[i + 1].first == edges[i].first) continue;  // non-manifold
+    if (i >= 2 && edges[i - 2].first == edges[i].first) continue;
+    const uint32_t a = edges[i - 1].second, b = edges[i].second;
+    for (const auto& [f, g] : {std::pair{a, b}, std::pair{b, a}}) {
+      for (uint32_t& slot : neighbor[f]) {
+        if (slot == UINT32_MAX) {
+          slot = g;
+          break;
+        }
+      }
+    }
+  }
+  for (int pass = 0; pass < options.smooth_passes; ++pass) {
+    std::vector<uint8_t> next = removed;
+    uint64_t flips = 0;
+    for (uint32_t f = 0; f < nf; ++f) {
+      int other = 0;
+      for (const uint32_t g : neighbor[f]) other += g != UINT32_MAX && removed[g] != removed[f];
+      // A removed face comes back only if the points support it a little
+      // (not a core face), so a membrane is never patched back in.
+      if (other >= 2 && (removed[f] == 0 || face_level[f] <= 1)) {
+        next[f] = !removed[f];
+        ++flips;
+      }
+    }
+    removed.swap(next);
+    r.smoothed_faces += flips;
+    if (flips == 0) break;
+  }
+
   Mesh out = mesh;
   size_t kept = 0;
   for (uint32_t f = 0; f < nf; ++f) {
-    if (weak(f) && removed_region(FindRoot(parent, f))) {
+    if (removed[f]) {
       ++r.faces_removed;
       continue;
     }

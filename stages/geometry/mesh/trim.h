@@ -30,6 +30,11 @@
 //  * A removed region must also have at least `min_region_faces` faces
 //    (gaps of a few faces are what the hole filler of mesh.clean would
 //    close again).
+//  * The cut is then smoothed for `smooth_passes` passes: a face with two
+//    or three of its edge neighbours on the other side of the cut flips
+//    (kept spurs go, removed notches that are not core faces come back), so
+//    the border does not zigzag at the size of a face, which decimation,
+//    holding borders, would have to keep.
 // Vertices no kept face uses are dropped; kept faces keep their order, so
 // the result does not depend on the thread count.
 #pragma once
@@ -49,6 +54,7 @@ struct TrimOptions {
   double max_distance_edges = 1.0;     // ... and this many mean edge lengths
   double grow_fraction = 0.5;          // weak faces: farther than this x the core distance
   int64_t min_region_faces = 8;        // smaller unsupported regions stay
+  int smooth_passes = 4;               // border smoothing passes (majority of neighbours)
   int spacing_neighbors = 8;           // k of the local spacing
   int threads = 0;                     // 0: TBB's default (all cores)
 };
@@ -58,6 +64,7 @@ struct TrimReport {
   uint64_t core_faces = 0;     // unsupported at level 1
   uint64_t weak_faces = 0;     // unsupported at level grow_fraction (cores included)
   uint64_t regions_removed = 0;
+  uint64_t smoothed_faces = 0;  // flipped by border smoothing, over all passes
   uint64_t faces_removed = 0;
   uint64_t vertices_removed = 0;
   double mean_edge_m = 0;
@@ -68,7 +75,8 @@ struct TrimReport {
 // have different origins. Status::Invalid if either fails Validate, the
 // cloud has fewer than spacing_neighbors + 1 points or a non-finite
 // coordinate, or an option is out of range (distances < 0, grow_fraction
-// outside (0, 1], spacing_neighbors < 1, min_region_faces < 0). `report` may
+// outside (0, 1], spacing_neighbors < 1, min_region_faces < 0,
+// smooth_passes < 0). `report` may
 // be null.
 Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,
                                const TrimOptions& options, TrimReport* report);
