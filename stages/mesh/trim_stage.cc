@@ -86,7 +86,7 @@ Status Run(StageContext& ctx) {
 
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.2));
   PB_ASSIGN_OR_RETURN(InputPoints points, ReadInputPoints(ctx, kId, 0.4));
-  TrimReport report;
+  SupportTrimReport report;
   Mesh trimmed;
   {
     PB_PHASE(ctx, "compute");

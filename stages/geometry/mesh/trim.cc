@@ -158,7 +158,7 @@ uint64_t CountBoundaryEdges(const Mesh& mesh) {
 }
 
 Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,
-                               const TrimOptions& options, TrimReport* report) {
+                               const TrimOptions& options, SupportTrimReport* report) {
   PB_RETURN_IF_ERROR(Validate(mesh).WithContext("mesh"));
   PB_RETURN_IF_ERROR(Validate(points).WithContext("points"));
   if (!(options.max_distance_spacings >= 0) || !(options.max_distance_edges >= 0) ||
@@ -169,9 +169,9 @@ Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,
         "trim: need max_distance_spacings >= 0, max_distance_edges >= 0, grow_fraction in "
         "(0, 1], spacing_neighbors >= 1, min_region_faces >= 0 and smooth_passes >= 0");
   }
-  TrimReport local;
-  TrimReport& r = report ? *report : local;
-  r = TrimReport();
+  SupportTrimReport local;
+  SupportTrimReport& r = report ? *report : local;
+  r = SupportTrimReport();
   r.faces_in = mesh.face_count();
   PB_ASSIGN_OR_RETURN(const SupportField field,
                       BuildField(mesh, points, options.spacing_neighbors, options.threads));

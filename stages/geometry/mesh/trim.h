@@ -59,7 +59,7 @@ struct TrimOptions {
   int threads = 0;                     // 0: TBB's default (all cores)
 };
 
-struct TrimReport {
+struct SupportTrimReport {
   uint64_t faces_in = 0;
   uint64_t core_faces = 0;     // unsupported at level 1
   uint64_t weak_faces = 0;     // unsupported at level grow_fraction (cores included)
@@ -79,7 +79,7 @@ struct TrimReport {
 // smooth_passes < 0). `report` may
 // be null.
 Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,
-                               const TrimOptions& options, TrimReport* report);
+                               const TrimOptions& options, SupportTrimReport* report);
 
 // How much of a mesh the points support, by the measure of issue 15:
 // the mesh is sampled uniformly by area (about `samples` points, a

@@ -60,7 +60,7 @@ TEST(TrimTest, RemovesAMembraneAcrossAnUnscannedGap) {
   // mesh (2 cm faces) spans the gap as a membrane 20 spacings wide.
   const PointCloud points = PlanePoints(1.0, 0.01, [](double x, double) { return x > 0.4 && x < 0.6; });
   const Mesh mesh = Grid(50, 1.0);
-  TrimReport report;
+  SupportTrimReport report;
   auto trimmed = TrimUnsupported(mesh, points, TrimOptions(), &report);
   ASSERT_TRUE(trimmed.ok()) << trimmed.status().message();
   // The gap's middle (farther than 3 spacings from any point) is gone...
@@ -87,7 +87,7 @@ TEST(TrimTest, ASparsePatchInWellSampledSurfaceOpensNoHole) {
     return std::abs(x - 0.5) < 0.021 && std::abs(y - 0.5) < 0.021;
   });
   const Mesh mesh = Grid(100, 1.0);  // 1 cm faces
-  TrimReport report;
+  SupportTrimReport report;
   auto trimmed = TrimUnsupported(mesh, points, TrimOptions(), &report);
   ASSERT_TRUE(trimmed.ok()) << trimmed.status().message();
   EXPECT_EQ(report.core_faces, 0u);
