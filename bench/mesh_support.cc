@@ -8,7 +8,12 @@
 #include <cstdio>
 #include <string>
 
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
 #include "stages/geometry/io/ply.h"
+#include "stages/geometry/mesh/holes.h"
 #include "stages/geometry/mesh/trim.h"
 
 int main(int argc, char** argv) {
@@ -32,13 +37,49 @@ int main(int argc, char** argv) {
       std::fprintf(stderr, "%s: %s\n", argv[i], support.status().message().c_str());
       return 1;
     }
+    // Boundary loops by perimeter: holes a viewer sees as pin-holes (under
+    // 10 cm) and the rest.
+    const pb::Mesh& m = mesh->mesh;
+    int small_loops = 0, loops = 0;
+    size_t loop_edges = 0;
+    for (const auto& loop : pb::BoundaryLoops(m)) {
+      double perimeter = 0;
+      for (size_t k = 0; k < loop.size(); ++k) {
+        const uint32_t a = loop[k], b = loop[(k + 1) % loop.size()];
+        double d2 = 0;
+        for (int c = 0; c < 3; ++c) {
+          const double d = double{m.positions[3 * size_t{a} + c]} - m.positions[3 * size_t{b} + c];
+          d2 += d * d;
+        }
+        perimeter += std::sqrt(d2);
+      }
+      ++loops;
+      loop_edges += loop.size();
+      small_loops += perimeter < 0.1;
+    }
+    // Connected components (faces sharing vertices).
+    std::vector<uint32_t> parent(m.vertex_count());
+    for (size_t v = 0; v < parent.size(); ++v) parent[v] = static_cast<uint32_t>(v);
+    const auto find = [&](uint32_t x) {
+      while (parent[x] != x) x = parent[x] = parent[parent[x]];
+      return x;
+    };
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      for (int k = 1; k < 3; ++k) {
+        const uint32_t a = find(m.indices[3 * f]), b = find(m.indices[3 * f + k]);
+        if (a != b) parent[std::max(a, b)] = std::min(a, b);
+      }
+    }
+    int components = 0;
+    for (size_t v = 0; v < parent.size(); ++v) components += find(static_cast<uint32_t>(v)) == v;
+    std::printf("{\"components\": %d, ", components);
     std::printf(
-        "{\"mesh\": \"%s\", \"faces\": %llu, \"area_m2\": %.4f, \"invented_fraction\": %.4f, "
+        "\"mesh\": \"%s\", \"faces\": %llu, \"area_m2\": %.4f, \"invented_fraction\": %.4f, "
         "\"boundary_edges\": %llu, \"boundary_edges_per_1000_faces\": %.1f, "
-        "\"mean_edge_m\": %.4f}\n",
+        "\"mean_edge_m\": %.4f, \"boundary_loops\": %d, \"loops_under_10cm\": %d, \"edges_in_loops\": %zu}\n",
         argv[i], static_cast<unsigned long long>(support->faces), support->area_m2,
         support->invented_fraction, static_cast<unsigned long long>(support->boundary_edges),
-        support->boundary_edges_per_1000_faces, support->mean_edge_m);
+        support->boundary_edges_per_1000_faces, support->mean_edge_m, loops, small_loops, loop_edges);
   }
   return 0;
 }

@@ -94,6 +94,7 @@ Status Run(StageContext& ctx) {
   ctx.counter("degenerate_faces", static_cast<double>(report.degenerate_faces));
   ctx.counter("duplicate_faces", static_cast<double>(report.duplicate_faces));
   ctx.counter("nonmanifold_edge_faces", static_cast<double>(report.nonmanifold_edge_faces));
+  ctx.counter("misoriented_faces", static_cast<double>(report.misoriented_faces));
   ctx.counter("small_components", static_cast<double>(report.small_components));
   ctx.counter("small_component_faces", static_cast<double>(report.small_component_faces));
   ctx.counter("split_vertices", static_cast<double>(report.split_vertices));
@@ -115,14 +116,14 @@ StageType CleanStage() {
   StageType type;
   type.id = kId;
   // 2: small components must also be small in area; 3: input meta passed on;
-  // 4: small holes filled.
+  // 4: small holes filled, faces at misoriented edges dropped.
   type.version = 4;
   type.summary = "Mesh repair: degenerate/duplicate faces, specks, non-manifold edges and vertices";
   type.doc =
       "Makes a reconstructed mesh 2-manifold, in this order: removes faces with a repeated "
       "vertex or an area below `min_area_m2`; removes duplicate faces (same three vertices, "
       "either orientation; the first is kept); where an edge has more than two faces, keeps "
-      "the two largest (faces are accepted by decreasing area, ties by index); removes "
+      "the two largest (faces are accepted by decreasing area, ties by index); where an edge's two faces run it the same way, drops the smaller; removes "
       "connected components with fewer faces than `min_component_faces` (or "
       "`min_component_fraction` of the largest) that are also smaller than "
       "`min_component_area_m2` (a decimated flat wall may be 2 faces); splits every vertex whose faces form several fans into one vertex per "
@@ -132,7 +133,7 @@ StageType CleanStage() {
       "non-manifold is skipped); drops unreferenced vertices. Face order is kept (the patches "
       "come last), so the result is deterministic.\n\n"
       "Counters: `faces_in`, `vertices_in`, `degenerate_faces`, `duplicate_faces`, "
-      "`nonmanifold_edge_faces`, `small_components`, `small_component_faces`, "
+      "`nonmanifold_edge_faces`, `misoriented_faces`, `small_components`, `small_component_faces`, "
       "`split_vertices`, `boundary_loops`, `holes_filled`, `hole_faces`, `unreferenced_vertices`, `faces_out`, `vertices_out`. Phases: `io`, "
       "`compute`.";
   type.params_schema = kSchema;

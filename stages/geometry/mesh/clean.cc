@@ -208,6 +208,30 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
     }
   }
 
+  // 3b. Edges whose two faces run them the same way (where step 3 kept one
+  // face of each of two crossing sheets, or the input was folded): the
+  // smaller face goes, so every kept edge is consistently oriented.
+  // mesh.decimate takes such an edge for two border edges and opens holes
+  // there; the hole left here is small and filled in step 6.
+  {
+    const size_t n = mesh.face_count();
+    const std::vector<EdgeUse> edges = SortedEdges(idx);
+    std::vector<bool> keep(n, true);
+    bool any = false;
+    for (size_t i = 1; i < edges.size(); ++i) {
+      if (edges[i].key != edges[i - 1].key) continue;
+      if (idx[edges[i].corner] != idx[edges[i - 1].corner]) continue;  // opposite: fine
+      const uint32_t a = edges[i - 1].corner / 3, b = edges[i].corner / 3;
+      if (!keep[a] || !keep[b]) continue;
+      const double area_a = FaceArea(mesh, &idx[3 * size_t{a}]);
+      const double area_b = FaceArea(mesh, &idx[3 * size_t{b}]);
+      keep[area_b < area_a || (area_b == area_a && b > a) ? b : a] = false;
+      ++r.misoriented_faces;
+      any = true;
+    }
+    if (any) KeepFaces(keep, &idx);
+  }
+
   // 4. Small components (faces joined through shared edges).
   {
     const size_t n = mesh.face_count();

@@ -9,6 +9,9 @@
 //      accepted greedily by decreasing area (ties: lower face index) and a
 //      face is dropped if one of its edges already has two accepted faces, so
 //      each such edge keeps its two largest faces;
+//   3b. misoriented edges: where the two faces of an edge run it the same
+//      way, the smaller face is dropped (mesh.decimate would treat the edge
+//      as two border edges);
 //   4. small connected components (faces connected through shared edges):
 //      fewer than min_component_faces faces, or fewer than
 //      min_component_fraction times the largest component's face count, AND
@@ -49,6 +52,7 @@ struct CleanReport {
   uint64_t degenerate_faces = 0;
   uint64_t duplicate_faces = 0;
   uint64_t nonmanifold_edge_faces = 0;  // faces dropped to make edges manifold
+  uint64_t misoriented_faces = 0;       // faces dropped at misoriented edges
   uint64_t small_components = 0;
   uint64_t small_component_faces = 0;
   uint64_t split_vertices = 0;         // vertices added by splitting fans
