@@ -92,27 +92,41 @@ Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport
   r.loops = loops.size();
   if (options.max_edges == 0 && options.max_perimeter_m == 0) return Status::Ok();
 
-  std::unordered_set<uint64_t> edges;
-  edges.reserve(mesh.indices.size());
-  for (size_t f = 0; f < mesh.face_count(); ++f) {
-    const uint32_t* t = &mesh.indices[3 * f];
-    for (int k = 0; k < 3; ++k) edges.insert(EdgeKey(t[k], t[(k + 1) % 3]));
+  // Only the loops small enough are filled; only edges between their
+  // vertices can clash with a patch, and only their sides need the face
+  // opposite, so the maps below hold those alone.
+  const auto perimeter_of = [&](const std::vector<uint32_t>& loop) {
+    double perimeter = 0;
+    for (size_t i = 0; i < loop.size(); ++i) {
+      perimeter += EdgeLength(mesh, loop[i], loop[(i + 1) % loop.size()]);
+    }
+    return perimeter;
+  };
+  const auto is_small = [&](const std::vector<uint32_t>& loop) {
+    return (options.max_edges > 0 && loop.size() <= static_cast<size_t>(options.max_edges)) ||
+           (options.max_perimeter_m > 0 && perimeter_of(loop) <= options.max_perimeter_m);
+  };
+  std::vector<uint8_t> on_small_loop(mesh.vertex_count(), 0);
+  std::vector<const std::vector<uint32_t>*> small_loops;
+  for (const std::vector<uint32_t>& loop : loops) {
+    if (!is_small(loop)) continue;
+    small_loops.push_back(&loop);
+    for (const uint32_t v : loop) on_small_loop[v] = 1;
   }
-  // The face on each boundary side, for the third points of the weight.
-  std::unordered_map<uint64_t, uint32_t> opposite;
+  std::unordered_set<uint64_t> edges;
+  std::unordered_map<uint64_t, uint32_t> opposite;  // directed side -> opposite corner
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
     for (int k = 0; k < 3; ++k) {
-      opposite.emplace((static_cast<uint64_t>(t[k]) << 32) | t[(k + 1) % 3], t[(k + 2) % 3]);
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      if (!on_small_loop[a] || !on_small_loop[b]) continue;
+      edges.insert(EdgeKey(a, b));
+      opposite.emplace((static_cast<uint64_t>(a) << 32) | b, t[(k + 2) % 3]);
     }
   }
-  for (const std::vector<uint32_t>& loop : loops) {
+  for (const std::vector<uint32_t>* small_loop : small_loops) {
+    const std::vector<uint32_t>& loop = *small_loop;
     const size_t n = loop.size();
-    double perimeter = 0;
-    for (size_t i = 0; i < n; ++i) perimeter += EdgeLength(mesh, loop[i], loop[(i + 1) % n]);
-    const bool small = (options.max_edges > 0 && n <= static_cast<size_t>(options.max_edges)) ||
-                       (options.max_perimeter_m > 0 && perimeter <= options.max_perimeter_m);
-    if (!small) continue;
     std::vector<double> points(3 * n), third(3 * n);
     for (size_t i = 0; i < n; ++i) {
       for (int c = 0; c < 3; ++c) points[3 * i + c] = mesh.positions[3 * size_t{loop[i]} + c];
