@@ -118,7 +118,9 @@ StageType CleanStage() {
   // 2: small components must also be small in area; 3: input meta passed on;
   // 4: small holes filled, faces at misoriented edges dropped.
   type.version = 4;
-  type.summary = "Mesh repair: degenerate/duplicate faces, specks, non-manifold edges and vertices";
+  type.summary =
+      "Mesh repair: degenerate/duplicate faces, specks, non-manifold edges and vertices, small "
+      "holes";
   type.doc =
       "Makes a reconstructed mesh 2-manifold, in this order: removes faces with a repeated "
       "vertex or an area below `min_area_m2`; removes duplicate faces (same three vertices, "

@@ -62,6 +62,7 @@ constexpr const char* kSchema = R"({
       "type": "integer",
       "minimum": 0,
       "default": 0,
+      "x-affects-output": false,
       "description": "Worker threads; 0 takes the engine's --threads. The output does not depend on it."
     }
   }
