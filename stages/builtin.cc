@@ -10,6 +10,7 @@ namespace {
 constexpr StageType (*kBuiltinStages[])() = {
     ReadPointsStage,   SynthScanStage,    DownsampleStage,       StatsStage,
     OutliersStage,     NormalsStage,      SpacingStage,          PoissonStage,
+    TrimStage,
     DecimateStage,     CleanStage,        UnwrapStage,           VertexColorsBakeStage,
     FromMeshBakeStage, FromPointsBakeStage, GltfExportStage,     ObjExportStage,
     FramesStage,       SplatsStage,       GeometryMetricsStage, ImageMetricsStage,

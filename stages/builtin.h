@@ -29,6 +29,8 @@ StageType SpacingStage();
 
 // mesh.poisson: screened Poisson surface reconstruction with trimming.
 StageType PoissonStage();
+// mesh.trim: removes the surface the points do not support.
+StageType TrimStage();
 // mesh.decimate: quadric edge-collapse decimation to a face budget.
 StageType DecimateStage();
 // mesh.clean: removes degenerate and duplicate faces, small components.

@@ -1,5 +1,7 @@
 #include "stages/stage_test_util.h"
 
+#include "engine/schema.h"
+
 #include <stdlib.h>
 
 #include "stages/geometry/io/ply.h"
@@ -70,6 +72,7 @@ void FakeContext::end_phase(std::string_view name) {
 Status StageTest::Run(const std::string& id, FakeContext& ctx) {
   const StageType* type = registry_.Find(id);
   if (!type) return Status::NotFound(id);
+  ctx.set_params(ApplyDefaults(nlohmann::json::parse(type->params_schema), ctx.params()));
   const Status status = type->run(ctx);
   EXPECT_TRUE(ctx.open_phases_.empty());
   return status;

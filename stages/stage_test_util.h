@@ -46,6 +46,7 @@ class FakeContext : public StageContext {
                 nlohmann::json meta = nlohmann::json::object());
 
   const nlohmann::json& params() const override { return params_; }
+  void set_params(nlohmann::json params) { params_ = std::move(params); }
   bool has_input(std::string_view port) const override {
     return inputs_.count(std::string(port)) > 0;
   }
@@ -85,7 +86,8 @@ class FakeContext : public StageContext {
 // that the derived fixture fills in SetUp.
 class StageTest : public testing::TempDirTest {
  protected:
-  // Runs stage `id` in `ctx`; every phase it opened must be closed.
+  // Runs stage `id` in `ctx` with the schema's defaults filled in, as the
+  // engine does; every phase it opened must be closed.
   Status Run(const std::string& id, FakeContext& ctx);
   // Writes <dir>/input/<name>/mesh.ply (points.ply) and returns its path,
   // for FakeContext::AddInput.

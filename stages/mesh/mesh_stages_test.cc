@@ -251,5 +251,66 @@ TEST_F(MeshStagesTest, PoissonExplainsWhatItNeeds) {
   EXPECT_THAT(status.message(), HasSubstr("points.ply"));
 }
 
+// mesh.trim: a grid of 1 m^2 whose points leave a band 0.4 < x < 0.6
+// unscanned; the band's faces go, the rest stays; the next stages learn
+// the spacing from the meta; mesh.clean then fills a pin-hole, not the band.
+TEST_F(MeshStagesTest, TrimRemovesUnsupportedFacesAndCleanFillsPinHoles) {
+  const StageType* type = registry_.Find("mesh.trim");
+  ASSERT_NE(type, nullptr);
+  EXPECT_EQ(type->version, 1);
+  const nlohmann::json schema = CheckedSchema(*type, true);
+  EXPECT_EQ(schema["properties"]["max_distance_spacings"]["default"], 3);
+  ASSERT_EQ(type->inputs.size(), 2u);
+  EXPECT_EQ(type->inputs[1].name, "points");
+
+  PointCloud points;
+  for (int j = 0; j <= 100; ++j) {
+    for (int i = 0; i <= 100; ++i) {
+      if (i > 40 && i < 60) continue;
+      points.positions.insert(points.positions.end(), {i / 100.0f, j / 100.0f, 0.0f});
+    }
+  }
+  Mesh grid;
+  const int n = 50;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      grid.positions.insert(grid.positions.end(),
+                            {static_cast<float>(i) / n, static_cast<float>(j) / n, 0.0f});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      if (i == 5 && j == 5) continue;  // a pin-hole in scanned surface
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      grid.indices.insert(grid.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  FakeContext trim(dir_ / "trim", nlohmann::json::object(), 2);
+  trim.AddInput("mesh", "mesh", WriteInputMesh("grid", grid), {{"source", "test"}});
+  trim.AddInput("points", "points", WriteInputPoints("points", points));
+  const Status status = Run("mesh.trim", trim);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(trim.counters_["faces_in"], 2 * n * n - 2);
+  EXPECT_GT(trim.counters_["faces_removed"], 200);
+  EXPECT_EQ(trim.counters_["regions_removed"], 1);
+  EXPECT_EQ(trim.phases_, (std::set<std::string>{"io", "compute"}));
+  EXPECT_EQ(trim.meta_["mesh"]["source"], "test");
+  EXPECT_NEAR(trim.meta_["mesh"]["spacing_m"].get<double>(), 0.01, 0.002);
+  auto trimmed = ReadPlyMesh(trim.outputs_["mesh"]);
+  ASSERT_TRUE(trimmed.ok());
+  for (size_t f = 0; f < trimmed->mesh.face_count(); ++f) {
+    double x = 0;
+    for (int k = 0; k < 3; ++k) x += trimmed->mesh.positions[3 * trimmed->mesh.indices[3 * f + k]] / 3;
+    EXPECT_FALSE(x > 0.45 && x < 0.55) << "face " << f << " at x " << x;
+  }
+
+  FakeContext clean(dir_ / "clean", nlohmann::json::object());
+  clean.AddInput("mesh", "mesh", trim.outputs_["mesh"], trim.meta_["mesh"]);
+  ASSERT_TRUE(Run("mesh.clean", clean).ok());
+  EXPECT_EQ(clean.counters_["holes_filled"], 1);  // the pin-hole, not the band
+  EXPECT_EQ(clean.counters_["hole_faces"], 2);
+  EXPECT_EQ(clean.counters_["faces_out"], trim.counters_["faces_out"] + 2);
+}
+
 }  // namespace
 }  // namespace pb

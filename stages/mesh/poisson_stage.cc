@@ -43,7 +43,7 @@ constexpr const char* kSchema = R"({
       "minimum": 0,
       "maximum": 0.5,
       "default": 0,
-      "description": "Density-quantile trimming: remove the vertices whose Poisson density (how well the points support them) is below this quantile of all densities, with their faces. Poisson closes every hole, open doors and windows included; 0.01-0.02 removes such false surfaces on the synthetic scenes while 0.05 and above also cut sparse real surface (docs/poisson.md). 0 keeps the closed surface."
+      "description": "Density-quantile trimming: remove the vertices whose Poisson density (how well the points support them) is below this quantile of all densities, with their faces. Poisson closes every hole, open doors and windows included; 0.01-0.02 removes such false surfaces on the synthetic scenes while 0.05 and above also cut sparse real surface (docs/poisson.md). 0 keeps the closed surface. The quantile is global, so on one-station real scans it cuts pin-holes in distant surface and leaves membranes across unscanned space: the shipped workflows keep 0 here and follow with mesh.trim (docs/mesh-real-scans.md)."
     },
     "scale": {
       "type": "number",

@@ -12,6 +12,8 @@
 #include <string>
 #include <vector>
 
+#include "stages/geometry/mesh/holes.h"
+
 namespace pb {
 namespace {
 
@@ -121,10 +123,12 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
   PB_RETURN_IF_ERROR(Validate(input));
   if (!(options.min_area_m2 >= 0) || options.min_component_faces < 0 ||
       !(options.min_component_fraction >= 0 && options.min_component_fraction <= 1) ||
-      !(options.min_component_area_m2 >= 0)) {
+      !(options.min_component_area_m2 >= 0) || options.hole_max_edges < 0 ||
+      !(options.hole_max_perimeter_m >= 0)) {
     return Status::Invalid(
         "mesh clean: need min_area_m2 >= 0, min_component_faces >= 0 and "
-        "min_component_fraction in [0, 1], min_component_area_m2 >= 0");
+        "min_component_fraction in [0, 1], min_component_area_m2 >= 0, hole_max_edges >= 0 "
+        "and hole_max_perimeter_m >= 0");
   }
   CleanReport local;
   CleanReport& r = report != nullptr ? *report : local;
@@ -204,6 +208,30 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
     }
   }
 
+  // 3b. Edges whose two faces run them the same way (where step 3 kept one
+  // face of each of two crossing sheets, or the input was folded): the
+  // smaller face goes, so every kept edge is consistently oriented.
+  // mesh.decimate takes such an edge for two border edges and opens holes
+  // there; the hole left here is small and filled in step 6.
+  {
+    const size_t n = mesh.face_count();
+    const std::vector<EdgeUse> edges = SortedEdges(idx);
+    std::vector<bool> keep(n, true);
+    bool any = false;
+    for (size_t i = 1; i < edges.size(); ++i) {
+      if (edges[i].key != edges[i - 1].key) continue;
+      if (idx[edges[i].corner] != idx[edges[i - 1].corner]) continue;  // opposite: fine
+      const uint32_t a = edges[i - 1].corner / 3, b = edges[i].corner / 3;
+      if (!keep[a] || !keep[b]) continue;
+      const double area_a = FaceArea(mesh, &idx[3 * size_t{a}]);
+      const double area_b = FaceArea(mesh, &idx[3 * size_t{b}]);
+      keep[area_b < area_a || (area_b == area_a && b > a) ? b : a] = false;
+      ++r.misoriented_faces;
+      any = true;
+    }
+    if (any) KeepFaces(keep, &idx);
+  }
+
   // 4. Small components (faces joined through shared edges).
   {
     const size_t n = mesh.face_count();
@@ -265,7 +293,18 @@ Expected<Mesh> CleanMesh(const Mesh& input, const CleanOptions& options, CleanRe
     }
   }
 
-  // 6. Unreferenced vertices.
+  // 6. Small holes.
+  {
+    HoleFillReport holes;
+    PB_RETURN_IF_ERROR(FillSmallHoles(
+        mesh, {.max_edges = options.hole_max_edges, .max_perimeter_m = options.hole_max_perimeter_m},
+        &holes));
+    r.boundary_loops = holes.loops;
+    r.holes_filled = holes.holes_filled;
+    r.hole_faces = holes.faces_added;
+  }
+
+  // 7. Unreferenced vertices.
   r.unreferenced_vertices = DropUnreferencedVertices(mesh);
   r.faces_out = mesh.face_count();
   r.vertices_out = mesh.vertex_count();

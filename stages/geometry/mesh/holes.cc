@@ -1,0 +1,168 @@
+#include "stages/geometry/mesh/holes.h"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <unordered_map>
+#include <unordered_set>
+
+#include "stages/geometry/mesh/hole_triangulation.h"
+
+namespace pb {
+namespace {
+
+uint64_t EdgeKey(uint32_t a, uint32_t b) {
+  return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
+}
+
+double EdgeLength(const Mesh& mesh, uint32_t a, uint32_t b) {
+  double sum = 0;
+  for (int c = 0; c < 3; ++c) {
+    const double d = double{mesh.positions[3 * size_t{a} + c]} - mesh.positions[3 * size_t{b} + c];
+    sum += d * d;
+  }
+  return std::sqrt(sum);
+}
+
+}  // namespace
+
+std::vector<std::vector<uint32_t>> BoundaryLoops(const Mesh& mesh) {
+  // Directed sides of faces, sorted by undirected edge; a side alone on its
+  // edge is a boundary side u -> v, and the hole runs v -> u.
+  struct Side {
+    uint64_t key;
+    uint32_t from, to, opposite;
+  };
+  std::vector<Side> sides;
+  sides.reserve(mesh.indices.size());
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    for (int k = 0; k < 3; ++k) {
+      sides.push_back({EdgeKey(t[k], t[(k + 1) % 3]), t[k], t[(k + 1) % 3], t[(k + 2) % 3]});
+    }
+  }
+  std::sort(sides.begin(), sides.end(),
+            [](const Side& a, const Side& b) { return a.key < b.key; });
+  constexpr uint32_t kNone = UINT32_MAX, kAmbiguous = UINT32_MAX - 1;
+  std::vector<uint32_t> hole_next(mesh.vertex_count(), kNone);  // v -> next vertex along the hole
+  std::vector<uint8_t> starts(mesh.vertex_count(), 0);
+  for (size_t i = 0; i < sides.size();) {
+    size_t j = i;
+    while (j < sides.size() && sides[j].key == sides[i].key) ++j;
+    if (j - i == 1) {
+      const Side& s = sides[i];
+      // Hole edge s.to -> s.from.
+      hole_next[s.to] = hole_next[s.to] == kNone ? s.from : kAmbiguous;
+      starts[s.from] = starts[s.from] < 2 ? starts[s.from] + 1 : 2;
+    }
+    i = j;
+  }
+  std::vector<std::vector<uint32_t>> loops;
+  std::vector<uint8_t> visited(mesh.vertex_count(), 0);
+  for (uint32_t v0 = 0; v0 < mesh.vertex_count(); ++v0) {
+    if (visited[v0] || hole_next[v0] == kNone) continue;
+    std::vector<uint32_t> loop;
+    bool ok = true;
+    uint32_t v = v0;
+    while (true) {
+      if (visited[v]) {
+        ok = ok && v == v0;
+        break;
+      }
+      visited[v] = 1;
+      loop.push_back(v);
+      if (hole_next[v] >= kAmbiguous || starts[v] != 1) ok = false;
+      if (hole_next[v] >= kAmbiguous) break;
+      v = hole_next[v];
+    }
+    if (ok && loop.size() >= 3) loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport* report) {
+  PB_RETURN_IF_ERROR(Validate(mesh));
+  if (options.max_edges < 0 || !(options.max_perimeter_m >= 0)) {
+    return Status::Invalid("hole filling: need max_edges >= 0 and max_perimeter_m >= 0");
+  }
+  HoleFillReport local;
+  HoleFillReport& r = report ? *report : local;
+  r = HoleFillReport();
+  const std::vector<std::vector<uint32_t>> loops = BoundaryLoops(mesh);
+  r.loops = loops.size();
+  if (options.max_edges == 0 && options.max_perimeter_m == 0) return Status::Ok();
+
+  // Only the loops small enough are filled; only edges between their
+  // vertices can clash with a patch, and only their sides need the face
+  // opposite, so the maps below hold those alone.
+  const auto perimeter_of = [&](const std::vector<uint32_t>& loop) {
+    double perimeter = 0;
+    for (size_t i = 0; i < loop.size(); ++i) {
+      perimeter += EdgeLength(mesh, loop[i], loop[(i + 1) % loop.size()]);
+    }
+    return perimeter;
+  };
+  const auto is_small = [&](const std::vector<uint32_t>& loop) {
+    return (options.max_edges > 0 && loop.size() <= static_cast<size_t>(options.max_edges)) ||
+           (options.max_perimeter_m > 0 && perimeter_of(loop) <= options.max_perimeter_m);
+  };
+  std::vector<uint8_t> on_small_loop(mesh.vertex_count(), 0);
+  std::vector<const std::vector<uint32_t>*> small_loops;
+  for (const std::vector<uint32_t>& loop : loops) {
+    if (!is_small(loop)) continue;
+    small_loops.push_back(&loop);
+    for (const uint32_t v : loop) on_small_loop[v] = 1;
+  }
+  std::unordered_set<uint64_t> edges;
+  std::unordered_map<uint64_t, uint32_t> opposite;  // directed side -> opposite corner
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = t[k], b = t[(k + 1) % 3];
+      if (!on_small_loop[a] || !on_small_loop[b]) continue;
+      edges.insert(EdgeKey(a, b));
+      opposite.emplace((static_cast<uint64_t>(a) << 32) | b, t[(k + 2) % 3]);
+    }
+  }
+  for (const std::vector<uint32_t>* small_loop : small_loops) {
+    const std::vector<uint32_t>& loop = *small_loop;
+    const size_t n = loop.size();
+    std::vector<double> points(3 * n), third(3 * n);
+    for (size_t i = 0; i < n; ++i) {
+      for (int c = 0; c < 3; ++c) points[3 * i + c] = mesh.positions[3 * size_t{loop[i]} + c];
+      // The face on hole edge loop[i] -> loop[i+1] runs it loop[i+1] -> loop[i].
+      const auto face = opposite.find((static_cast<uint64_t>(loop[(i + 1) % n]) << 32) | loop[i]);
+      const uint32_t o = face != opposite.end() ? face->second : loop[i];
+      for (int c = 0; c < 3; ++c) third[3 * i + c] = mesh.positions[3 * size_t{o} + c];
+    }
+    std::vector<std::array<uint32_t, 3>> patch = TriangulateHoleLoop(points, third);
+    bool valid = patch.size() == n - 2;
+    std::unordered_set<uint64_t> inner;
+    for (const auto& t : patch) {
+      for (int k = 0; k < 3 && valid; ++k) {
+        const uint32_t a = t[k], b = t[(k + 1) % 3];
+        if ((b == a + 1) || (a == n - 1 && b == 0)) continue;  // a loop edge, run forward
+        if ((a == b + 1) || (b == n - 1 && a == 0)) valid = false;  // a loop edge run backward
+        const uint64_t key = EdgeKey(loop[a], loop[b]);
+        if (edges.count(key)) valid = false;  // would make a non-manifold edge
+        inner.insert(key);
+      }
+    }
+    if (!valid) {
+      ++r.holes_rejected;
+      continue;
+    }
+    // The hole runs against the faces around it and the patch runs the
+    // hole forward, so the patch is wound like the faces around it.
+    for (const auto& t : patch) {
+      mesh.indices.insert(mesh.indices.end(), {loop[t[0]], loop[t[1]], loop[t[2]]});
+    }
+    edges.insert(inner.begin(), inner.end());
+    for (size_t i = 0; i < n; ++i) edges.insert(EdgeKey(loop[i], loop[(i + 1) % n]));
+    ++r.holes_filled;
+    r.faces_added += patch.size();
+  }
+  return Status::Ok();
+}
+
+}  // namespace pb
