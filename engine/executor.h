@@ -24,6 +24,10 @@ struct JobSpec {
   std::vector<std::string> plugins;
   int threads = 0;  // 0: all cores
   std::string log_path;  // stdout+stderr of the stage (child executors)
+  // What the stage is expected to need (learned from its last run, else
+  // declared): a cluster executor sizes its request from them.
+  uint64_t peak_estimate_bytes = 0;
+  double wall_estimate_s = 0;
 
   nlohmann::json ToJson() const;
 };
