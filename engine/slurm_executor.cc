@@ -350,7 +350,9 @@ JobResult SlurmExecutor::RunAttempt(const JobSpec& job, int attempt, bool* kille
   Expected<std::string> slurm_text = env->ReadFile(slurm_out);
   if (!job.log_path.empty()) {
     (void)env->CreateDirs(DirName(job.log_path));
-    std::string text = stage_text.ok() ? *stage_text : "";
+    // The retry's log follows the killed attempt's.
+    Expected<std::string> before = attempt > 1 ? env->ReadFile(job.log_path) : Expected<std::string>("");
+    std::string text = (before.ok() ? *before : "") + (stage_text.ok() ? *stage_text : "");
     text += "--- slurm job " + job_id + " (attempt " + std::to_string(attempt) + ", --mem=" +
             std::to_string(mem_mib) + "M), " + std::to_string(elapsed_s) + " s from submission to result\n";
     if (slurm_text.ok() && !slurm_text->empty()) text += *slurm_text;
