@@ -44,7 +44,7 @@ verify() {  # cache verify reports 0 problems
 # by path relative to it.
 digests() {
   (cd "$1" && find . -type f ! -name 'run.json' ! -name 'run.jsonl' ! -name 'trace.json' \
-     ! -path './logs/*' ! -path './report/*' ! -name 'campaign.json' -print0 |
+     ! -path '*/logs/*' ! -path './report/*' ! -name 'campaign.json' -print0 |
      sort -z | xargs -0 sha256sum)
 }
 # The state of a stage in a run record.
