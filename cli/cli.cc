@@ -188,6 +188,7 @@ int CmdCampaign(const CampaignFlags& f, Registry& registry, const CampaignReport
   std::printf("campaign %s: %zu runs into %s\n", campaign->name.c_str(), campaign->runs.size(),
               (options.out_dir.empty() ? "out/" + campaign->name : options.out_dir).c_str());
   const CampaignResult r = RunCampaign(*campaign, **cache, options, registry, report);
+  if (SlurmExecutor::Interrupted()) std::fprintf(stderr, "interrupted: submitted Slurm jobs were cancelled\n");
   if (!r.report.ok()) {
     std::fprintf(stderr, "writing the report: %s\n", r.report.message().c_str());
     return 2;

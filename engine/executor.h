@@ -1,6 +1,6 @@
 // Executors run one stage job and measure it. The scheduler only sees this
-// interface, so a cluster executor (Slurm: `sbatch --wait pointbake __stage
-// JOB.json` on a shared cache) can be added without touching it.
+// interface; the cluster executor (Slurm, on a shared cache) is in
+// slurm_executor.h.
 #pragma once
 
 #include <cstdint>

@@ -16,6 +16,8 @@
 #   scancel    a stage job cancelled with scancel fails with Slurm's state;
 #              --keep-going still runs the independent branch
 #   interrupt  Ctrl-C (SIGINT) on pointbake cancels its running jobs
+#   timeout    a stage over its --time fails with TIMEOUT (takes ~1.5 min)
+#   nodefail   a job on a node set DOWN fails with NODE_FAIL (--no-requeue)
 #   shared     two pointbake processes on one cache compute a shared stage once
 # After each case `pointbake cache verify` must report 0 problems.
 # Exit status 77 (skipped) when the cluster is not up.
@@ -195,6 +197,51 @@ EOF
   no_jobs_left || fail "Ctrl-C left jobs in the queue"
   grep -q "interrupted" run.txt || fail "no word of the interruption: $(cat run.txt)"
   [ -z "$(ls cache/tmp)" ] || fail "staging leftovers in the cache: $(ls cache/tmp)"
+  verify cache
+  ;;
+
+timeout)
+  cat > wf.yaml <<EOF
+name: slurm-timeout
+plugins: [$plugin]
+stages:
+  endless: { uses: test.source, with: { text: late, sleep_ms: 300000 } }
+EOF
+  # Slurm's smallest limit is a minute; it checks limits every ~30 s.
+  "$pb" run wf.yaml --executor slurm --time 1 --cache cache --out out > run.txt 2>&1 &&
+    fail "a stage over its time limit should fail"
+  err=$(stage_field out/run.json endless error)
+  echo "$err" | grep -q "TIMEOUT" || fail "error lacks Slurm's state: $err"
+  [ -z "$(ls cache/tmp)" ] || fail "staging leftovers in the cache: $(ls cache/tmp)"
+  verify cache
+  ;;
+
+nodefail)
+  cat > wf.yaml <<EOF
+name: slurm-nodefail
+plugins: [$plugin]
+stages:
+  doomed: { uses: test.source, with: { text: doomed, sleep_ms: 60000 } }
+EOF
+  # Without requeueing (Slurm's default requeues a batch job after a node
+  # failure), the stage fails with NODE_FAIL.
+  "$pb" run wf.yaml --executor slurm --sbatch-arg=--no-requeue --sbatch-arg=--job-name=pb:nodefail \
+    --cache cache --out out > run.txt 2>&1 &
+  pid=$!
+  wait_running pb:nodefail || { kill "$pid"; fail "no job started"; }
+  node=$(squeue -h -n pb:nodefail -o '%N')
+  scontrol update nodename="$node" state=down reason="pointbake node failure test"
+  wait "$pid"
+  rc=$?
+  # ReturnToService=2 may have brought it back already.
+  scontrol update nodename="$node" state=resume 2>/dev/null || true
+  [ "$rc" != 0 ] || fail "a stage on a failed node should fail"
+  err=$(stage_field out/run.json doomed error)
+  echo "$err" | grep -q "NODE_FAIL" || fail "error lacks Slurm's state: $err"
+  for _ in $(seq 100); do
+    scontrol show node "$node" | grep -q "State=IDLE" && break
+    sleep 0.2
+  done
   verify cache
   ;;
 
