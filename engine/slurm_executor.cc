@@ -297,7 +297,10 @@ JobResult SlurmExecutor::RunAttempt(const JobSpec& job, int attempt, bool* kille
       result.status = sub.status();
       return result;
     }
-    job_id = Trim(sub->output.substr(0, sub->output.find(';')));
+    // --parsable prints "id[;cluster]" last; a site's sbatch may warn before it.
+    std::string last = Trim(sub->output);
+    last = last.substr(last.rfind('\n') == std::string::npos ? 0 : last.rfind('\n') + 1);
+    job_id = Trim(last.substr(0, last.find(';')));
     if (sub->exit_status != 0 || job_id.empty() ||
         job_id.find_first_not_of("0123456789") != std::string::npos) {
       result.status = Status::Invalid("sbatch failed for stage '" + job.stage_id + "': " + Trim(sub->output));
@@ -305,8 +308,11 @@ JobResult SlurmExecutor::RunAttempt(const JobSpec& job, int attempt, bool* kille
     }
   }
 
-  // Wait: the result file appears when the job is done; Slurm is asked every
-  // second whether the job died without one.
+  // Wait: the result file appears when the job is done; Slurm is asked
+  // whether the job died without one. Both polls slow down as the job ages
+  // (a long stage need not be seen ending within 50 ms, and hundreds of jobs
+  // in flight must not flood slurmctld): the file every 50 ms growing to 1 s,
+  // Slurm every second growing to 30 s.
   SlurmJobState state;
   bool cancelled_by_us = false;
   auto last_query = Clock::now();
@@ -318,7 +324,8 @@ JobResult SlurmExecutor::RunAttempt(const JobSpec& job, int attempt, bool* kille
       cancelled_by_us = true;
     }
     const auto now = Clock::now();
-    if (!ended_at && now - last_query >= std::chrono::seconds(1)) {
+    const double age_s = std::chrono::duration<double>(now - submitted_at).count();
+    if (!ended_at && now - last_query >= std::chrono::duration<double>(std::min(30.0, 1.0 + age_s / 20))) {
       last_query = now;
       Expected<CommandResult> q = RunCommand({options_.scontrol, "show", "job", "-o", job_id});
       if (q.ok()) {
@@ -341,7 +348,7 @@ JobResult SlurmExecutor::RunAttempt(const JobSpec& job, int attempt, bool* kille
                         state.exit_code.compare(state.exit_code.size() - 2, 2, ":0") == 0;
     if (ended_at && (!exited || now - *ended_at > std::chrono::duration<double>(options_.result_grace_s)))
       break;
-    std::this_thread::sleep_for(std::chrono::duration<double>(options_.poll_s));
+    std::this_thread::sleep_for(std::chrono::duration<double>(std::min(1.0, options_.poll_s + age_s / 100)));
   }
   const double elapsed_s = std::chrono::duration<double>(Clock::now() - submitted_at).count();
 

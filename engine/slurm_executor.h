@@ -57,7 +57,7 @@ struct SlurmOptions {
   std::string sbatch = "sbatch";         // the commands, found in PATH
   std::string scontrol = "scontrol";
   std::string scancel = "scancel";
-  double poll_s = 0.05;  // how often the result file is looked for
+  double poll_s = 0.05;  // how often the result file is looked for at first
   // After Slurm reports a job ended, how long to wait for its result file to
   // show up (a shared file system's attribute cache may hide it for a while).
   double result_grace_s = 60;
