@@ -1,4 +1,5 @@
 #include "cli/cli.h"
+#include "cli/executor_config.h"
 
 #include <unistd.h>
 
@@ -19,6 +20,7 @@
 #include "engine/run_record.h"
 #include "engine/run_workflow.h"
 #include "engine/scheduler.h"
+#include "engine/slurm_executor.h"
 #include "engine/workflow.h"
 
 namespace pb {
@@ -39,6 +41,7 @@ struct RunFlags {
   int threads = 0;
   std::vector<std::string> force;  // --force STAGE
   std::vector<std::string> until;  // --until STAGE
+  ExecutorFlags executor;  // run and campaign only
 };
 
 constexpr const char* kCacheHelp =
@@ -193,7 +196,11 @@ int CmdRun(const RunFlags& f, Registry& registry, bool explain_only) {
   opts.sets = f.sets;
   opts.force.insert(f.force.begin(), f.force.end());
   opts.until = f.until;
+  Expected<std::unique_ptr<Executor>> executor = MakeExecutor(f.executor);
+  if (!executor.ok()) return Fail(executor.status());
+  opts.executor = executor->get();
   const WorkflowRunSummary r = RunWorkflowInto(*wf, **cache, opts, out_dir);
+  if (SlurmExecutor::Interrupted()) std::fprintf(stderr, "interrupted: submitted Slurm jobs were cancelled\n");
   if (!r.outputs.ok()) {
     std::fprintf(stderr, "writing outputs: %s\n", r.outputs.message().c_str());
     return 2;
@@ -277,9 +284,15 @@ int CmdCampaign(const CampaignFlags& f, Registry& registry, const CampaignReport
   options.run.keep_going = f.run.keep_going;
   options.run.threads_per_stage = f.run.threads;
   options.run.quiet = f.run.quiet;
+  Expected<std::unique_ptr<Executor>> executor = MakeExecutor(f.run.executor);
+  if (!executor.ok()) return Fail(executor.status());
+  options.run.executor = executor->get();
+  // On a cluster every run goes out at once; the scheduler there queues them.
+  if (*executor) options.parallel_runs = static_cast<int>(campaign->runs.size());
   std::printf("campaign %s: %zu runs into %s\n", campaign->name.c_str(), campaign->runs.size(),
               (options.out_dir.empty() ? "out/" + campaign->name : options.out_dir).c_str());
   const CampaignResult r = RunCampaign(*campaign, **cache, options, registry, report);
+  if (SlurmExecutor::Interrupted()) std::fprintf(stderr, "interrupted: submitted Slurm jobs were cancelled\n");
   if (!r.report.ok()) {
     std::fprintf(stderr, "writing the report: %s\n", r.report.message().c_str());
     return 2;
@@ -307,6 +320,7 @@ void AddCampaignOptions(CLI::App* cmd, CampaignFlags& f) {
       ->type_name("N");
   cmd->add_flag("--keep-going", f.run.keep_going, "After a failure, still run independent stages");
   cmd->add_flag("-q,--quiet", f.run.quiet, "Print failures and summaries only");
+  AddExecutorOptions(cmd, f.run.executor);
 }
 
 // A scene names data, units, spacing, viewpoints or parameters; anything else
@@ -393,6 +407,8 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
     std::fprintf(stderr, "internal error registering built-in stages: %s\n", e.c_str());
   // The hidden child-process entry point, kept out of CLI11 for speed.
   if (argc == 3 && std::string(argv[1]) == "__stage") return RunStageSubcommand(argv[2], registry);
+  // The same inside a Slurm job: runs __stage as a child and measures it.
+  if (argc == 3 && std::string(argv[1]) == "__job") return RunSlurmJobSubcommand(argv[2], registry);
   // `pointbake help [COMMAND...]` is `pointbake [COMMAND...] --help`.
   std::vector<char*> help_args;
   if (argc >= 2 && std::string(argv[1]) == "help") {
@@ -421,6 +437,7 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
   run->add_flag("-q,--quiet", run_flags.quiet, "Print failures and the summary only");
   run->add_flag("--in-process", run_flags.in_process,
                 "Run stages inside this process (debugging; no per-stage memory figures)");
+  AddExecutorOptions(run, run_flags.executor);
   CampaignFlags campaign_flags, demo_flags;
   campaign_flags.run.jobs = demo_flags.run.jobs = 2;
   CLI::App* campaign = app.add_subcommand("campaign", "Run a campaign (scenes x workflows) and write its report");

@@ -63,14 +63,18 @@ Digest KeyOf(const nlohmann::json& components) {
 FileLock& FileLock::operator=(FileLock&& o) noexcept {
   if (this != &o) {
     if (fd_ >= 0) ::close(fd_);
+    if (release_) release_();
     fd_ = o.fd_;
+    release_ = std::move(o.release_);
     o.fd_ = -1;
+    o.release_ = nullptr;
   }
   return *this;
 }
 
 FileLock::~FileLock() {
   if (fd_ >= 0) ::close(fd_);  // closing drops the flock
+  if (release_) release_();
 }
 
 Expected<std::unique_ptr<Cache>> Cache::Open(const std::string& dir, Env* env) {
@@ -105,10 +109,13 @@ std::string Cache::EntryPath(const Digest& key) const {
 }
 
 Expected<FileLock> Cache::Lock(const std::string& path, bool exclusive, bool wait,
-                               bool* would_block) {
+                               bool* would_block, std::function<void()> release) {
   const int fd = ::open(path.c_str(), O_RDWR | O_CREAT | O_CLOEXEC, 0644);
-  if (fd < 0) return Status::Errno(path, "open lock");
-  FileLock lock(fd);
+  if (fd < 0) {
+    if (release) release();
+    return Status::Errno(path, "open lock");
+  }
+  FileLock lock(fd, std::move(release));
   int op = (exclusive ? LOCK_EX : LOCK_SH) | (wait ? 0 : LOCK_NB);
   for (;;) {
     if (::flock(fd, op) == 0) break;
@@ -131,7 +138,23 @@ Expected<FileLock> Cache::Lock(const std::string& path, bool exclusive, bool wai
 Expected<FileLock> Cache::LockShared() { return Lock(dir_ + "/locks/cache.lock", false, true, nullptr); }
 Expected<FileLock> Cache::LockExclusive() { return Lock(dir_ + "/locks/cache.lock", true, true, nullptr); }
 Expected<FileLock> Cache::LockKey(const Digest& key, bool wait, bool* would_block) {
-  return Lock(dir_ + "/locks/" + key.Hex() + ".lock", true, wait, would_block);
+  const std::string hex = key.Hex();
+  {
+    std::unique_lock<std::mutex> g(held_mu_);
+    if (held_keys_.count(hex) && !wait) {
+      if (would_block) *would_block = true;
+      return FileLock();
+    }
+    held_cv_.wait(g, [&] { return !held_keys_.count(hex); });
+    held_keys_.insert(hex);
+  }
+  auto release = [this, hex] {
+    std::lock_guard<std::mutex> g(held_mu_);
+    held_keys_.erase(hex);
+    held_cv_.notify_all();
+  };
+  // Failing or not acquired, the FileLock inside Lock() ends the claim.
+  return Lock(dir_ + "/locks/" + hex + ".lock", true, wait, would_block, std::move(release));
 }
 
 Expected<Digest> Cache::FileDigest(const std::string& path) {

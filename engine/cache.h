@@ -13,7 +13,8 @@
 //                               size, mtime, ctime) so a 1 GB scan is hashed once;
 //                               files changed in the last 2 s are not memoized
 //   locks/                      flock() files; the kernel drops a lock when its
-//                               owner dies, so a killed run never blocks the next;
+//                               owner dies, so a killed run never blocks the next
+//                               (on a cluster's shared file system: docs/cluster.md);
 //                               gc removes key locks (it runs alone) and memos
 //                               in filehash/ unused for 30 days
 //   tmp/                        staging folders and temporary names; a name
@@ -29,8 +30,12 @@
 // Relocatable: nothing in the cache records an absolute path.
 #pragma once
 
+#include <condition_variable>
 #include <cstdint>
+#include <functional>
 #include <map>
+#include <mutex>
+#include <set>
 #include <memory>
 #include <nlohmann/json.hpp>
 #include <optional>
@@ -48,18 +53,23 @@ inline constexpr int kCacheFormatVersion = 1;
 // A cache key: XXH3-128 of the compact JSON of its components (see key.h).
 Digest KeyOf(const nlohmann::json& components);
 
-// An flock() held on a file until destruction.
+// An flock() held on a file until destruction; `release` (if any) runs
+// after the file is closed.
 class FileLock {
  public:
   FileLock() = default;
-  explicit FileLock(int fd) : fd_(fd) {}
-  FileLock(FileLock&& o) noexcept : fd_(o.fd_) { o.fd_ = -1; }
+  explicit FileLock(int fd, std::function<void()> release = {}) : fd_(fd), release_(std::move(release)) {}
+  FileLock(FileLock&& o) noexcept : fd_(o.fd_), release_(std::move(o.release_)) {
+    o.fd_ = -1;
+    o.release_ = nullptr;
+  }
   FileLock& operator=(FileLock&& o) noexcept;
   ~FileLock();
   bool held() const { return fd_ >= 0; }
 
  private:
   int fd_ = -1;
+  std::function<void()> release_;
 };
 
 struct CacheEntry {
@@ -143,11 +153,19 @@ class Cache {
   Cache(std::string dir, Env* env) : dir_(std::move(dir)), env_(env) {}
   std::string EntryPath(const Digest& key) const;
   Expected<CacheEntry> ReadEntry(const std::string& path);
-  Expected<FileLock> Lock(const std::string& path, bool exclusive, bool wait, bool* would_block);
+  Expected<FileLock> Lock(const std::string& path, bool exclusive, bool wait, bool* would_block,
+                          std::function<void()> release = {});
   Status StoreObject(const std::string& staged_path, const Digest& digest);
 
   std::string dir_;
   Env* env_;
+  // Key locks held by this process. flock() already excludes threads (each
+  // open is its own lock), but NFS emulates flock with POSIX locks, which a
+  // process shares among its threads: a campaign's parallel runs would then
+  // compute a shared stage twice.
+  std::mutex held_mu_;
+  std::condition_variable held_cv_;
+  std::set<std::string> held_keys_;
 };
 
 }  // namespace pb

@@ -2,8 +2,12 @@
 
 #include <gtest/gtest.h>
 #include <fcntl.h>
+#include <signal.h>
 #include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <thread>
@@ -198,6 +202,68 @@ TEST(CacheTest, KeyLockIsExclusiveAndReleasedOnClose) {
   { FileLock drop = std::move(first).value(); }
   auto third = cache->LockKey(key, false, &blocked);
   EXPECT_FALSE(blocked);
+}
+
+// What a cache shared by several machines needs from its file system
+// (docs/cluster.md): a key lock held by another process excludes, and is
+// released when that process dies. PB_CACHE_FS_TEST_DIR runs this on the
+// file system to check (e.g. an NFS mount), else in a temporary folder.
+TEST(CacheFsTest, KeyLockExcludesOtherProcessesAndDiesWithItsOwner) {
+  TempDir tmp;
+  const char* on = std::getenv("PB_CACHE_FS_TEST_DIR");
+  const std::string dir = (on && *on ? std::string(on) : tmp.path()) + "/fs-test-cache." + std::to_string(::getpid());
+  auto cache = Cache::Open(dir).value();
+  const Digest key = HashBytes("shared stage");
+  int ready[2];
+  ASSERT_EQ(::pipe(ready), 0);
+  const pid_t child = ::fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    auto other = Cache::Open(dir);
+    if (!other.ok()) ::_exit(2);
+    auto lock = (*other)->LockKey(key, true);
+    if (!lock.ok() || !lock->held()) ::_exit(3);
+    (void)!::write(ready[1], "L", 1);
+    for (;;) ::pause();  // holds the lock until killed
+  }
+  char c = 0;
+  ASSERT_EQ(::read(ready[0], &c, 1), 1);
+  bool blocked = false;
+  auto mine = cache->LockKey(key, false, &blocked);
+  ASSERT_TRUE(mine.ok());
+  EXPECT_TRUE(blocked) << "another process holds the key lock";
+  EXPECT_FALSE(mine->held());
+  ::kill(child, SIGKILL);
+  ::waitpid(child, nullptr, 0);
+  // The owner died: a blocking lock returns (the test would hang otherwise).
+  auto after = cache->LockKey(key, true, &blocked);
+  ASSERT_TRUE(after.ok());
+  EXPECT_TRUE(after->held());
+  EXPECT_FALSE(blocked);
+  ::close(ready[0]);
+  ::close(ready[1]);
+  std::filesystem::remove_all(dir);
+}
+
+// Threads of one process exclude each other on a key too: a campaign's
+// parallel runs share one Cache, and on NFS flock() is a POSIX lock that the
+// process's threads share, so the cache keeps its own claims.
+TEST(CacheFsTest, KeyLockExcludesThreadsOfOneProcessAndWakesTheWaiter) {
+  TempDir dir;
+  auto cache = Cache::Open(dir.path() + "/c").value();
+  const Digest key = HashBytes("shared stage");
+  auto first = cache->LockKey(key, true);
+  ASSERT_TRUE(first.ok());
+  std::atomic<bool> acquired{false};
+  std::thread waiter([&] {
+    auto second = cache->LockKey(key, true);
+    acquired = second.ok() && second->held();
+  });
+  std::this_thread::sleep_for(std::chrono::milliseconds(100));
+  EXPECT_FALSE(acquired.load());
+  { FileLock drop = std::move(first).value(); }
+  waiter.join();
+  EXPECT_TRUE(acquired.load());
 }
 
 }  // namespace

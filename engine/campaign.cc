@@ -5,6 +5,8 @@
 #include <chrono>
 #include <cstdio>
 #include <fstream>
+#include <atomic>
+#include <mutex>
 #include <thread>
 
 #include "base/env.h"
@@ -200,11 +202,15 @@ CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const Campaig
   const auto t0 = std::chrono::steady_clock::now();
   result.report = Env::Default()->CreateDirs(result.out_dir);
   if (!result.report.ok()) return result;
-  json runs = json::array();
-  for (size_t i = 0; i < campaign.runs.size(); ++i) {
+  std::vector<json> rows(campaign.runs.size());
+  std::mutex print_mu;
+  auto run_one = [&](size_t i) {
     const CampaignRun& run = campaign.runs[i];
-    std::printf("[%zu/%zu] %s\n", i + 1, campaign.runs.size(), run.name.c_str());
-    std::fflush(stdout);
+    {
+      std::lock_guard<std::mutex> g(print_mu);
+      std::printf("[%zu/%zu] %s\n", i + 1, campaign.runs.size(), run.name.c_str());
+      std::fflush(stdout);
+    }
     json row = {{"name", run.name},         {"scene", run.scene},
                 {"scene_file", run.scene_file}, {"workflow", run.workflow},
                 {"workflow_file", run.workflow_file}, {"variant", run.variant},
@@ -213,28 +219,50 @@ CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const Campaig
     opts.scene_file = run.scene_file;
     opts.sets = run.sets;
     // Loaded again: a file may have changed since the campaign was checked.
-    Expected<Workflow> wf = LoadWorkflow(run.workflow_file, opts, registry);
+    Expected<Workflow> wf = [&] {
+      std::lock_guard<std::mutex> g(print_mu);  // plugins load into the shared registry
+      return LoadWorkflow(run.workflow_file, opts, registry);
+    }();
     if (!wf.ok()) {
       row["status"] = "failed";
       row["error"] = wf.status().message();
       std::fprintf(stderr, "%s\n", wf.status().message().c_str());
-      ++result.failed_runs;
-      runs.push_back(row);
-      continue;
+      rows[i] = row;
+      return;
     }
     WorkflowRunOptions run_options = options.run;
     run_options.sets = run.sets;
     const WorkflowRunSummary s =
         RunWorkflowInto(*wf, cache, run_options, JoinPath(result.out_dir, run.dir));
-    std::printf("  %s: %s in %s\n", run.name.c_str(), SummaryCounts(s).c_str(),
-                FormatSeconds(s.total_s).c_str());
+    {
+      std::lock_guard<std::mutex> g(print_mu);
+      std::printf("  %s: %s in %s\n", run.name.c_str(), SummaryCounts(s).c_str(),
+                  FormatSeconds(s.total_s).c_str());
+      std::fflush(stdout);
+    }
     row["status"] = s.ok() ? "ok" : "failed";
     if (s.warnings > 0) row["warnings"] = s.warnings;
     if (!s.outputs.ok()) row["error"] = s.outputs.message();
     else if (!s.ok()) row["error"] = std::to_string(s.failed) + " stage(s) failed, " +
                                      std::to_string(s.skipped) + " not run; see " + run.dir + "/run.json";
-    if (!s.ok()) ++result.failed_runs;
-    runs.push_back(row);
+    rows[i] = row;
+  };
+  // Runs in parallel (a cluster): each run's scheduler submits its ready
+  // stages; a stage two runs share is computed once, the other run waits on
+  // its key lock and reuses the entry.
+  const size_t parallel = std::max<size_t>(1, std::min<size_t>(options.parallel_runs, campaign.runs.size()));
+  std::atomic<size_t> next{0};
+  auto worker = [&] {
+    for (size_t i; (i = next.fetch_add(1)) < campaign.runs.size();) run_one(i);
+  };
+  std::vector<std::thread> workers;
+  for (size_t w = 1; w < parallel; ++w) workers.emplace_back(worker);
+  worker();
+  for (std::thread& t : workers) t.join();
+  json runs = json::array();
+  for (json& row : rows) {
+    if (row.value("status", "failed") != "ok") ++result.failed_runs;
+    runs.push_back(std::move(row));
   }
   const double total_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const long pages = ::sysconf(_SC_PHYS_PAGES), page_size = ::sysconf(_SC_PAGE_SIZE);

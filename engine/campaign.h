@@ -64,6 +64,7 @@ using CampaignReportWriter =
 struct CampaignOptions {
   WorkflowRunOptions run;  // per run: jobs, memory budget, threads, ...
   std::string out_dir;     // default out/<campaign name>
+  int parallel_runs = 1;   // runs at once (a cluster executor: many)
 };
 
 struct CampaignResult {
@@ -73,7 +74,7 @@ struct CampaignResult {
   Status report;           // writing the manifest and the report
 };
 
-// Runs every run in order against `cache` (held with a shared lock by the
+// Runs every run (`parallel_runs` at a time, in order) against `cache` (held with a shared lock by the
 // caller), then writes <out>/campaign.json and the report (when `report` is
 // set). A failed run does not stop the others; its row says "failed".
 CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const CampaignOptions& options,

@@ -1,6 +1,6 @@
 // Executors run one stage job and measure it. The scheduler only sees this
-// interface, so a cluster executor (Slurm: `sbatch --wait pointbake __stage
-// JOB.json` on a shared cache) can be added without touching it.
+// interface; the cluster executor (Slurm, on a shared cache) is in
+// slurm_executor.h.
 #pragma once
 
 #include <cstdint>
@@ -24,6 +24,10 @@ struct JobSpec {
   std::vector<std::string> plugins;
   int threads = 0;  // 0: all cores
   std::string log_path;  // stdout+stderr of the stage (child executors)
+  // What the stage is expected to need (learned from its last run, else
+  // declared): a cluster executor sizes its request from them.
+  uint64_t peak_estimate_bytes = 0;
+  double wall_estimate_s = 0;
 
   nlohmann::json ToJson() const;
 };

@@ -45,7 +45,9 @@ WorkflowRunSummary RunWorkflowInto(const Workflow& wf, Cache& cache, const Workf
   opts.log_dir = ResolvePath(".", out_dir + "/logs");
   LocalProcessExecutor local(SelfExe());
   InProcessExecutor in_process;
-  Executor& executor = o.in_process ? static_cast<Executor&>(in_process) : local;
+  Executor& executor = o.executor     ? *o.executor
+                       : o.in_process ? static_cast<Executor&>(in_process)
+                                      : local;
   ProgressPrinter printer(::isatty(2) != 0, o.quiet);
   Scheduler scheduler(wf, cache, executor, &printer);
   const std::string started = UtcTimestamp();

@@ -10,6 +10,7 @@
 
 #include "base/status.h"
 #include "engine/cache.h"
+#include "engine/executor.h"
 #include "engine/workflow.h"
 
 namespace pb {
@@ -21,6 +22,7 @@ struct WorkflowRunOptions {
   int threads_per_stage = 0;      // 0: all cores
   bool quiet = false;             // progress: failures and the summary only
   bool in_process = false;        // debugging: no child processes
+  Executor* executor = nullptr;   // null: child processes on this machine
   std::vector<std::string> sets;  // recorded in run.json's options
   std::set<std::string> force;    // --force: run these stages whatever the cache holds
   std::vector<std::string> until;  // --until (recorded; the workflow is already cut)

@@ -56,6 +56,11 @@ void Scheduler::RunOne(StageOutcome& out, const std::map<std::string, StageOutco
   job.params = node.params;
   job.plugins = wf_.plugins;
   job.threads = options.threads_per_stage;
+  job.peak_estimate_bytes = node.type->declared_peak_bytes;
+  if (auto h = cache_.LoadHistory(wf_.name, out.id)) {
+    job.peak_estimate_bytes = h->value("peak_rss_bytes", job.peak_estimate_bytes);
+    job.wall_estimate_s = h->value("wall_s", 0.0);
+  }
   for (const auto& [port, in] : node.inputs) {
     const auto& upstream = done.at(in.from_stage).outputs;
     if (!upstream.count(in.from_port)) {

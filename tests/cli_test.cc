@@ -806,6 +806,33 @@ stages:
   const RunResult nofile = pbtest::Run({"campaign", "-n"});
   EXPECT_EQ(nofile.exit_code, 2) << nofile.Describe();
   EXPECT_NE(nofile.err.find("a campaign FILE is required"), std::string::npos) << nofile.Describe();
+
+// The executor from a user config file: a bad value is reported at its file,
+// line and column before anything runs; an executor that cannot reach Slurm
+// says which command it could not run. (Runs through Slurm: tests/slurm/.)
+TEST_F(Cli, UserConfigChoosesTheExecutorAndReportsItsMistakes) {
+  const std::string wf = WriteWorkflow(P("proj/chain.yaml"), kChain);
+  WriteFile(P("bad.yaml"), "executor: slurm\nslurm:\n  partiton: batch\n");
+  RunResult r = RunWf(wf, "out", {"--config", P("bad.yaml")});
+  EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_NE(r.err.find("bad.yaml:3:3: unknown key 'partiton'"), std::string::npos) << r.Describe();
+  EXPECT_FALSE(std::filesystem::exists(P("out/run.json")));
+
+  WriteFile(P("bad_mem.yaml"), "slurm:\n  default_mem: lots\n");
+  r = RunWf(wf, "out", {"--config", P("bad_mem.yaml")});
+  EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_NE(r.err.find("bad_mem.yaml:2:16:"), std::string::npos) << r.Describe();
+
+  // The config asks for Slurm; with no sbatch in PATH the stage fails saying so.
+  WriteFile(P("slurm.yaml"), "executor: slurm\n");
+  r = pbtest::Run({"run", wf, "--cache", P("cache"), "--out", P("out"), "--config", P("slurm.yaml")},
+                  {{"PATH", P("empty-path")}});
+  EXPECT_EQ(r.exit_code, 1) << r.Describe();
+  EXPECT_NE(RunJson().dump().find("cannot run 'sbatch'"), std::string::npos) << RunJson().dump(1);
+
+  // The command line wins over the config file.
+  r = RunWf(wf, "out", {"--config", P("slurm.yaml"), "--executor", "local"});
+  EXPECT_EQ(r.exit_code, 0) << r.Describe();
 }
 
 }  // namespace

@@ -93,9 +93,11 @@ extern "C" void pointbake_register_stages(pb::StageRegistry* registry) {
   registry->Register(pb::StageType{
       .id = "test.alloc",
       .version = 1,
-      .summary = "Allocates and touches `mib` MiB, then writes that figure",
+      .summary = "Allocates and touches `mib` MiB, holds it `hold_ms`, then writes that figure",
       .params_schema = R"({"type":"object","additionalProperties":false,
-        "properties":{"mib":{"type":"integer","minimum":0,"default":64}}})",
+        "properties":{"mib":{"type":"integer","minimum":0,"default":64},
+          "hold_ms":{"type":"integer","minimum":0,"default":0,
+            "description":"keep the memory this long, so that a memory poll sees it"}}})",
       .outputs = {{"out", "table", ""}},
       .run = [](pb::StageContext& ctx) {
         const size_t bytes = ctx.params()["mib"].get<size_t>() << 20;
@@ -104,6 +106,7 @@ extern "C" void pointbake_register_stages(pb::StageRegistry* registry) {
         for (size_t i = 0; i < bytes; i += static_cast<size_t>(page)) block[i] = static_cast<char>(i);
         volatile char sink = bytes ? block[bytes / 2] : 0;
         (void)sink;
+        std::this_thread::sleep_for(std::chrono::milliseconds(ctx.params()["hold_ms"].get<int>()));
         ctx.counter("bytes", static_cast<double>(bytes));
         return WriteText(ctx, "out", std::to_string(bytes));
       }});
