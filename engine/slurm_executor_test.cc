@@ -92,6 +92,7 @@ TEST(JobResultJson, RoundTripKeepsOutputsAndFigures) {
   r.write_bytes = 4242;
   r.counters = {{"points", 1000}};
   r.phases = nlohmann::json::array({{{"name", "io"}, {"start_s", 0.0}, {"dur_s", 0.5}}});
+  r.warnings = {"3 scans merged", "12 invalid points dropped"};
   r.outputs["points"] = Cache::StagedOutput{"points", {{"points.ply", "/c/tmp/x/points/points.ply"}}, {{"n", 3}}};
   JobResult back = JobResultFromJson(nlohmann::json::parse(JobResultToJson(r).dump()));
   EXPECT_TRUE(back.status.ok());
@@ -103,6 +104,7 @@ TEST(JobResultJson, RoundTripKeepsOutputsAndFigures) {
   EXPECT_EQ(back.write_bytes, 4242u);
   EXPECT_EQ(back.counters, r.counters);
   EXPECT_EQ(back.phases, r.phases);
+  EXPECT_EQ(back.warnings, r.warnings);
   ASSERT_EQ(back.outputs.count("points"), 1u);
   EXPECT_EQ(back.outputs["points"].files.at("points.ply"), "/c/tmp/x/points/points.ply");
   EXPECT_EQ(back.outputs["points"].meta, r.outputs["points"].meta);
