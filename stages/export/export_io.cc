@@ -1,4 +1,5 @@
 #include "stages/builtin.h"
+#include "stages/export/export_io.h"
 
 #include <algorithm>
 #include <cassert>

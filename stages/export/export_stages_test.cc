@@ -11,6 +11,7 @@
 #include <string>
 
 #include "stages/builtin.h"
+#include "stages/export/export_io.h"
 #include "stages/geometry/io/gltf.h"
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/io/obj.h"
