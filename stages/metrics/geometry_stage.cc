@@ -55,8 +55,8 @@ std::vector<TableValue> Row(const char* direction, const DistanceStats& s, const
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const int64_t samples, IntegerParam(ctx, kId, "samples", 200000, 1));
-  PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", 1, 0));
+  PB_ASSIGN_OR_RETURN(const int64_t samples, IntegerParam(ctx, kId, "samples", {1}));
+  PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", {0}));
   Mesh mesh, truth;
   std::optional<SynthScene> scene;
   {

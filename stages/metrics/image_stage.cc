@@ -65,7 +65,7 @@ Status MatchFrames(const FrameSet& test, const FrameSet& reference) {
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const double ppd, NumberParam(ctx, kId, "ppd", FlipDefaultPpd()));
+  PB_ASSIGN_OR_RETURN(const double ppd, NumberParam(ctx, kId, "ppd"));
   if (!(ppd > 0)) return Status::Invalid(std::string(kId) + ": ppd must be positive");
   FrameSet test, reference;
   {
