@@ -58,8 +58,10 @@ Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_v
   const std::string extension = LowerExtension(InputFileName(ctx, port, path));
   if (extension == ".png") {
     auto header = ReadImageSize(path);
+    const bool png = header.ok() ? header->png_bit_depth > 0
+                                 : header.status().code() != Status::Code::kUnsupported;
+    if (!png) return Status::Corrupt(context + ": " + path + " is not a PNG file");
     if (!header.ok()) return header.status().WithContext(context);
-    if (header->png_bit_depth == 0) return Status::Corrupt(context + ": " + path + " is not a PNG file");
     if (header->png_bit_depth == 8) {  // as baked, byte for byte
       auto bytes = Env::Default()->ReadFile(path);
       if (!bytes.ok()) return bytes.status().WithContext(context);
