@@ -173,7 +173,7 @@ class FpsStageTest : public StageTest {
  protected:
   void SetUp() override {
     StageTest::SetUp();
-    RegisterMetricsStages(registry_);
+    RegisterBuiltinStages(registry_);
   }
   // Two triangles (a unit quad).
   std::string QuadMesh() {

@@ -2,7 +2,6 @@
 #include "stages/export/export_io.h"
 
 #include <algorithm>
-#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <string>
@@ -13,13 +12,6 @@
 #include "stages/params.h"
 
 namespace pb {
-
-void RegisterExportStages(StageRegistry& registry) {
-  for (StageType type : {GltfExportStage(), ObjExportStage()}) {
-    [[maybe_unused]] const Status status = registry.Register(std::move(type));
-    assert(status.ok());
-  }
-}
 
 namespace {
 

@@ -14,11 +14,6 @@
 
 namespace pb {
 
-void RegisterExportStages(StageRegistry& registry);
-
-StageType GltfExportStage();
-StageType ObjExportStage();
-
 // Shared by the export stages: the PNG bytes for texture input `port`, empty
 // when the port is not connected. An 8-bit PNG is passed through byte for
 // byte; a 16-bit PNG is reduced to 8 bits; a float EXR is encoded as 8-bit

@@ -103,7 +103,7 @@ class ImageStageTest : public StageTest {
  protected:
   void SetUp() override {
     StageTest::SetUp();
-    RegisterMetricsStages(registry_);
+    RegisterBuiltinStages(registry_);
   }
   // Writes `set` into dir_/name and connects it to `port`.
   void AddFrames(FakeContext& ctx, const std::string& port, const std::string& name, const FrameSet& set) {

@@ -17,8 +17,7 @@ class MeshMetricsStagesTest : public StageTest {
  protected:
   void SetUp() override {
     StageTest::SetUp();
-    ASSERT_TRUE(registry_.Register(CleanStage()).ok());
-    RegisterMetricsStages(registry_);
+    RegisterBuiltinStages(registry_);
   }
   // The synth truth artifact: mesh.ply + scene.json in one directory.
   ArtifactView Truth(double cell_m, const std::string& name) {

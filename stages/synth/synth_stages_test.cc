@@ -22,7 +22,7 @@ class SynthStagesTest : public StageTest {
  protected:
   void SetUp() override {
     StageTest::SetUp();
-    RegisterSynthStages(registry_);
+    RegisterBuiltinStages(registry_);
   }
 };
 
