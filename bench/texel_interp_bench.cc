@@ -41,8 +41,11 @@ double ThreadCpuSeconds() {
   return double(ts.tv_sec) + 1e-9 * double(ts.tv_nsec);
 }
 
-// kDistinct triangles of 45..75 texels^2, one per 16 x 16 cell of a 512^2
-// atlas, with kPointsPerFace random points (color, unit normal) inside each.
+// kDistinct triangles, one per 16 x 16 cell of a 512^2 atlas, with
+// kPointsPerFace random points (color, unit normal) inside each. Alone in
+// their cells, the faces own all their edge texels (in a mesh, neighbours
+// share them), so areas of 26..44 texels^2 give the ~50 texels a face owns
+// in the paper-size bake.
 std::vector<Face> MakeFaces() {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> u(0, 1), signed_unit(-1, 1);
@@ -60,7 +63,7 @@ std::vector<Face> MakeFaces() {
     const auto& c = face.corners;
     const double area = 0.5 * std::abs((c[1].s - c[0].s) * (c[2].t - c[0].t) -
                                        (c[2].s - c[0].s) * (c[1].t - c[0].t));
-    if (area < 45 || area > 75) continue;
+    if (area < 26 || area > 44) continue;
     const uint32_t first = uint32_t(mesh.vertex_count());
     for (const TexelSample& corner : c) {
       mesh.positions.insert(mesh.positions.end(), {corner.s, corner.t, 0});
