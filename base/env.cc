@@ -63,19 +63,85 @@ std::string TempNameFor(const std::string& path) {
   return path + ".tmp." + std::to_string(::getpid()) + "." + std::to_string(counter++);
 }
 
-Status Env::WriteFileAtomic(const std::string& path, std::string_view contents) {
-  const std::string tmp = TempNameFor(path);
-  Fd fd(::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644));
-  if (fd.get() < 0) return Status::Errno(tmp, "open for writing");
-  Status st = WriteAll(fd.get(), tmp, contents);
-  if (st.ok() && ::fsync(fd.get()) != 0) st = Status::Errno(tmp, "fsync");
-  ::close(fd.release());
-  if (st.ok() && ::rename(tmp.c_str(), path.c_str()) != 0) st = Status::Errno(path, "rename");
-  if (!st.ok()) {
-    ::unlink(tmp.c_str());
-    return st;
+namespace {
+
+// The real AtomicFile: an open temporary beside the target.
+class PosixAtomicFile : public AtomicFile {
+ public:
+  PosixAtomicFile(std::string path, std::string temp, int fd)
+      : AtomicFile(std::move(path)), temp_(std::move(temp)), fd_(fd) {}
+  ~PosixAtomicFile() override {
+    if (!committed_) ::unlink(temp_.c_str());
   }
-  SyncDirOf(path);
+
+  Status Append(std::string_view bytes) override {
+    if (fd_.get() < 0) return Abandoned();
+    return Check(WriteAll(fd_.get(), temp_, bytes));
+  }
+  Status Sync() override {
+    if (fd_.get() < 0) return Abandoned();
+    if (synced_) return Status::Ok();
+    if (::fsync(fd_.get()) != 0) return Check(Status::Errno(temp_, "fsync"));
+    synced_ = true;
+    return Status::Ok();
+  }
+  Status Commit() override {
+    PB_RETURN_IF_ERROR(Sync());
+    const int fd = fd_.release();
+    if (::close(fd) != 0) return Status::Errno(temp_, "close");
+    if (::rename(temp_.c_str(), path().c_str()) != 0) return Status::Errno(path(), "rename");
+    committed_ = true;
+    SyncDirOf(path());
+    return Status::Ok();
+  }
+
+ private:
+  Status Abandoned() const {
+    return Status::Internal(path() + ": write after a failed or finished durable write");
+  }
+  // A failed write abandons the file: nothing after it may publish half.
+  Status Check(Status status) {
+    if (!status.ok()) ::close(fd_.release());
+    synced_ = false;
+    return status;
+  }
+
+  std::string temp_;
+  Fd fd_;
+  bool synced_ = false;
+  bool committed_ = false;
+};
+
+Expected<std::unique_ptr<AtomicFile>> OpenAtomicFile(const std::string& path) {
+  std::string temp = TempNameFor(path);
+  const int fd = ::open(temp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  if (fd < 0) return Status::Errno(temp, "open for writing");
+  return std::unique_ptr<AtomicFile>(new PosixAtomicFile(path, std::move(temp), fd));
+}
+
+}  // namespace
+
+Expected<std::unique_ptr<AtomicFile>> Env::NewAtomicFile(const std::string& path) {
+  return OpenAtomicFile(path);
+}
+
+// The real file, not NewAtomicFile: a fake Env that overrides both counts
+// one durable write once.
+Status Env::WriteFileAtomic(const std::string& path, std::string_view contents) {
+  PB_ASSIGN_OR_RETURN(std::unique_ptr<AtomicFile> file, OpenAtomicFile(path));
+  PB_RETURN_IF_ERROR(file->Append(contents));
+  return file->Commit();
+}
+
+Status WriteFilesAtomic(Env* env, const std::vector<FileContents>& files) {
+  std::vector<std::unique_ptr<AtomicFile>> pending;
+  for (const FileContents& contents : files) {
+    PB_ASSIGN_OR_RETURN(std::unique_ptr<AtomicFile> file, env->NewAtomicFile(contents.path));
+    PB_RETURN_IF_ERROR(file->Append(contents.bytes));
+    PB_RETURN_IF_ERROR(file->Sync());
+    pending.push_back(std::move(file));
+  }
+  for (std::unique_ptr<AtomicFile>& file : pending) PB_RETURN_IF_ERROR(file->Commit());
   return Status::Ok();
 }
 

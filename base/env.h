@@ -9,6 +9,7 @@
 #include <sys/types.h>
 
 #include <cstdint>
+#include <memory>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -26,6 +27,32 @@ struct FileInfo {
   bool is_directory = false;
 };
 
+// A file written by streaming and published atomically, for files too big to
+// build in memory first (a 10^7-point PLY). Bytes go to a temporary name
+// beside path() (TempNameFor); Commit() fsyncs it, renames it over path() and
+// syncs the folder. Destroyed without a successful Commit (an error on the
+// way, an early return), it removes the temporary and path() stays as it
+// was. Errors name the file and the call that failed.
+class AtomicFile {
+ public:
+  virtual ~AtomicFile() = default;
+  virtual Status Append(std::string_view bytes) = 0;
+  // Flushes the bytes written so far to the disk (fsync of the temporary).
+  // Commit does it too; a set of files that must appear together (OBJ + MTL +
+  // textures) syncs them all before renaming any.
+  virtual Status Sync() = 0;
+  // Sync, rename over path(), sync the folder. Once only; after a failure the
+  // file is abandoned (the temporary is removed on destruction).
+  virtual Status Commit() = 0;
+  const std::string& path() const { return path_; }
+
+ protected:
+  explicit AtomicFile(std::string path) : path_(std::move(path)) {}
+
+ private:
+  std::string path_;
+};
+
 class Env {
  public:
   virtual ~Env() = default;
@@ -33,6 +60,8 @@ class Env {
   // Writes `contents` to `path` atomically: a sibling temporary file is
   // written, fsynced and renamed over `path`. On failure `path` is untouched.
   virtual Status WriteFileAtomic(const std::string& path, std::string_view contents);
+  // Opens the temporary of a streamed durable write (see AtomicFile).
+  virtual Expected<std::unique_ptr<AtomicFile>> NewAtomicFile(const std::string& path);
   // Copies `from` to `to` atomically (temporary name + rename); tries a
   // reflink, then copy_file_range.
   virtual Status CopyFileAtomic(const std::string& from, const std::string& to);
@@ -52,6 +81,17 @@ class Env {
   // The process-wide real file system.
   static Env* Default();
 };
+
+// Writes several files as one durable set: every file is written to its
+// temporary and synced before any is renamed, then they are renamed in the
+// order given (put the file readers open first, an index or the .obj, last).
+// A failed write (full disk, I/O error) leaves every earlier file as it was;
+// only a failed rename leaves the files before it published.
+struct FileContents {
+  std::string path;
+  std::string_view bytes;
+};
+Status WriteFilesAtomic(Env* env, const std::vector<FileContents>& files);
 
 // A temporary name beside `path`, unique per process and call:
 // "<path>.tmp.<pid>.<counter>". Cache garbage collection recognizes the

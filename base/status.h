@@ -16,7 +16,7 @@ namespace pb {
 
 class Status {
  public:
-  enum class Code { kOk, kInvalid, kNotFound, kIo, kCorrupt, kUnsupported, kCancelled, kInternal };
+  enum class Code { kOk, kInvalid, kNotFound, kIo, kCorrupt, kUnsupported, kInternal };
 
   Status() = default;
   static Status Ok() { return Status(); }
@@ -25,7 +25,6 @@ class Status {
   static Status Io(std::string msg) { return Status(Code::kIo, std::move(msg)); }
   static Status Corrupt(std::string msg) { return Status(Code::kCorrupt, std::move(msg)); }
   static Status Unsupported(std::string msg) { return Status(Code::kUnsupported, std::move(msg)); }
-  static Status Cancelled(std::string msg) { return Status(Code::kCancelled, std::move(msg)); }
   static Status Internal(std::string msg) { return Status(Code::kInternal, std::move(msg)); }
   // Io error from errno, e.g. Errno("cache/objects/ab/cd", "rename") ->
   // "cache/objects/ab/cd: rename: No space left on device".

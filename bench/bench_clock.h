@@ -1,9 +1,13 @@
-// Wall and CPU clocks shared by the benchmark programs in bench/.
+// Wall and CPU clocks and memory gauges shared by the benchmark programs in
+// bench/.
 #pragma once
 
 #include <sys/resource.h>
 
 #include <chrono>
+#include <cstdlib>
+#include <fstream>
+#include <string>
 
 namespace pb::bench {
 
@@ -22,5 +26,17 @@ inline double CpuSeconds() {
   return double(usage.ru_utime.tv_sec + usage.ru_stime.tv_sec) +
          1e-6 * double(usage.ru_utime.tv_usec + usage.ru_stime.tv_usec);
 }
+
+// A field of /proc/self/status ("VmRSS:", "VmHWM:") in bytes; 0 if absent.
+inline double StatusBytes(const char* field) {
+  std::ifstream in("/proc/self/status");
+  std::string line;
+  while (std::getline(in, line))
+    if (line.rfind(field, 0) == 0) return std::atof(line.c_str() + std::string(field).size()) * 1024;
+  return 0;
+}
+
+// Resets the peak RSS (VmHWM) to the current RSS (Linux >= 4.0).
+inline void ResetPeakRss() { std::ofstream("/proc/self/clear_refs") << "5"; }
 
 }  // namespace pb::bench

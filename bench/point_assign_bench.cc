@@ -37,14 +37,7 @@ using pb::bench::Clock;
 using pb::bench::CpuSeconds;
 using pb::bench::Seconds;
 
-// VmRSS or VmHWM of this process, bytes.
-double StatusBytes(const char* field) {
-  std::ifstream in("/proc/self/status");
-  std::string line;
-  while (std::getline(in, line))
-    if (line.rfind(field, 0) == 0) return std::atof(line.c_str() + std::string(field).size()) * 1024;
-  return 0;
-}
+using pb::bench::StatusBytes;
 
 int Fail(const pb::Status& status) {
   std::fprintf(stderr, "error: %s\n", status.message().c_str());
@@ -109,7 +102,7 @@ int Run(const std::string& dir, double spacings, double angle_deg, int threads, 
   const double cloud_bytes = double(cloud.positions.size() * 4 + cloud.normals.size() * 4 + cloud.colors.size());
   const size_t faces = low->mesh.face_count();
   const double rss_before = StatusBytes("VmRSS:");
-  std::ofstream("/proc/self/clear_refs") << "5";  // resets VmHWM to the current RSS
+  pb::bench::ResetPeakRss();
 
   pb::AssignOptions options;
   options.max_distance_m = spacings * spacing;

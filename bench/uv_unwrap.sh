@@ -1,8 +1,8 @@
 #!/usr/bin/env bash
 # uv.unwrap figures for issue 5: our `charts` (and `per_triangle`) unwrapper
 # and Blender 3.4's Smart UV Project on the same PLY meshes, one at a time.
-# Our times come from the uv_atlas_test tool (DISABLED_UnwrapFile: unwrap +
-# measuring, PLY reading excluded); Blender's from bench/uv_blender.py
+# Our times come from build/bench/uv_unwrap_tool (unwrap + measuring, PLY
+# reading excluded); Blender's from bench/uv_blender.py
 # (smart_project only, import excluded). Prints what each run prints.
 # Usage: bench/uv_unwrap.sh [BUILD_DIR] MESH.ply...
 # Env: SIZE (default 4096), THREADS (0 = all cores), BLENDER=0 skips Blender,
@@ -16,10 +16,10 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 build=${1:-build}
 shift || true
-tool="$build/stages/geometry/uv_atlas_test"
-[ -x "$tool" ] || { echo "no $tool: build uv_atlas_test (Release) first" >&2; exit 1; }
+tool="$build/bench/uv_unwrap_tool"
+[ -x "$tool" ] || { echo "no $tool: build uv_unwrap_tool (Release) first" >&2; exit 1; }
 run_tool() {
-  "$tool" --gtest_also_run_disabled_tests --gtest_filter='*UnwrapFile' 2>&1 | grep -E '^faces|^overlap'
+  "$tool" 2>&1 | grep -E '^faces|^overlap'
 }
 for cell in ${SYNTH_CELLS:-}; do
   echo "== SynthTruthMesh(room, $cell)"

@@ -2,36 +2,23 @@
 
 #include <cmath>
 #include <cstdio>
-#include <cstdlib>
 #include <nlohmann/json.hpp>
 
+#include "cli/command_args.h"
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/metrics/image_metrics.h"
 
 namespace pb {
 namespace {
 
-constexpr const char* kUsage =
-    "Usage: pointbake compare REF TEST [--map FLIP.png] [--json] [--ppd X]\n"
-    "\n"
+constexpr const char* kDescription =
     "Image-quality metrics of TEST against REF (8-bit PNGs of equal size; alpha\n"
     "is ignored, gray counts as R = G = B):\n"
     "  PSNR     dB over R, G, B, MAX 255 (inf for identical images)\n"
     "  SSIM     Wang et al. 2004, 11x11 Gaussian sigma 1.5, on luma\n"
     "           Y = 0.299 R + 0.587 G + 0.114 B and as the mean of R, G, B\n"
     "  MS-SSIM  5 scales on luma (n/a below 176x176 pixels)\n"
-    "  FLIP     LDR-FLIP (Andersson et al. 2020, NVIDIA FLIP v1.6), mean error\n"
-    "\n"
-    "Options:\n"
-    "  --map FILE  write the FLIP error map (magma colormap) as a PNG\n"
-    "  --json      print one JSON object instead of the table (inf/n/a as null)\n"
-    "  --ppd X     FLIP's pixels per degree (default 67.0206, FLIP's monitor setup)\n"
-    "  -h, --help  this text\n";
-
-int Usage(const std::string& problem) {
-  std::fprintf(stderr, "pointbake compare: %s\n\n%s", problem.c_str(), kUsage);
-  return 2;
-}
+    "  FLIP     LDR-FLIP (Andersson et al. 2020, NVIDIA FLIP v1.6), mean error";
 
 nlohmann::json NumberOrNull(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
 
@@ -44,36 +31,19 @@ std::string Fixed(double v, int decimals) {
 }
 
 int RunCompare(const std::vector<std::string>& args) {
-  std::vector<std::string> files;
+  CLI::App app{kDescription, "pointbake compare"};
+  std::vector<std::string> files(2);
+  app.add_option("REF", files[0], "The reference image")->required();
+  app.add_option("TEST", files[1], "The image compared with it")->required();
   std::string map_path;
+  app.add_option("--map", map_path, "Write the FLIP error map (magma colormap) as a PNG");
   bool json = false;
+  app.add_flag("--json", json, "Print one JSON object instead of the table (inf/n/a as null)");
   double ppd = FlipDefaultPpd();
-  for (size_t i = 0; i < args.size(); ++i) {
-    const std::string& a = args[i];
-    if (a == "-h" || a == "--help") {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    if (a == "--json") {
-      json = true;
-    } else if (a == "--map" || a == "--ppd") {
-      if (i + 1 >= args.size()) return Usage(a + " needs a value");
-      const std::string& value = args[++i];
-      if (a == "--map") {
-        map_path = value;
-      } else {
-        char* end = nullptr;
-        ppd = std::strtod(value.c_str(), &end);
-        if (value.empty() || *end != '\0' || !(ppd > 0) || !std::isfinite(ppd))
-          return Usage("--ppd must be a positive number, got '" + value + "'");
-      }
-    } else if (a.size() > 1 && a[0] == '-') {
-      return Usage("unknown option '" + a + "'");
-    } else {
-      files.push_back(a);
-    }
-  }
-  if (files.size() != 2) return Usage("expected two images, REF and TEST");
+  app.add_option("--ppd", ppd, "FLIP's pixels per degree (default: FLIP's monitor setup)")
+      ->check(CLI::PositiveNumber)
+      ->capture_default_str();
+  if (const std::optional<int> exit = ParseCommandArgs(app, args)) return *exit;
 
   Image images[2];
   for (int k = 0; k < 2; ++k) {

@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include "base/testing/temp_dir.h"
+
 namespace pb {
 namespace {
 
@@ -193,9 +195,8 @@ TEST(SchemaTest, PatternPropertiesAndOneOf) {
 }
 
 TEST(SchemaTest, ParseFile) {
-  char dir_template[] = "/tmp/schema_test.XXXXXX";
-  ASSERT_NE(mkdtemp(dir_template), nullptr);
-  const std::string dir = dir_template;
+  testing::TempDir temp;
+  const std::string dir = temp.path();
   const std::string good = dir + "/good.json";
   const std::string bad = dir + "/bad.json";
   std::ofstream(good) << R"({"type": "integer"})";
@@ -212,9 +213,6 @@ TEST(SchemaTest, ParseFile) {
       << broken.status().message();
 
   EXPECT_FALSE(JsonSchema::ParseFile(dir + "/missing.json").ok());
-  std::remove(good.c_str());
-  std::remove(bad.c_str());
-  rmdir(dir.c_str());
 }
 
 TEST(SchemaTest, ApplyDefaultsFillsNestedMembers) {

@@ -8,6 +8,8 @@
 #include <fstream>
 #include <string>
 
+#include "base/testing/temp_dir.h"
+
 namespace pb {
 namespace {
 
@@ -220,9 +222,8 @@ TEST(YamlJsonTest, PointerToken) {
 }
 
 TEST(YamlJsonTest, ReadsFilesAndReportsMissingOnes) {
-  char dir_template[] = "/tmp/yaml_json_test.XXXXXX";
-  ASSERT_NE(mkdtemp(dir_template), nullptr);
-  const std::string dir = dir_template;
+  testing::TempDir temp;
+  const std::string dir = temp.path();
   const std::string path = dir + "/wf.yaml";
   {
     std::ofstream out(path);
@@ -238,9 +239,6 @@ TEST(YamlJsonTest, ReadsFilesAndReportsMissingOnes) {
   Expected<YamlDocument> gone = ParseYamlFile(missing);
   ASSERT_FALSE(gone.ok());
   EXPECT_EQ(gone.status().message(), missing + ": cannot read: No such file or directory");
-
-  std::remove(path.c_str());
-  rmdir(dir.c_str());
 }
 
 TEST(YamlJsonTest, SourcePosToString) {

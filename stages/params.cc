@@ -26,47 +26,34 @@ Status WrongType(std::string_view stage_id, const char* name, const char* type, 
 
 }  // namespace
 
-Expected<std::string> StringParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                                  std::optional<std::string> fallback) {
+Expected<std::string> StringParam(const StageContext& ctx, std::string_view stage_id, const char* name) {
   const nlohmann::json* value = Find(ctx, name);
-  if (!value) {
-    if (fallback) return *fallback;
-    return Missing(stage_id, name);
-  }
+  if (!value) return Missing(stage_id, name);
   if (!value->is_string()) return WrongType(stage_id, name, "a string", *value);
   return value->get<std::string>();
 }
 
-Expected<double> NumberParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                             std::optional<double> fallback) {
+Expected<double> NumberParam(const StageContext& ctx, std::string_view stage_id, const char* name) {
   const nlohmann::json* value = Find(ctx, name);
-  if (!value) {
-    if (fallback) return *fallback;
-    return Missing(stage_id, name);
-  }
+  if (!value) return Missing(stage_id, name);
   if (!value->is_number()) return WrongType(stage_id, name, "a number", *value);
   return value->get<double>();
 }
 
-Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                         std::optional<bool> fallback) {
+Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, const char* name) {
   const nlohmann::json* value = Find(ctx, name);
-  if (!value) {
-    if (fallback) return *fallback;
-    return Missing(stage_id, name);
-  }
+  if (!value) return Missing(stage_id, name);
   if (!value->is_boolean()) return WrongType(stage_id, name, "true or false", *value);
   return value->get<bool>();
 }
 
 Expected<int64_t> IntegerParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                               std::optional<int64_t> fallback, int64_t min,
-                               std::optional<int64_t> max) {
+                               IntegerRange range) {
   // Doubles hold every integer up to 2^53 exactly; beyond, "integer" means little.
   constexpr int64_t kMaxExact = int64_t{1} << 53;
-  std::optional<double> fallback_number;
-  if (fallback) fallback_number = static_cast<double>(*fallback);
-  PB_ASSIGN_OR_RETURN(const double value, NumberParam(ctx, stage_id, name, fallback_number));
+  const int64_t min = range.min;
+  const std::optional<int64_t> max = range.max;
+  PB_ASSIGN_OR_RETURN(const double value, NumberParam(ctx, stage_id, name));
   const int64_t upper = max ? *max : kMaxExact;
   const bool above = value > static_cast<double>(upper);
   if (value != std::floor(value) || value < static_cast<double>(min) || above) {

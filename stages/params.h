@@ -17,21 +17,24 @@
 
 namespace pb {
 
-// `fallback` is used when the parameter is absent; without one, absence is
-// Status::Invalid.
-Expected<std::string> StringParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                                  std::optional<std::string> fallback = std::nullopt);
-Expected<double> NumberParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                             std::optional<double> fallback = std::nullopt);
-Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                         std::optional<bool> fallback = std::nullopt);
+// Defaults are stated once, in the stage's parameter schema: the engine fills
+// them in before a stage runs (ApplyDefaults, engine/schema.h), so these read
+// what is there and an absent parameter is Status::Invalid (a parameter
+// without a default, which may be left out, is looked up only when given).
+Expected<std::string> StringParam(const StageContext& ctx, std::string_view stage_id, const char* name);
+Expected<double> NumberParam(const StageContext& ctx, std::string_view stage_id, const char* name);
+Expected<bool> BoolParam(const StageContext& ctx, std::string_view stage_id, const char* name);
 
-// A whole number in [min, max] (JSON has one number type, so 16.0 counts as
-// 16); without `max`, any whole number >= min up to 2^53. Out of range or
-// fractional is Status::Invalid naming the range.
+// The whole numbers an integer parameter may take: [min, max], or without
+// `max` any whole number >= min up to 2^53.
+struct IntegerRange {
+  int64_t min = 0;
+  std::optional<int64_t> max;
+};
+// A whole number in `range` (JSON has one number type, so 16.0 counts as 16).
+// Out of range or fractional is Status::Invalid naming the range.
 Expected<int64_t> IntegerParam(const StageContext& ctx, std::string_view stage_id, const char* name,
-                               std::optional<int64_t> fallback, int64_t min,
-                               std::optional<int64_t> max = std::nullopt);
+                               IntegerRange range);
 
 // The file of input `port`: `preferred_file` when the artifact has one of that
 // name (synth.scan's truth is mesh.ply + scene.json), else its first file;

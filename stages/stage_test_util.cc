@@ -4,6 +4,7 @@
 
 #include <stdlib.h>
 
+#include "engine/schema.h"
 #include "stages/geometry/io/ply.h"
 
 namespace pb {
@@ -69,10 +70,14 @@ void FakeContext::end_phase(std::string_view name) {
   open_phases_.pop_back();
 }
 
+void FakeContext::ApplySchemaDefaults(const nlohmann::json& schema) {
+  params_ = ApplyDefaults(schema, params_.is_null() ? nlohmann::json::object() : params_);
+}
+
 Status StageTest::Run(const std::string& id, FakeContext& ctx) {
   const StageType* type = registry_.Find(id);
   if (!type) return Status::NotFound(id);
-  ctx.set_params(ApplyDefaults(nlohmann::json::parse(type->params_schema), ctx.params()));
+  ctx.ApplySchemaDefaults(nlohmann::json::parse(type->params_schema));
   const Status status = type->run(ctx);
   EXPECT_TRUE(ctx.open_phases_.empty());
   return status;

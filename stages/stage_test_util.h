@@ -65,6 +65,8 @@ class FakeContext : public StageContext {
   void end_phase(std::string_view name) override;
   int threads() const override { return threads_; }
   void warning(std::string_view message) override { warnings_.emplace_back(message); }
+  // Fills in the schema's defaults, as the engine does before a stage runs.
+  void ApplySchemaDefaults(const nlohmann::json& schema);
 
   std::map<std::string, std::string> outputs_;  // port -> its last file
   std::vector<std::string> warnings_;           // in order
@@ -86,8 +88,8 @@ class FakeContext : public StageContext {
 // that the derived fixture fills in SetUp.
 class StageTest : public testing::TempDirTest {
  protected:
-  // Runs stage `id` in `ctx` with the schema's defaults filled in, as the
-  // engine does; every phase it opened must be closed.
+  // Runs stage `id` in `ctx` with the defaults of its parameter schema filled
+  // in (as the engine does); every phase it opened must be closed.
   Status Run(const std::string& id, FakeContext& ctx);
   // Writes <dir>/input/<name>/mesh.ply (points.ply) and returns its path,
   // for FakeContext::AddInput.

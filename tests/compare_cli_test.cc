@@ -79,8 +79,13 @@ TEST_F(CompareCli, ErrorsGoToStderrWithNonZeroExit) {
 
   r = pbtest::Run({"compare", P("r0.png"), P("t1.png"), "--ppd", "-3"});
   EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_NE(r.err.find("--ppd"), std::string::npos) << r.Describe();
   r = pbtest::Run({"compare", P("r0.png"), P("t1.png"), "--bogus"});
   EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_NE(r.err.find("--bogus"), std::string::npos) << r.Describe();
+  r = pbtest::Run({"compare", "--help"});
+  EXPECT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_NE(r.out.find("--map"), std::string::npos) << r.Describe();
 }
 
 TEST_F(CompareCli, ListedInHelpAndPpdChangesFlip) {

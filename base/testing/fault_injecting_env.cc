@@ -4,6 +4,33 @@
 #include <unistd.h>
 
 namespace pb {
+namespace {
+
+Status Injected(const std::string& path) {
+  return Status::Io(path + ": write: No space left on device (injected)");
+}
+
+// Passes everything to the real file until the disk "fills up".
+class FailingAtomicFile : public AtomicFile {
+ public:
+  explicit FailingAtomicFile(std::unique_ptr<AtomicFile> real)
+      : AtomicFile(real->path()), real_(std::move(real)) {}
+  Status Append(std::string_view bytes) override {
+    if (!failed_) {
+      failed_ = true;
+      (void)real_->Append(bytes.substr(0, bytes.size() / 2));
+    }
+    return Injected(path());
+  }
+  Status Sync() override { return Injected(path()); }
+  Status Commit() override { return Injected(path()); }
+
+ private:
+  std::unique_ptr<AtomicFile> real_;
+  bool failed_ = false;
+};
+
+}  // namespace
 
 bool FaultInjectingEnv::ShouldFail(const std::string& path) {
   ++writes_;
@@ -19,8 +46,15 @@ bool FaultInjectingEnv::ShouldFail(const std::string& path) {
 }
 
 Status FaultInjectingEnv::WriteFileAtomic(const std::string& path, std::string_view contents) {
-  if (ShouldFail(path)) return Status::Io(path + ": write: No space left on device (injected)");
+  if (ShouldFail(path)) return Injected(path);
   return Env::WriteFileAtomic(path, contents);
+}
+
+Expected<std::unique_ptr<AtomicFile>> FaultInjectingEnv::NewAtomicFile(const std::string& path) {
+  const bool fail = ShouldFail(path);
+  PB_ASSIGN_OR_RETURN(std::unique_ptr<AtomicFile> file, Env::NewAtomicFile(path));
+  if (!fail) return file;
+  return std::unique_ptr<AtomicFile>(new FailingAtomicFile(std::move(file)));
 }
 
 Status FaultInjectingEnv::CopyFileAtomic(const std::string& from, const std::string& to) {

@@ -10,12 +10,16 @@
 namespace pb {
 
 // An Env that fails the Nth durable write (WriteFileAtomic, CopyFileAtomic,
-// Rename, SyncFile, counted together from 1) with ENOSPC-like errors, leaving
-// a half-written temporary file behind as a real crash would.
+// NewAtomicFile, Rename, SyncFile, counted together from 1) with ENOSPC-like
+// errors, leaving a half-written temporary file behind as a real crash would.
+// A streamed file (NewAtomicFile) that is the Nth write opens fine and fails
+// its first Append after writing half of the bytes (or its Commit, if
+// nothing was appended), as a disk that fills up mid-file.
 class FaultInjectingEnv : public Env {
  public:
   explicit FaultInjectingEnv(int fail_at_write) : fail_at_(fail_at_write) {}
   Status WriteFileAtomic(const std::string& path, std::string_view contents) override;
+  Expected<std::unique_ptr<AtomicFile>> NewAtomicFile(const std::string& path) override;
   Status CopyFileAtomic(const std::string& from, const std::string& to) override;
   Status Rename(const std::string& from, const std::string& to) override;
   Status SyncFile(const std::string& path) override;

@@ -36,9 +36,9 @@ std::string BakeCommonSchemaProperties() {
 
 Expected<BakeOptions> ReadBakeOptions(const StageContext& ctx, std::string_view stage_id) {
   BakeOptions options;
-  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, stage_id, "size", 4096, 16, 16384));
-  PB_ASSIGN_OR_RETURN(const int64_t gutter, IntegerParam(ctx, stage_id, "gutter", 12, 0, 64));
-  PB_ASSIGN_OR_RETURN(const std::string format, StringParam(ctx, stage_id, "normal_format", "png"));
+  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, stage_id, "size", {16, 16384}));
+  PB_ASSIGN_OR_RETURN(const int64_t gutter, IntegerParam(ctx, stage_id, "gutter", {0, 64}));
+  PB_ASSIGN_OR_RETURN(const std::string format, StringParam(ctx, stage_id, "normal_format"));
   if (format != "png" && format != "exr") {
     return Status::Invalid(std::string(stage_id) +
                            ": parameter 'normal_format' must be 'png' or 'exr', got '" + format +

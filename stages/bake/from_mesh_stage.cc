@@ -35,7 +35,7 @@ std::string Schema() {
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(BakeOptions options, ReadBakeOptions(ctx, kId));
   FromMeshOptions from_mesh;
-  PB_ASSIGN_OR_RETURN(from_mesh.cage_m, NumberParam(ctx, kId, "cage", 0.05));
+  PB_ASSIGN_OR_RETURN(from_mesh.cage_m, NumberParam(ctx, kId, "cage"));
   if (!(from_mesh.cage_m > 0)) {
     return Status::Invalid(std::string(kId) + ": parameter 'cage' must be > 0 meters, got " +
                            std::to_string(from_mesh.cage_m));

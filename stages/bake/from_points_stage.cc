@@ -66,12 +66,12 @@ Expected<TexelInterpolation> ParseInterpolation(const std::string& name) {
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(BakeOptions options, ReadBakeOptions(ctx, kId));
   FromPointsOptions from_points;
-  PB_ASSIGN_OR_RETURN(const std::string interpolation, StringParam(ctx, kId, "interpolation", "delaunay"));
+  PB_ASSIGN_OR_RETURN(const std::string interpolation, StringParam(ctx, kId, "interpolation"));
   PB_ASSIGN_OR_RETURN(from_points.interpolation.mode, ParseInterpolation(interpolation));
-  PB_ASSIGN_OR_RETURN(const double max_distance, NumberParam(ctx, kId, "max_distance", 4.0));
-  PB_ASSIGN_OR_RETURN(from_points.max_angle_deg, NumberParam(ctx, kId, "max_angle_deg", 90.0));
-  PB_ASSIGN_OR_RETURN(const int64_t neighbors, IntegerParam(ctx, kId, "idw_neighbors", 4, 1, 64));
-  PB_ASSIGN_OR_RETURN(const double splat_sigma, NumberParam(ctx, kId, "splat_sigma", 1.0));
+  PB_ASSIGN_OR_RETURN(const double max_distance, NumberParam(ctx, kId, "max_distance"));
+  PB_ASSIGN_OR_RETURN(from_points.max_angle_deg, NumberParam(ctx, kId, "max_angle_deg"));
+  PB_ASSIGN_OR_RETURN(const int64_t neighbors, IntegerParam(ctx, kId, "idw_neighbors", {1, 64}));
+  PB_ASSIGN_OR_RETURN(const double splat_sigma, NumberParam(ctx, kId, "splat_sigma"));
   if (!(max_distance > 0) || !(splat_sigma > 0) ||
       !(from_points.max_angle_deg > 0 && from_points.max_angle_deg <= 180)) {
     return Status::Invalid(std::string(kId) +

@@ -3,8 +3,6 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
-#include <fstream>
-#include <iterator>
 #include <string>
 
 #include "stages/builtin.h"
@@ -51,14 +49,16 @@ Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_v
   const std::string context = std::string(stage_id) + ": input '" + std::string(port) + "'";
   const std::string extension = LowerExtension(InputFileName(ctx, port, path));
   if (extension == ".png") {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return Status::Errno(path, "open").WithContext(context);
-    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-    // IHDR: signature (8), length (4), "IHDR" (4), width, height, bit depth.
-    if (bytes.size() < 33 || std::memcmp(bytes.data() + 12, "IHDR", 4) != 0) {
-      return Status::Corrupt(context + ": " + path + " is not a PNG file");
+    auto header = ReadImageSize(path);
+    const bool png = header.ok() ? header->png_bit_depth > 0
+                                 : header.status().code() != Status::Code::kUnsupported;
+    if (!png) return Status::Corrupt(context + ": " + path + " is not a PNG file");
+    if (!header.ok()) return header.status().WithContext(context);
+    if (header->png_bit_depth == 8) {  // as baked, byte for byte
+      auto bytes = Env::Default()->ReadFile(path);
+      if (!bytes.ok()) return bytes.status().WithContext(context);
+      return std::vector<uint8_t>(bytes->begin(), bytes->end());
     }
-    if (bytes[24] == 8) return bytes;  // as baked, byte for byte
     auto image = ReadPng(path);
     if (!image.ok()) return image.status().WithContext(context);
     if (image->type == Image::PixelType::kU8) return EncodePng(*image);  // low bit depths, palettes

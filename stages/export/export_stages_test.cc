@@ -180,6 +180,24 @@ TEST_F(ExportStagesTest, ExrAndSixteenBitMapsAreConvertedToEightBitPng) {
   EXPECT_EQ(color->at_u8(0, 0, 0), 0);
 }
 
+// The map's header decides: a ".png" that holds an OpenEXR image, or is cut
+// short, is an error naming the stage, the port and the file.
+TEST_F(ExportStagesTest, MapThatIsNotAPngIsAClearError) {
+  const std::string exr = WriteImage("color.exr", Image::PixelType::kF32);
+  const std::string disguised = Input("disguised.png");
+  std::filesystem::rename(exr, disguised);
+  const std::string truncated = Write("truncated.png", "\x89PNG\r\n\x1a\n");
+  for (const std::string& path : {disguised, truncated}) {
+    FakeContext ctx(dir_ / "run", nlohmann::json::object());
+    ctx.AddInput("mesh", "mesh", WriteMesh(true));
+    ctx.AddInput("color", "image", path);
+    const Status status = Run("export.gltf", ctx);
+    EXPECT_EQ(status.code(), Status::Code::kCorrupt) << status.message();
+    EXPECT_THAT(status.message(), HasSubstr("export.gltf: input 'color'"));
+    EXPECT_THAT(status.message(), HasSubstr(path));
+  }
+}
+
 TEST_F(ExportStagesTest, TextureWithoutUvsIsAClearError) {
   for (const char* id : {"export.gltf", "export.obj"}) {
     FakeContext ctx(dir_ / id, nlohmann::json::object());

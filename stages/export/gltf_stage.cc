@@ -34,8 +34,8 @@ constexpr const char* kSchema = R"({
 
 Status Run(StageContext& ctx) {
   GltfWriteOptions options;
-  PB_ASSIGN_OR_RETURN(options.name, StringParam(ctx, kId, "name", "model"));
-  PB_ASSIGN_OR_RETURN(options.vertex_colors, BoolParam(ctx, kId, "vertex_colors", true));
+  PB_ASSIGN_OR_RETURN(options.name, StringParam(ctx, kId, "name"));
+  PB_ASSIGN_OR_RETURN(options.vertex_colors, BoolParam(ctx, kId, "vertex_colors"));
   PB_ASSIGN_OR_RETURN(ExportInputs inputs, ReadExportInputs(ctx, kId));
   options.base_color_png = std::move(inputs.color_png);
   options.normal_png = std::move(inputs.normal_png);

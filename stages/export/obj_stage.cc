@@ -40,9 +40,9 @@ constexpr const char* kSchema = R"({
 
 Status Run(StageContext& ctx) {
   ObjWriteOptions options;
-  PB_ASSIGN_OR_RETURN(options.name, StringParam(ctx, kId, "name", "model"));
-  PB_ASSIGN_OR_RETURN(options.vertex_colors, BoolParam(ctx, kId, "vertex_colors", true));
-  PB_ASSIGN_OR_RETURN(const std::string coordinates, StringParam(ctx, kId, "coordinates", "absolute"));
+  PB_ASSIGN_OR_RETURN(options.name, StringParam(ctx, kId, "name"));
+  PB_ASSIGN_OR_RETURN(options.vertex_colors, BoolParam(ctx, kId, "vertex_colors"));
+  PB_ASSIGN_OR_RETURN(const std::string coordinates, StringParam(ctx, kId, "coordinates"));
   if (coordinates != "absolute" && coordinates != "relative") {
     return Status::Invalid(std::string(kId) + ": parameter 'coordinates' must be \"absolute\" or \"relative\", got \"" +
                            coordinates + "\"");

@@ -1,18 +1,8 @@
 // io.read_points: reads a scan file into the `points` artifact.
-#include <cctype>
-#include <string>
-#include <string_view>
-
 #include <cstdio>
+#include <string>
 
-#include "stages/geometry/core/text_parse.h"
-#include "stages/geometry/io/e57.h"
-#include "stages/geometry/io/las.h"
-#include "stages/geometry/io/pcd.h"
-#include "stages/geometry/io/ply.h"
-#include "stages/geometry/io/ptx.h"
 #include "stages/geometry/io/scan_read.h"
-#include "stages/geometry/io/xyz.h"
 #include "stages/builtin.h"
 #include "stages/params.h"
 #include "stages/points_io.h"
@@ -22,80 +12,9 @@ namespace {
 
 constexpr const char* kId = "io.read_points";
 
-Expected<ScanReadResult> ReadPly(const std::string& path, const ScanReadOptions& options) {
-  PlyReadOptions ply_options;
-  ply_options.drop_invalid_points = options.drop_invalid_points;
-  ply_options.progress = options.progress;
-  PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(path, ply_options));
-  ScanReadResult result;
-  result.points = std::move(ply.points);
-  result.dropped_points = ply.report.dropped_points;
-  result.format = "ply " + ply.report.format;
-  return result;
-}
-
-// The scan formats this stage reads, by name; `auto` matches the extension.
-struct ScanFormat {
-  std::string_view name;
-  std::string_view extensions;  // lower case, with the dot, space separated
-  Expected<ScanReadResult> (*read)(const std::string& path, const ScanReadOptions& options);
-};
-Expected<ScanReadResult> ReadPcdScan(const std::string& p, const ScanReadOptions& o) { return ReadPcd(p, o); }
-Expected<ScanReadResult> ReadXyzScan(const std::string& p, const ScanReadOptions& o) { return ReadXyz(p, o); }
-Expected<ScanReadResult> ReadPtxScan(const std::string& p, const ScanReadOptions& o) { return ReadPtx(p, o); }
-Expected<ScanReadResult> ReadE57Scan(const std::string& p, const ScanReadOptions& o) { return ReadE57(p, o); }
-Expected<ScanReadResult> ReadLasScan(const std::string& p, const ScanReadOptions& o) { return ReadLas(p, o); }
-constexpr ScanFormat kScanFormats[] = {
-    {"ply", ".ply", &ReadPly},
-    {"pcd", ".pcd", &ReadPcdScan},
-    {"xyz", ".xyz .txt .pts .csv", &ReadXyzScan},
-    {"ptx", ".ptx", &ReadPtxScan},
-    {"e57", ".e57", &ReadE57Scan},
-    // .laz goes to the LAS reader, which explains that compressed LAS is not supported.
-    {"las", ".las .laz", &ReadLasScan},
-};
-
-bool HasExtension(const ScanFormat& format, const std::string& extension) {
-  std::string_view list = format.extensions;
-  while (!list.empty()) {
-    const size_t space = list.find(' ');
-    if (list.substr(0, space) == extension) return true;
-    if (space == std::string_view::npos) break;
-    list.remove_prefix(space + 1);
-  }
-  return false;
-}
-
-std::string SupportedFormats() {
-  std::string list;
-  for (const ScanFormat& format : kScanFormats) {
-    list += (list.empty() ? "" : ", ") + std::string(format.name) + " (" + std::string(format.extensions) + ")";
-  }
-  return list;
-}
-
-
-Expected<const ScanFormat*> ChooseFormat(const std::string& path, const std::string& name) {
-  if (name != "auto") {
-    for (const ScanFormat& format : kScanFormats) {
-      if (format.name == name) return &format;
-    }
-    return Status::Unsupported(std::string(kId) + ": unknown format '" + name +
-                               "'; supported now: auto, " + SupportedFormats());
-  }
-  const std::string extension = LowerExtension(path);
-  for (const ScanFormat& format : kScanFormats) {
-    if (HasExtension(format, extension)) return &format;
-  }
-  return Status::Unsupported(std::string(kId) + ": cannot read '" + path + "': " +
-                             (extension.empty() ? std::string("no file extension")
-                                                : "unsupported extension '" + extension + "'") +
-                             "; formats supported now: " + SupportedFormats());
-}
-
 std::string ParamsSchema() {
   nlohmann::json formats = nlohmann::json::array({"auto"});
-  for (const ScanFormat& format : kScanFormats) formats.push_back(std::string(format.name));
+  for (const ScanFormat& format : ScanFormats()) formats.push_back(std::string(format.name));
   const nlohmann::json schema = {
       {"type", "object"},
       {"additionalProperties", false},
@@ -112,7 +31,8 @@ std::string ParamsSchema() {
             {{"type", "string"},
              {"enum", formats},
              {"default", "auto"},
-             {"description", "File format; 'auto' decides by the file extension."}}},
+             {"description", "File format; 'auto' decides by the file extension: " +
+                                 SupportedScanFormats() + "."}}},
            {"drop_invalid",
             {{"type", "boolean"},
              {"default", false},
@@ -134,11 +54,13 @@ std::string ParamsSchema() {
 
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const std::string path, StringParam(ctx, kId, "path"));
-  PB_ASSIGN_OR_RETURN(const std::string format_name, StringParam(ctx, kId, "format", "auto"));
-  PB_ASSIGN_OR_RETURN(const bool drop_invalid, BoolParam(ctx, kId, "drop_invalid", false));
-  PB_ASSIGN_OR_RETURN(const ScanFormat* format, ChooseFormat(path, format_name));
+  PB_ASSIGN_OR_RETURN(const std::string format_name, StringParam(ctx, kId, "format"));
+  PB_ASSIGN_OR_RETURN(const bool drop_invalid, BoolParam(ctx, kId, "drop_invalid"));
+  Expected<const ScanFormat*> found = FindScanFormat(path, format_name);
+  if (!found.ok()) return found.status().WithContext(kId);
+  const ScanFormat* format = *found;
 
-  PB_ASSIGN_OR_RETURN(const std::string columns, StringParam(ctx, kId, "columns", ""));
+  PB_ASSIGN_OR_RETURN(const std::string columns, StringParam(ctx, kId, "columns"));
 
   ScanReadOptions options;
   options.drop_invalid_points = drop_invalid;

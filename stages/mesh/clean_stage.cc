@@ -61,16 +61,15 @@ constexpr const char* kSchema = R"({
 
 Status Run(StageContext& ctx) {
   CleanOptions options;
-  PB_ASSIGN_OR_RETURN(options.min_area_m2, NumberParam(ctx, kId, "min_area_m2", 1e-10));
-  PB_ASSIGN_OR_RETURN(options.hole_max_edges,
-                      IntegerParam(ctx, kId, "fill_hole_edges", std::nullopt, 0));
+  PB_ASSIGN_OR_RETURN(options.min_area_m2, NumberParam(ctx, kId, "min_area_m2"));
+  PB_ASSIGN_OR_RETURN(options.hole_max_edges, IntegerParam(ctx, kId, "fill_hole_edges", {0}));
   PB_ASSIGN_OR_RETURN(const double hole_spacings, NumberParam(ctx, kId, "fill_hole_spacings"));
   PB_ASSIGN_OR_RETURN(options.min_component_faces,
-                      IntegerParam(ctx, kId, "min_component_faces", 50, 0));
+                      IntegerParam(ctx, kId, "min_component_faces", {0}));
   PB_ASSIGN_OR_RETURN(options.min_component_fraction,
-                      NumberParam(ctx, kId, "min_component_fraction", 0));
+                      NumberParam(ctx, kId, "min_component_fraction"));
   PB_ASSIGN_OR_RETURN(options.min_component_area_m2,
-                      NumberParam(ctx, kId, "min_component_area_m2", 0.01));
+                      NumberParam(ctx, kId, "min_component_area_m2"));
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.3));
   Mesh& mesh = input.mesh;
   ctx.progress(0.3);

@@ -57,8 +57,8 @@ Status Run(StageContext& ctx) {
     return Status::Invalid(std::string(kId) + ": give exactly one of 'target_faces' and 'ratio'");
   }
   DecimateOptions options;
-  PB_ASSIGN_OR_RETURN(options.boundary_weight, NumberParam(ctx, kId, "boundary_weight", 1000.0));
-  PB_ASSIGN_OR_RETURN(options.min_normal_dot, NumberParam(ctx, kId, "min_normal_dot", 0.2));
+  PB_ASSIGN_OR_RETURN(options.boundary_weight, NumberParam(ctx, kId, "boundary_weight"));
+  PB_ASSIGN_OR_RETURN(options.min_normal_dot, NumberParam(ctx, kId, "min_normal_dot"));
   double ratio = 0;
   int64_t target = 0;
   if (has_ratio) {
@@ -68,7 +68,7 @@ Status Run(StageContext& ctx) {
                              std::to_string(ratio));
     }
   } else {
-    PB_ASSIGN_OR_RETURN(target, IntegerParam(ctx, kId, "target_faces", std::nullopt, 1));
+    PB_ASSIGN_OR_RETURN(target, IntegerParam(ctx, kId, "target_faces", {1}));
   }
 
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.2));

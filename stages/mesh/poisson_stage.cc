@@ -18,6 +18,8 @@ namespace pb {
 namespace {
 
 constexpr const char* kId = "mesh.poisson";
+// Without depth or target_faces (the description of `depth` says so).
+constexpr int kDefaultDepth = 8;
 
 // The depth probed to calibrate target_faces: cheap (a 64^3 grid) yet deep
 // enough for the surface to be resolved on building-sized scans.
@@ -77,22 +79,25 @@ Status Run(StageContext& ctx) {
     return Status::Invalid(std::string(kId) + ": give 'depth' or 'target_faces', not both");
   }
   PoissonOptions options;
-  PB_ASSIGN_OR_RETURN(options.scale, NumberParam(ctx, kId, "scale", 1.1));
-  PB_ASSIGN_OR_RETURN(options.linear_fit, BoolParam(ctx, kId, "linear_fit", false));
-  PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", 1, 0));
+  PB_ASSIGN_OR_RETURN(options.scale, NumberParam(ctx, kId, "scale"));
+  PB_ASSIGN_OR_RETURN(options.linear_fit, BoolParam(ctx, kId, "linear_fit"));
+  PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", {0}));
   options.threads = threads > 0 ? static_cast<int>(threads) : ctx.threads();
-  PB_ASSIGN_OR_RETURN(const double trim, NumberParam(ctx, kId, "trim", 0.0));
+  PB_ASSIGN_OR_RETURN(const double trim, NumberParam(ctx, kId, "trim"));
   if (!(trim >= 0 && trim <= 0.5)) {
     return Status::Invalid(std::string(kId) + ": parameter 'trim' must be in [0, 0.5], got " +
                            std::to_string(trim));
   }
   int64_t target = 0;
   if (has_target) {
-    PB_ASSIGN_OR_RETURN(target, IntegerParam(ctx, kId, "target_faces", std::nullopt, 100));
-  } else {
-    PB_ASSIGN_OR_RETURN(const int64_t depth, IntegerParam(ctx, kId, "depth", 8, kPoissonMinDepth,
-                                                          kPoissonMaxDepth));
+    PB_ASSIGN_OR_RETURN(target, IntegerParam(ctx, kId, "target_faces", {100}));
+  } else if (has_depth) {
+    PB_ASSIGN_OR_RETURN(const int64_t depth,
+                        IntegerParam(ctx, kId, "depth", {kPoissonMinDepth, kPoissonMaxDepth}));
     options.depth = static_cast<int>(depth);
+  } else {
+    // Not a schema default: one there would always clash with target_faces.
+    options.depth = kDefaultDepth;
   }
 
   PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.1));

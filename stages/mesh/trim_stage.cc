@@ -75,14 +75,14 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.max_distance_edges, NumberParam(ctx, kId, "max_distance_edges"));
   PB_ASSIGN_OR_RETURN(options.grow_fraction, NumberParam(ctx, kId, "grow_fraction"));
   PB_ASSIGN_OR_RETURN(options.min_region_faces,
-                      IntegerParam(ctx, kId, "min_region_faces", std::nullopt, 0));
+                      IntegerParam(ctx, kId, "min_region_faces", {0}));
   PB_ASSIGN_OR_RETURN(const int64_t smooth_passes,
-                      IntegerParam(ctx, kId, "smooth_passes", std::nullopt, 0, 100));
+                      IntegerParam(ctx, kId, "smooth_passes", {0, 100}));
   options.smooth_passes = static_cast<int>(smooth_passes);
   PB_ASSIGN_OR_RETURN(const int64_t neighbors,
-                      IntegerParam(ctx, kId, "spacing_neighbors", std::nullopt, 1, 64));
+                      IntegerParam(ctx, kId, "spacing_neighbors", {1, 64}));
   options.spacing_neighbors = static_cast<int>(neighbors);
-  PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", std::nullopt, 0));
+  PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", {0}));
   options.threads = threads > 0 ? static_cast<int>(threads) : ctx.threads();
 
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.2));

@@ -71,10 +71,10 @@ std::vector<TableValue> Row(const char* direction, const DistanceStats& s, const
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const int64_t samples, IntegerParam(ctx, kId, "samples", 200000, 1));
-  PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", 1, 0));
-  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 8, 1, 64));
-  PB_ASSIGN_OR_RETURN(const double spacing_factor, NumberParam(ctx, kId, "spacing_factor", 3.0));
+  PB_ASSIGN_OR_RETURN(const int64_t samples, IntegerParam(ctx, kId, "samples", {1}));
+  PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", {0}));
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 64}));
+  PB_ASSIGN_OR_RETURN(const double spacing_factor, NumberParam(ctx, kId, "spacing_factor"));
   if (!(spacing_factor > 0)) return Status::Invalid(std::string(kId) + ": 'spacing_factor' must be > 0");
   const bool has_truth = ctx.has_input("truth"), has_points = ctx.has_input("points");
   if (!has_truth && !has_points)

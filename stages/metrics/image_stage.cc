@@ -82,8 +82,8 @@ Status MatchFrames(const FrameSet& test, const FrameSet& reference) {
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const double ppd, NumberParam(ctx, kId, "ppd", FlipDefaultPpd()));
-  PB_ASSIGN_OR_RETURN(const double depth_tolerance, NumberParam(ctx, kId, "depth_tolerance", 0.05));
+  PB_ASSIGN_OR_RETURN(const double ppd, NumberParam(ctx, kId, "ppd"));
+  PB_ASSIGN_OR_RETURN(const double depth_tolerance, NumberParam(ctx, kId, "depth_tolerance"));
   if (!(depth_tolerance >= 0)) return Status::Invalid(std::string(kId) + ": depth_tolerance must be >= 0");
   if (!(ppd > 0)) return Status::Invalid(std::string(kId) + ": ppd must be positive");
   FrameSet test, reference;

@@ -1,7 +1,6 @@
 // Stage tests for mesh.clean and metrics.geometry through the fake context.
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <fstream>
 
 #include "stages/geometry/mesh/clean.h"
@@ -18,7 +17,6 @@ class MeshMetricsStagesTest : public StageTest {
  protected:
   void SetUp() override {
     StageTest::SetUp();
-    ASSERT_TRUE(registry_.Register(CleanStage()).ok());
     RegisterBuiltinStages(registry_);
   }
   // The synth truth artifact: mesh.ply + scene.json in one directory.
@@ -126,37 +124,6 @@ TEST_F(MeshMetricsStagesTest, GeometryAgainstTheScanWithoutTruth) {
   const Status none = Run("metrics.geometry", neither);
   EXPECT_FALSE(none.ok());
   EXPECT_NE(none.message().find("'points'"), std::string::npos) << none.message();
-}
-
-// Timing: 200k samples on a ~10^6-face mesh (not a unit test).
-TEST_F(MeshMetricsStagesTest, DISABLED_TimingMillionFaces) {
-  const ArtifactView truth = Truth(0.01, "truth");
-  const ArtifactView big = Truth(0.0155, "big");
-  Expected<PlyMesh> m = ReadPlyMesh(big.files.at("mesh.ply"));
-  std::printf("mesh faces %zu\n", m->mesh.face_count());
-  FakeContext ctx(dir_, {{"samples", 200000}, {"seed", 1}}, 2);
-  ctx.AddInput("mesh", "mesh", big.files.at("mesh.ply"));
-  ctx.AddInput("truth", "mesh", truth.files);
-  const auto t0 = std::chrono::steady_clock::now();
-  ASSERT_TRUE(Run("metrics.geometry", ctx).ok());
-  const double s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  Expected<Table> table = ReadTable(ctx.outputs_.at("table"));
-  std::printf("%s\nseconds %.2f\n", TableToJson(*table).c_str(), s);
-  FakeContext ctx2(dir_, {{"samples", 200000}, {"seed", 1}}, 2);
-  ctx2.AddInput("mesh", "mesh", big.files.at("mesh.ply"));
-  ctx2.AddInput("truth", "mesh", truth.files.at("mesh.ply"));
-  const auto t1 = std::chrono::steady_clock::now();
-  ASSERT_TRUE(Run("metrics.geometry", ctx2).ok());
-  std::printf("mesh-only seconds %.2f\n",
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count());
-  FakeContext ctx3(dir_, nlohmann::json::object(), 2);
-  ctx3.AddInput("mesh", "mesh", big.files.at("mesh.ply"));
-  const auto t2 = std::chrono::steady_clock::now();
-  ASSERT_TRUE(Run("mesh.clean", ctx3).ok());
-  std::printf("clean seconds %.2f faces_out %.0f split %.0f small %.0f\n",
-              std::chrono::duration<double>(std::chrono::steady_clock::now() - t2).count(),
-              ctx3.counters_.at("faces_out"), ctx3.counters_.at("split_vertices"),
-              ctx3.counters_.at("small_component_faces"));
 }
 
 }  // namespace

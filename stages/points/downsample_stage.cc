@@ -23,7 +23,7 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const double voxel_m, NumberParam(ctx, kId, "voxel", 0.01));
+  PB_ASSIGN_OR_RETURN(const double voxel_m, NumberParam(ctx, kId, "voxel"));
   PB_ASSIGN_OR_RETURN(const InputPoints in, ReadInputPoints(ctx, kId, 0.4));
   const PointCloud& input = in.cloud;
   PointCloud output;

@@ -51,8 +51,8 @@ const char* OrientationName(NormalOrientation orientation) {
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 16, 3, 100));
-  PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation", "auto"));
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {3, 100}));
+  PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation"));
   PB_ASSIGN_OR_RETURN(const NormalOrientation orientation, ParseOrientation(orientation_name));
   PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.3));
   PointCloud& cloud = input.cloud;

@@ -30,8 +30,8 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 16, 1, 1000));
-  PB_ASSIGN_OR_RETURN(const double std_ratio, NumberParam(ctx, kId, "std_ratio", 2.0));
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 1000}));
+  PB_ASSIGN_OR_RETURN(const double std_ratio, NumberParam(ctx, kId, "std_ratio"));
   PB_ASSIGN_OR_RETURN(const InputPoints in, ReadInputPoints(ctx, kId, 0.3));
   const PointCloud& input = in.cloud;
   PointCloud output;

@@ -24,7 +24,7 @@ constexpr const char* kSchema = R"({
 })";
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const int64_t sample, IntegerParam(ctx, kId, "sample", 100000, 0));
+  PB_ASSIGN_OR_RETURN(const int64_t sample, IntegerParam(ctx, kId, "sample", {0}));
   PB_ASSIGN_OR_RETURN(const InputPoints input, ReadInputPoints(ctx, kId, 0.4));
   const PointCloud& cloud = input.cloud;
   double spacing_m = 0;

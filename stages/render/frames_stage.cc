@@ -97,13 +97,13 @@ struct Options {
 
 Expected<Options> ReadOptions(const StageContext& ctx) {
   Options options;
-  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", 1024, 16, 8192));
-  PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", 2, 1, 8));
-  PB_ASSIGN_OR_RETURN(const int64_t truth_supersample, IntegerParam(ctx, kId, "truth_supersample", 4, 1, 8));
-  PB_ASSIGN_OR_RETURN(const std::string lighting, StringParam(ctx, kId, "lighting", "lambert"));
-  PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth", false));
-  PB_ASSIGN_OR_RETURN(options.render.ambient, NumberParam(ctx, kId, "ambient", 0.25));
-  PB_ASSIGN_OR_RETURN(options.render.diffuse, NumberParam(ctx, kId, "diffuse", 0.75));
+  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", {16, 8192}));
+  PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", {1, 8}));
+  PB_ASSIGN_OR_RETURN(const int64_t truth_supersample, IntegerParam(ctx, kId, "truth_supersample", {1, 8}));
+  PB_ASSIGN_OR_RETURN(const std::string lighting, StringParam(ctx, kId, "lighting"));
+  PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth"));
+  PB_ASSIGN_OR_RETURN(options.render.ambient, NumberParam(ctx, kId, "ambient"));
+  PB_ASSIGN_OR_RETURN(options.render.diffuse, NumberParam(ctx, kId, "diffuse"));
   if (lighting != "lambert" && lighting != "unlit")
     return Status::Invalid(std::string(kId) + ": parameter 'lighting' must be 'lambert' or 'unlit', got '" +
                            lighting + "'");

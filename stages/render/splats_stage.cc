@@ -101,16 +101,16 @@ struct Options {
 
 Expected<Options> ReadOptions(const StageContext& ctx) {
   Options options;
-  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", 1024, 16, 8192));
-  PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", 2, 1, 8));
-  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", 8, 1, 64));
-  PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth", false));
-  PB_ASSIGN_OR_RETURN(options.radius_scale, NumberParam(ctx, kId, "radius_scale", 0.75));
-  PB_ASSIGN_OR_RETURN(options.max_radius_spacings, NumberParam(ctx, kId, "max_radius_spacings", 4.0));
+  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", {16, 8192}));
+  PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", {1, 8}));
+  PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 64}));
+  PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth"));
+  PB_ASSIGN_OR_RETURN(options.radius_scale, NumberParam(ctx, kId, "radius_scale"));
+  PB_ASSIGN_OR_RETURN(options.max_radius_spacings, NumberParam(ctx, kId, "max_radius_spacings"));
   if (!(options.max_radius_spacings > 0))
     return Status::Invalid(std::string(kId) + ": 'max_radius_spacings' must be > 0");
-  PB_ASSIGN_OR_RETURN(options.splat.depth_tolerance, NumberParam(ctx, kId, "depth_tolerance", 2.0));
-  PB_ASSIGN_OR_RETURN(options.splat.max_radius_px, NumberParam(ctx, kId, "max_radius_px", 32.0));
+  PB_ASSIGN_OR_RETURN(options.splat.depth_tolerance, NumberParam(ctx, kId, "depth_tolerance"));
+  PB_ASSIGN_OR_RETURN(options.splat.max_radius_px, NumberParam(ctx, kId, "max_radius_px"));
   if (!(options.radius_scale > 0)) return Status::Invalid(std::string(kId) + ": 'radius_scale' must be > 0");
   if (!(options.splat.depth_tolerance >= 0))
     return Status::Invalid(std::string(kId) + ": 'depth_tolerance' must be >= 0");

@@ -3,7 +3,6 @@
 #include <tbb/task_arena.h>
 
 #include <cmath>
-#include <fstream>
 
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/synth/scanner.h"
@@ -73,8 +72,9 @@ constexpr const char* kSchema = R"({
   }
 })";
 
-Expected<int64_t> IntegerParam(const StageContext& ctx, const char* name, double fallback) {
-  PB_ASSIGN_OR_RETURN(const double value, NumberParam(ctx, kId, name, fallback));
+// A whole number; its range is checked with the others in Run.
+Expected<int64_t> WholeNumberParam(const StageContext& ctx, const char* name) {
+  PB_ASSIGN_OR_RETURN(const double value, NumberParam(ctx, kId, name));
   if (value != std::floor(value)) {
     return Status::Invalid(std::string(kId) + ": parameter '" + name + "' must be an integer");
   }
@@ -103,22 +103,17 @@ Expected<std::optional<Vec3>> SizeParam(const StageContext& ctx) {
 }
 
 Status WriteSceneJson(const std::string& path, const SynthScene& scene) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  if (!out) return Status::Errno(path, "open");
-  out << ToJson(scene).dump(2) << "\n";
-  out.close();
-  if (!out) return Status::Errno(path, "write");
-  return Status::Ok();
+  return Env::Default()->WriteFileAtomic(path, ToJson(scene).dump(2) + "\n");
 }
 
 Status Run(StageContext& ctx) {
-  PB_ASSIGN_OR_RETURN(const std::string preset, StringParam(ctx, kId, "preset", "room"));
-  PB_ASSIGN_OR_RETURN(const int64_t points, IntegerParam(ctx, "points", 2000000));
-  PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, "seed", 1));
-  PB_ASSIGN_OR_RETURN(const double noise_mm, NumberParam(ctx, kId, "noise_mm", 2));
-  PB_ASSIGN_OR_RETURN(const double color_noise, NumberParam(ctx, kId, "color_noise", 0.02));
-  PB_ASSIGN_OR_RETURN(const int64_t stations, IntegerParam(ctx, "stations", 3));
-  PB_ASSIGN_OR_RETURN(const double truth_cell_mm, NumberParam(ctx, kId, "truth_cell_mm", 10));
+  PB_ASSIGN_OR_RETURN(const std::string preset, StringParam(ctx, kId, "preset"));
+  PB_ASSIGN_OR_RETURN(const int64_t points, WholeNumberParam(ctx, "points"));
+  PB_ASSIGN_OR_RETURN(const int64_t seed, WholeNumberParam(ctx, "seed"));
+  PB_ASSIGN_OR_RETURN(const double noise_mm, NumberParam(ctx, kId, "noise_mm"));
+  PB_ASSIGN_OR_RETURN(const double color_noise, NumberParam(ctx, kId, "color_noise"));
+  PB_ASSIGN_OR_RETURN(const int64_t stations, WholeNumberParam(ctx, "stations"));
+  PB_ASSIGN_OR_RETURN(const double truth_cell_mm, NumberParam(ctx, kId, "truth_cell_mm"));
   PB_ASSIGN_OR_RETURN(const std::optional<Vec3> size_m, SizeParam(ctx));
   if (points < 1000 || seed < 0 || stations < 1 || stations > 16 || !(noise_mm >= 0) ||
       !(color_noise >= 0 && color_noise <= 1) || !(truth_cell_mm > 0)) {

@@ -56,7 +56,7 @@ constexpr const char* kSchema = R"({
 
 Status Run(StageContext& ctx) {
   UnwrapOptions options;
-  PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method", "charts"));
+  PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method"));
   if (method == "charts") {
     options.method = UnwrapMethod::kCharts;
   } else if (method == "per_triangle") {
@@ -65,10 +65,10 @@ Status Run(StageContext& ctx) {
     return Status::Invalid(std::string(kId) + ": parameter 'method' must be 'charts' or " +
                            "'per_triangle', got '" + method + "'");
   }
-  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", 4096, 64, 16384));
-  PB_ASSIGN_OR_RETURN(const int64_t gutter, IntegerParam(ctx, kId, "gutter", 4, 0, 64));
-  PB_ASSIGN_OR_RETURN(options.max_angle_deg, NumberParam(ctx, kId, "max_angle_deg", 66.0));
-  PB_ASSIGN_OR_RETURN(options.max_stretch, NumberParam(ctx, kId, "max_stretch", 1.25));
+  PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", {64, 16384}));
+  PB_ASSIGN_OR_RETURN(const int64_t gutter, IntegerParam(ctx, kId, "gutter", {0, 64}));
+  PB_ASSIGN_OR_RETURN(options.max_angle_deg, NumberParam(ctx, kId, "max_angle_deg"));
+  PB_ASSIGN_OR_RETURN(options.max_stretch, NumberParam(ctx, kId, "max_stretch"));
   if (!(options.max_angle_deg > 0 && options.max_angle_deg < 90)) {
     return Status::Invalid(std::string(kId) +
                            ": parameter 'max_angle_deg' must be in (0, 90), got " +

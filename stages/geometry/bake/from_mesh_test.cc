@@ -1,11 +1,11 @@
 #include "stages/geometry/bake/from_mesh.h"
+#include "stages/geometry/testing/meshes.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
 #include <array>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <functional>
@@ -13,51 +13,11 @@
 namespace pb {
 namespace {
 
+using testing::LowGrid;
+using testing::Sheet;
+
 using ::testing::HasSubstr;
 
-// The unit square [0,1]^2 at z = 0 as n x n quads (2 triangles each), uvs =
-// (x, y): the atlas is covered, texel (x, y) of a size-S map has its centre
-// at u = (x + 0.5) / S, v = 1 - (y + 0.5) / S, i.e. at that point in space.
-Mesh LowGrid(int n) {
-  Mesh mesh;
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) {
-      const float x = float(i) / float(n), y = float(j) / float(n);
-      mesh.positions.insert(mesh.positions.end(), {x, y, 0.0f});
-      mesh.uvs.insert(mesh.uvs.end(), {x, y});
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
-    }
-  }
-  return mesh;
-}
-
-// A sheet over [x0,x1] x [y0,y1] as n x n quads, counter-clockwise seen from
-// +z, at height z(x, y), every vertex colored color(x, y). No normals.
-Mesh Sheet(double x0, double x1, double y0, double y1, int n,
-           const std::function<double(double, double)>& z,
-           const std::function<std::array<uint8_t, 3>(double, double)>& color) {
-  Mesh mesh;
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) {
-      const double x = x0 + (x1 - x0) * i / n, y = y0 + (y1 - y0) * j / n;
-      mesh.positions.insert(mesh.positions.end(), {float(x), float(y), float(z(x, y))});
-      const auto c = color(x, y);
-      mesh.colors.insert(mesh.colors.end(), c.begin(), c.end());
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
-    }
-  }
-  return mesh;
-}
 
 void Append(Mesh& to, const Mesh& from) {
   const uint32_t base = uint32_t(to.vertex_count());
@@ -350,45 +310,6 @@ TEST(BakeFromMeshTest, ClearErrors) {
   auto no_faces = BakeFromMesh(LowGrid(1), empty, Options(16), {});
   ASSERT_FALSE(no_faces.ok());
   EXPECT_THAT(no_faces.status().message(), HasSubstr("no faces"));
-}
-
-// The figure in docs/bake-from-mesh.md: a 240k-face low mesh, a 5e6-face
-// high mesh, 4096^2 maps. Run by hand:
-//   bake_from_mesh_test --gtest_also_run_disabled_tests --gtest_filter='*Timing*'
-TEST(BakeFromMeshTest, DISABLED_Timing) {
-  const auto wave = [](double x, double y) {
-    return 0.01 * std::sin(40 * x) * std::cos(31 * y) + 0.002 * std::sin(400 * x + 300 * y);
-  };
-  const auto start = std::chrono::steady_clock::now();
-  Mesh high = Sheet(-0.01, 1.01, -0.01, 1.01, 1582, wave, [](double x, double y) {
-    return std::array<uint8_t, 3>{uint8_t(std::clamp(x, 0.0, 1.0) * 255),
-                                  uint8_t(std::clamp(y, 0.0, 1.0) * 255),
-                                  uint8_t(128 + 100 * std::sin(90 * x))};
-  });
-  Mesh low = LowGrid(346);
-  for (size_t v = 0; v < low.vertex_count(); ++v) {
-    low.positions[3 * v + 2] = float(wave(low.positions[3 * v], low.positions[3 * v + 1]));
-  }
-  const double make_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  BakeOptions options;
-  options.size = 4096;
-  options.threads = 0;
-  FromMeshReport report;
-  const auto bake_start = std::chrono::steady_clock::now();
-  auto result = BakeFromMesh(std::move(low), high, options, {}, &report);
-  const double bake_s =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - bake_start).count();
-  ASSERT_TRUE(result.ok()) << result.status().message();
-  std::printf(
-      "low %zu faces, high %zu faces, %d^2: meshes made in %.2f s; bake %.2f s wall (BVH %.2f s "
-      "wall, %.2f s CPU; rays %.2f s wall, %.2f s CPU for %zu rays = %.1f Mrays per CPU-second); "
-      "hit %zu, fallback %zu, mean distance %.5f m, gutter %zu\n",
-      result->mesh.face_count(), high.face_count(), options.size, make_s, bake_s,
-      report.build_seconds, report.build_cpu_seconds, report.ray_seconds, report.ray_cpu_seconds,
-      report.rays_cast, report.rays_cast / report.ray_cpu_seconds * 1e-6, report.texels_hit,
-      report.texels_fallback,
-      report.mean_hit_distance_m, result->gutter_texels);
 }
 
 }  // namespace

@@ -2,11 +2,9 @@
 
 #include <gtest/gtest.h>
 
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
-#include <ctime>
 #include <random>
 #include <string>
 
@@ -485,66 +483,6 @@ TEST(TexelInterpTest, LargeAndSliverFacesStayWithinTheSampleRange) {
       EXPECT_GE(out.colors[i][0], 10 - 1e-3f) << int(mode) << " texel " << i;
       EXPECT_LE(out.colors[i][0], 50 + 1e-3f) << int(mode) << " texel " << i;
     }
-  }
-}
-
-// Timing tool, not a test: run with
-//   texel_interp_test --gtest_also_run_disabled_tests --gtest_filter='*DISABLED_Timing*'
-// 2.5e4 random faces of ~120 points and ~50 texels (the 3e7-point,
-// 2.5e5-face bake's averages), one thread, microseconds per face per mode
-// (thread CPU time, so that other load on the machine counts less; wall
-// time beside it). PB_TIMING_MODES=delaunay,splat limits the modes.
-TEST(TexelInterpTest, DISABLED_TimingPerFace) {
-  constexpr int kDistinct = 1000, kFaces = 25000;
-  std::mt19937 rng(5);
-  std::uniform_real_distribution<float> u(0, 1);
-  struct Face {
-    std::array<TexelSample, 3> corners;
-    std::vector<TexelSample> points;
-    std::vector<BakeTexel> texels;
-  };
-  std::vector<Face> faces;
-  size_t texel_count = 0;
-  while (faces.size() < kDistinct) {
-    Face face;
-    float x = 100 * u(rng), y = 100 * u(rng);
-    // Random triangles of area ~50 texels^2.
-    for (auto& c : face.corners) c = Sample(x + 12 * u(rng), y + 12 * u(rng), {0, 0, 0});
-    double area = 0.5 * std::abs((face.corners[1].s - face.corners[0].s) * (face.corners[2].t - face.corners[0].t) -
-                                 (face.corners[2].s - face.corners[0].s) * (face.corners[1].t - face.corners[0].t));
-    if (area < 45 || area > 75) continue;
-    face.texels = TexelsInside(face.corners);
-    face.points = RandomPoints(face.corners, 120, uint32_t(faces.size()));
-    texel_count += face.texels.size();
-    faces.push_back(std::move(face));
-  }
-  std::printf("faces: %d (%d distinct), %.1f texels and 120 points per face\n", kFaces, kDistinct,
-              double(texel_count) / kDistinct);
-  const char* names[] = {"delaunay", "nearest", "idw", "splat"};
-  const char* only = std::getenv("PB_TIMING_MODES");
-  auto cpu_seconds = [] {
-    timespec ts;
-    clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
-    return ts.tv_sec + 1e-9 * ts.tv_nsec;
-  };
-  for (TexelInterpolation mode : kAllModes) {
-    if (only && std::string(only).find(names[int(mode)]) == std::string::npos) continue;
-    FaceInterpolator interpolator;
-    TexelInterpolationOptions options;
-    options.mode = mode;
-    std::vector<Vec3> colors, normals;
-    double checksum = 0;
-    double cpu_start = cpu_seconds();
-    auto start = std::chrono::steady_clock::now();
-    for (int f = 0; f < kFaces; ++f) {
-      const Face& face = faces[f % kDistinct];
-      interpolator.Interpolate(face.corners, face.points, face.texels, options, colors, normals);
-      checksum += colors[0][0];
-    }
-    double wall = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    double us = 1e6 * (cpu_seconds() - cpu_start) / kFaces;
-    std::printf("%-9s %7.2f us/face CPU (%.2f wall) -> %5.2f s for 2.5e5 faces on 1 thread (checksum %.1f)\n",
-                names[int(mode)], us, 1e6 * wall / kFaces, us * 2.5e5 * 1e-6, checksum);
   }
 }
 

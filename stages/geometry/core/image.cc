@@ -7,6 +7,7 @@
 #include <OpenEXR/ImfChannelList.h>
 #include <OpenEXR/ImfFrameBuffer.h>
 #include <OpenEXR/ImfHeader.h>
+#include <OpenEXR/ImfIO.h>
 #include <OpenEXR/ImfInputFile.h>
 #include <OpenEXR/ImfOutputFile.h>
 #include <algorithm>
@@ -54,7 +55,8 @@ extern "C" void PngOnWarning(png_structp, png_const_charp) {}
 struct PngInfo {
   png_uint_32 width = 0;
   png_uint_32 height = 0;
-  int bit_depth = 0;
+  int bit_depth = 0;       // per sample, after the transforms: 8 or 16
+  int file_bit_depth = 0;  // as stored (IHDR): 1, 2, 4, 8 or 16
   int channels = 0;
 };
 
@@ -76,6 +78,7 @@ bool PngReadInfo(png_structp png, png_infop info, FILE* file, PngInfo* out) {
   out->width = png_get_image_width(png, info);
   out->height = png_get_image_height(png, info);
   out->bit_depth = png_get_bit_depth(png, info);
+  out->file_bit_depth = bit_depth;
   out->channels = png_get_channels(png, info);
   return true;
 }
@@ -137,11 +140,6 @@ class File {
   File(const File&) = delete;
   File& operator=(const File&) = delete;
   FILE* get() const { return file_; }
-  int Close() {
-    FILE* file = file_;
-    file_ = nullptr;
-    return std::fclose(file);
-  }
 
  private:
   FILE* file_;
@@ -158,9 +156,11 @@ const char* const kExrChannelNames[4][4] = {
 struct ImageFormat {
   std::string_view extension;
   Expected<Image> (*read)(const std::string&);
-  Status (*write)(const std::string&, const Image&);
+  Status (*write)(const std::string&, const Image&, Env*);
 };
-Status WriteFastPng(const std::string& path, const Image& image) { return WritePng(path, image); }
+Status WriteFastPng(const std::string& path, const Image& image, Env* env) {
+  return WritePng(path, image, PngEncoding::kFast, env);
+}
 constexpr ImageFormat kImageFormats[] = {
     {".png", &ReadPng, &WriteFastPng},
     {".exr", &ReadExr, &WriteExr},
@@ -260,15 +260,10 @@ Expected<std::vector<uint8_t>> EncodePngFor(const Image& image, PngEncoding enco
 
 }  // namespace
 
-Status WritePng(const std::string& path, const Image& image, PngEncoding encoding) {
+Status WritePng(const std::string& path, const Image& image, PngEncoding encoding, Env* env) {
   PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> bytes, EncodePngFor(image, encoding, path));
-  File file(path, "wb");
-  if (!file.get()) return Status::Errno(path, "open");
-  if (std::fwrite(bytes.data(), 1, bytes.size(), file.get()) != bytes.size()) {
-    return Status::Errno(path, "write");
-  }
-  if (file.Close() != 0) return Status::Errno(path, "close");
-  return Status::Ok();
+  return env->WriteFileAtomic(
+      path, std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()));
 }
 
 Expected<std::vector<uint8_t>> EncodePng(const Image& image, PngEncoding encoding) {
@@ -301,7 +296,8 @@ Expected<ImageSize> ReadImageSize(const std::string& path) {
         return Status::Corrupt(path + ": corrupt or truncated PNG: " + error.message);
       if (header.width > 0x7fffffffu || header.height > 0x7fffffffu)
         return Status::Corrupt(path + ": PNG header gives an invalid size");
-      return ImageSize{static_cast<int>(header.width), static_cast<int>(header.height)};
+      return ImageSize{static_cast<int>(header.width), static_cast<int>(header.height),
+                       header.file_bit_depth};
     }
   }
   if (magic[0] != 0x76 || magic[1] != 0x2f || magic[2] != 0x31 || magic[3] != 0x01)
@@ -372,7 +368,31 @@ Expected<Image> ReadExr(const std::string& path) {
   }
 }
 
-Status WriteExr(const std::string& path, const Image& image) {
+namespace {
+
+// OpenEXR writes through an OStream and seeks back to fill in the line offset
+// table, so the file is built in memory and then written durably.
+class MemoryOStream : public Imf::OStream {
+ public:
+  explicit MemoryOStream(const std::string& path) : Imf::OStream(path.c_str()) {}
+  void write(const char c[], int n) override {
+    const size_t end = position_ + static_cast<size_t>(n);
+    if (end > bytes_.size()) bytes_.resize(end);
+    std::memcpy(bytes_.data() + position_, c, static_cast<size_t>(n));
+    position_ = end;
+  }
+  uint64_t tellp() override { return position_; }
+  void seekp(uint64_t position) override { position_ = static_cast<size_t>(position); }
+  const std::string& bytes() const { return bytes_; }
+
+ private:
+  std::string bytes_;
+  size_t position_ = 0;
+};
+
+}  // namespace
+
+Expected<std::string> EncodeExr(const Image& image, const std::string& path) {
   if (image.type != Image::PixelType::kF32) {
     return Status::Invalid(path + ": EXR files hold float samples; write 8/16-bit images as .png");
   }
@@ -389,22 +409,31 @@ Status WriteExr(const std::string& path, const Image& image) {
     for (int c = 0; c < image.channels; ++c) {
       header.channels().insert(names[c], Imf::Channel(Imf::FLOAT));
     }
-    Imf::OutputFile file(path.c_str(), header);
-    Imf::FrameBuffer frame_buffer;
-    const size_t x_stride = sizeof(float) * size_t(image.channels);
-    const size_t y_stride = x_stride * size_t(image.width);
-    // OpenEXR takes non-const slices but only reads them when writing.
-    float* base = const_cast<float*>(image.f32());
-    for (int c = 0; c < image.channels; ++c) {
-      frame_buffer.insert(names[c], Imf::Slice::Make(Imf::FLOAT, base + c, header.dataWindow(),
-                                                     x_stride, y_stride));
+    MemoryOStream stream(path);
+    {
+      // The line offset table is written when the file object is destroyed.
+      Imf::OutputFile file(stream, header);
+      Imf::FrameBuffer frame_buffer;
+      const size_t x_stride = sizeof(float) * size_t(image.channels);
+      const size_t y_stride = x_stride * size_t(image.width);
+      // OpenEXR takes non-const slices but only reads them when writing.
+      float* base = const_cast<float*>(image.f32());
+      for (int c = 0; c < image.channels; ++c) {
+        frame_buffer.insert(names[c], Imf::Slice::Make(Imf::FLOAT, base + c, header.dataWindow(),
+                                                       x_stride, y_stride));
+      }
+      file.setFrameBuffer(frame_buffer);
+      file.writePixels(image.height);
     }
-    file.setFrameBuffer(frame_buffer);
-    file.writePixels(image.height);
-    return Status::Ok();
+    return std::string(stream.bytes());
   } catch (const std::exception& e) {
     return Status::Io(path + ": writing EXR: " + e.what());
   }
+}
+
+Status WriteExr(const std::string& path, const Image& image, Env* env) {
+  PB_ASSIGN_OR_RETURN(const std::string bytes, EncodeExr(image, path));
+  return env->WriteFileAtomic(path, bytes);
 }
 
 Expected<Image> ReadImage(const std::string& path) {
@@ -412,9 +441,9 @@ Expected<Image> ReadImage(const std::string& path) {
   return format->read(path);
 }
 
-Status WriteImage(const std::string& path, const Image& image) {
+Status WriteImage(const std::string& path, const Image& image, Env* env) {
   PB_ASSIGN_OR_RETURN(const ImageFormat* format, FormatFor(path));
-  return format->write(path, image);
+  return format->write(path, image, env);
 }
 
 }  // namespace pb

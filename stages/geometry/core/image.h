@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "base/env.h"
 #include "base/status.h"
 
 namespace pb {
@@ -67,8 +68,10 @@ Expected<Image> ReadPng(const std::string& path);
 // 6), up to 2x smaller on photographic images such as rendered frames; for
 // pictures that are kept (reports, docs). Both are lossless.
 enum class PngEncoding { kFast, kSmall };
+// Files are written durably (env->WriteFileAtomic): on failure `path` keeps
+// what it held.
 Status WritePng(const std::string& path, const Image& image,
-                PngEncoding encoding = PngEncoding::kFast);
+                PngEncoding encoding = PngEncoding::kFast, Env* env = Env::Default());
 // The bytes of the PNG file WritePng would write (e.g. to embed in a .glb).
 // Status::Invalid for kF32 or a malformed image.
 Expected<std::vector<uint8_t>> EncodePng(const Image& image,
@@ -78,22 +81,26 @@ Expected<std::vector<uint8_t>> EncodePng(const Image& image,
 // R,G,B[,A] or Y[,A], any stored pixel type) as kF32. Writing takes kF32,
 // ZIP-compressed FLOAT channels.
 Expected<Image> ReadExr(const std::string& path);
-Status WriteExr(const std::string& path, const Image& image);
+Status WriteExr(const std::string& path, const Image& image, Env* env = Env::Default());
+// The bytes of the OpenEXR file WriteExr writes; `path` only names the image
+// in errors.
+Expected<std::string> EncodeExr(const Image& image, const std::string& path);
 
-// Width and height of a PNG or OpenEXR file (its data window) from its
-// header, without decoding pixels; the format is told by the file's
+// Width and height of a PNG or OpenEXR file (its data window), and a PNG's
+// bit depth, from its header, without decoding pixels; the format is told by the file's
 // signature, not its name (cache files have no extension). Status::Unsupported
 // for a file that is neither, Status::Corrupt for an unreadable header,
 // Status::NotFound for a missing file.
 struct ImageSize {
   int width = 0;
   int height = 0;
+  int png_bit_depth = 0;  // as stored (IHDR): 1, 2, 4, 8 or 16; 0 for OpenEXR
 };
 Expected<ImageSize> ReadImageSize(const std::string& path);
 
 // By extension (case-insensitive): ".png" or ".exr"; Status::Unsupported
 // otherwise.
 Expected<Image> ReadImage(const std::string& path);
-Status WriteImage(const std::string& path, const Image& image);
+Status WriteImage(const std::string& path, const Image& image, Env* env = Env::Default());
 
 }  // namespace pb

@@ -1,5 +1,6 @@
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/testing/test_data.h"
+#include "base/testing/durable_write_check.h"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -67,10 +68,14 @@ TEST_F(ImageTest, ReadImageSizeFromHeadersWhateverTheFileName) {
   ASSERT_TRUE(png_size.ok()) << png_size.status().message();
   EXPECT_EQ(png_size->width, 37);
   EXPECT_EQ(png_size->height, 21);
+  EXPECT_EQ(png_size->png_bit_depth, 8);
   auto exr_size = ReadImageSize(Path("b"));
   ASSERT_TRUE(exr_size.ok()) << exr_size.status().message();
   EXPECT_EQ(exr_size->width, 19);
   EXPECT_EQ(exr_size->height, 44);
+  EXPECT_EQ(exr_size->png_bit_depth, 0);
+  ASSERT_TRUE(WritePng(Path("deep.png"), Image::Make(3, 2, 1, Image::PixelType::kU16)).ok());
+  EXPECT_EQ(ReadImageSize(Path("deep.png"))->png_bit_depth, 16);
 
   std::ofstream(Path("text")) << "not an image at all";
   EXPECT_EQ(ReadImageSize(Path("text")).status().code(), Status::Code::kUnsupported);
@@ -110,6 +115,24 @@ TEST_F(ImageTest, ExrFloatRoundTrip) {
     EXPECT_EQ(read->channels, channels);
     EXPECT_EQ(read->type, Image::PixelType::kF32);
     EXPECT_EQ(read->data, image.data);
+  }
+}
+
+// PNG and OpenEXR: a failed write keeps the earlier file.
+TEST_F(ImageTest, FailedWritesKeepTheEarlierFile) {
+  for (const auto& [name, type] : {std::pair{"map.png", Image::PixelType::kU8},
+                                  std::pair{"map.png", Image::PixelType::kU16},
+                                  std::pair{"map.exr", Image::PixelType::kF32}}) {
+    SCOPED_TRACE(name);
+    testing::TempDir dir;
+    const Image older = Image::Make(4, 4, 3, type);
+    Image newer = Image::Make(6, 5, 3, type);
+    newer.data[1] = 7;
+    ASSERT_TRUE(WriteImage(dir.Path(name), older).ok());
+    EXPECT_EQ(testing::ExpectFailedWritesKeepEarlierFiles(dir.path(), [&](Env* env) {
+                return WriteImage(dir.Path(name), newer, env);
+              }),
+              1);
   }
 }
 

@@ -88,13 +88,4 @@ Status Validate(const Mesh& mesh) {
   return Status::Ok();
 }
 
-PointCloud VerticesAsPoints(const Mesh& mesh) {
-  PointCloud cloud;
-  cloud.origin = mesh.origin;
-  cloud.positions = mesh.positions;
-  cloud.normals = mesh.normals;
-  cloud.colors = mesh.colors;
-  return cloud;
-}
-
 }  // namespace pb

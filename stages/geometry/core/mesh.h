@@ -47,8 +47,4 @@ Status Validate(const Mesh& mesh);
 // attribute) and renumbers the indices. Returns how many were dropped.
 size_t DropUnreferencedVertices(Mesh& mesh);
 
-// The vertices of a mesh as a point cloud (positions, normals, colors),
-// e.g. to bake from a mesh's own vertex colors.
-PointCloud VerticesAsPoints(const Mesh& mesh);
-
 }  // namespace pb

@@ -129,16 +129,9 @@ Expected<Table> TableFromJson(std::string_view json_text, const std::string& sou
   return table;
 }
 
-Status WriteTable(const std::string& path, const Table& table) {
+Status WriteTable(const std::string& path, const Table& table, Env* env) {
   PB_RETURN_IF_ERROR(Validate(table).WithContext("writing " + path));
-  const std::string text = TableToJson(table);
-  FILE* file = std::fopen(path.c_str(), "wb");
-  if (!file) return Status::Errno(path, "open");
-  const bool written = std::fwrite(text.data(), 1, text.size(), file) == text.size();
-  const bool closed = std::fclose(file) == 0;
-  if (!written) return Status::Errno(path, "write");
-  if (!closed) return Status::Errno(path, "close");
-  return Status::Ok();
+  return env->WriteFileAtomic(path, TableToJson(table));
 }
 
 Expected<Table> ReadTable(const std::string& path) {

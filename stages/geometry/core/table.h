@@ -20,6 +20,7 @@
 #include <variant>
 #include <vector>
 
+#include "base/env.h"
 #include "base/status.h"
 
 namespace pb {
@@ -49,8 +50,8 @@ std::string TableToJson(const Table& table);
 // `source` names the text in errors (a path).
 Expected<Table> TableFromJson(std::string_view json_text, const std::string& source);
 
-// Write to `path` directly (callers needing atomicity rename a temporary).
-Status WriteTable(const std::string& path, const Table& table);
+// Writes durably (env->WriteFileAtomic): on failure `path` keeps what it held.
+Status WriteTable(const std::string& path, const Table& table, Env* env = Env::Default());
 Expected<Table> ReadTable(const std::string& path);
 
 }  // namespace pb

@@ -7,6 +7,9 @@
 #include <cmath>
 #include <filesystem>
 
+#include "base/testing/durable_write_check.h"
+#include "base/testing/temp_dir.h"
+
 namespace pb {
 namespace {
 
@@ -17,12 +20,10 @@ TEST(TableTest, RoundTripThroughFile) {
   table.columns = {"scene", "points", "psnr_db", "ok", "note"};
   table.rows.push_back({std::string("d11v3"), int64_t{35947}, 31.25, true, std::monostate{}});
   table.rows.push_back({std::string("synthetic"), int64_t{-1}, 1.0, false, std::string("x")});
-  const std::string path = (std::filesystem::temp_directory_path() /
-                            ("pb_table_test_" + std::to_string(::getpid()) + ".json"))
-                               .string();
+  testing::TempDir dir;
+  const std::string path = dir.Path("table.json");
   ASSERT_TRUE(WriteTable(path, table).ok());
   auto read = ReadTable(path);
-  std::filesystem::remove(path);
   ASSERT_TRUE(read.ok()) << read.status().message();
   EXPECT_EQ(read->columns, table.columns);
   EXPECT_EQ(read->rows, table.rows);  // 1.0 stays a double, -1 an integer
@@ -30,6 +31,20 @@ TEST(TableTest, RoundTripThroughFile) {
   EXPECT_DOUBLE_EQ(TableNumber(read->get(0, "psnr_db")), 31.25);
   EXPECT_TRUE(std::isnan(TableNumber(read->get(0, "scene"))));
   EXPECT_TRUE(std::holds_alternative<std::monostate>(read->get(0, "missing")));
+}
+
+TEST(TableTest, FailedWritesKeepTheEarlierFile) {
+  Table older, newer;
+  older.columns = {"points"};
+  older.rows = {{int64_t{1}}};
+  newer.columns = {"points", "faces"};
+  newer.rows = {{int64_t{2}, int64_t{3}}};
+  testing::TempDir dir;
+  ASSERT_TRUE(WriteTable(dir.Path("table.json"), older).ok());
+  EXPECT_EQ(testing::ExpectFailedWritesKeepEarlierFiles(dir.path(), [&](Env* env) {
+              return WriteTable(dir.Path("table.json"), newer, env);
+            }),
+            1);
 }
 
 TEST(TableTest, JsonShape) {

@@ -181,12 +181,14 @@ Expected<FrameSet> ReadFrames(const std::string& index_path, const FramesFilePat
   return set;
 }
 
-Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of) {
+Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of, Env* env) {
   FramesIndex index;
   index.width = frames.width;
   index.height = frames.height;
   for (const Frame& f : frames.frames) index.frames.push_back(f.entry);
   PB_RETURN_IF_ERROR(Validate(index).WithContext("writing frames"));
+  std::vector<std::vector<uint8_t>> pngs;
+  std::vector<std::string> depths, depth_paths;  // depth maps (EXR), when the frames have them
   for (const Frame& f : frames.frames) {
     const Image& image = f.image;
     if (image.type != Image::PixelType::kU8 || (image.channels != 3 && image.channels != 4) ||
@@ -194,9 +196,7 @@ Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of) {
       return Status::Invalid("writing frames: frame '" + f.entry.name + "' must be an 8-bit RGB(A) " +
                              std::to_string(frames.width) + "x" + std::to_string(frames.height) +
                              " image");
-    PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> png, EncodePng(image));
-    PB_RETURN_IF_ERROR(Env::Default()->WriteFileAtomic(
-        path_of(f.entry.file), std::string_view(reinterpret_cast<const char*>(png.data()), png.size())));
+    PB_ASSIGN_OR_RETURN(pngs.emplace_back(), EncodePng(image));
     if (!f.entry.depth_file.empty()) {
       const Image& depth = f.depth;
       if (depth.type != Image::PixelType::kF32 || depth.channels != 1 || depth.width != frames.width ||
@@ -204,14 +204,23 @@ Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of) {
         return Status::Invalid("writing frames: frame '" + f.entry.name + "' names a depth file but has no " +
                                std::to_string(frames.width) + "x" + std::to_string(frames.height) +
                                " one-channel float depth map");
-      PB_RETURN_IF_ERROR(WriteExr(path_of(f.entry.depth_file), depth));
+      PB_ASSIGN_OR_RETURN(depths.emplace_back(), EncodeExr(depth, path_of(f.entry.depth_file)));
+      depth_paths.push_back(path_of(f.entry.depth_file));
     }
   }
-  return Env::Default()->WriteFileAtomic(path_of(kFramesIndexFile), FramesIndexToJson(index));
+  const std::string index_json = FramesIndexToJson(index);
+  std::vector<FileContents> files;
+  for (size_t i = 0; i < pngs.size(); ++i) {
+    files.push_back({path_of(frames.frames[i].entry.file),
+                     std::string_view(reinterpret_cast<const char*>(pngs[i].data()), pngs[i].size())});
+  }
+  for (size_t i = 0; i < depths.size(); ++i) files.push_back({depth_paths[i], depths[i]});
+  files.push_back({path_of(kFramesIndexFile), index_json});
+  return WriteFilesAtomic(env, files);
 }
 
-Status WriteFrames(const std::string& dir, const FrameSet& frames) {
-  return WriteFrames(frames, [&dir](const std::string& file) { return JoinPath(dir, file); });
+Status WriteFrames(const std::string& dir, const FrameSet& frames, Env* env) {
+  return WriteFrames(frames, [&dir](const std::string& file) { return JoinPath(dir, file); }, env);
 }
 
 }  // namespace pb

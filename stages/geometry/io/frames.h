@@ -36,6 +36,7 @@
 #include <string_view>
 #include <vector>
 
+#include "base/env.h"
 #include "base/status.h"
 #include "stages/geometry/core/image.h"
 
@@ -100,9 +101,11 @@ using FramesFilePath = std::function<std::string(const std::string& file_name)>;
 // format (Status::Invalid).
 Expected<FrameSet> ReadFrames(const std::string& index_path, const FramesFilePath& path_of = {});
 
-// Writes every image, then frames.json, to `path_of(file)`.
-Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of);
+// Writes every image and frames.json to `path_of(file)` as one durable set
+// (WriteFilesAtomic, base/env.h; frames.json renamed last): a failed write
+// leaves the earlier files as they were.
+Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of, Env* env = Env::Default());
 // The same into folder `dir` (which must exist).
-Status WriteFrames(const std::string& dir, const FrameSet& frames);
+Status WriteFrames(const std::string& dir, const FrameSet& frames, Env* env = Env::Default());
 
 }  // namespace pb

@@ -10,6 +10,7 @@
 #include <cstring>
 #include <filesystem>
 #include <limits>
+#include <memory>
 #include <nlohmann/json.hpp>
 
 namespace pb {
@@ -78,31 +79,12 @@ void AppendU32(std::string* out, uint32_t value) {
   out->append(reinterpret_cast<const char*>(&value), 4);
 }
 
-// Writes `chunks` to path.tmp and renames it to path; removes the temporary
-// file on failure.
-Status WriteAtomically(const std::string& path, const std::vector<std::string_view>& parts) {
-  const std::string temp = path + ".tmp";
-  FILE* file = std::fopen(temp.c_str(), "wb");
-  if (!file) return Status::Errno(temp, "open");
-  for (std::string_view part : parts) {
-    if (std::fwrite(part.data(), 1, part.size(), file) != part.size()) {
-      const Status status = Status::Errno(temp, "write");
-      std::fclose(file);
-      std::remove(temp.c_str());
-      return status;
-    }
-  }
-  if (std::fclose(file) != 0) {
-    const Status status = Status::Errno(temp, "close");
-    std::remove(temp.c_str());
-    return status;
-  }
-  if (std::rename(temp.c_str(), path.c_str()) != 0) {
-    const Status status = Status::Errno(path, "rename");
-    std::remove(temp.c_str());
-    return status;
-  }
-  return Status::Ok();
+// Writes `parts` one after the other as one durable file (env->NewAtomicFile),
+// without joining them in memory first.
+Status WriteParts(const std::string& path, const std::vector<std::string_view>& parts, Env* env) {
+  PB_ASSIGN_OR_RETURN(std::unique_ptr<AtomicFile> file, env->NewAtomicFile(path));
+  for (std::string_view part : parts) PB_RETURN_IF_ERROR(file->Append(part));
+  return file->Commit();
 }
 
 // Normals to write: the mesh's, renormalized; computed where missing or zero.
@@ -147,7 +129,7 @@ Expected<std::vector<float>> UnitTangents(const Mesh& mesh, GltfWriteReport* rep
 }  // namespace
 
 Status WriteGlb(const std::string& path, const Mesh& mesh, const GltfWriteOptions& options,
-                GltfWriteReport* report) {
+                GltfWriteReport* report, Env* env) {
   GltfWriteReport local;
   GltfWriteReport& out = report ? *report : local;
   out = GltfWriteReport{};
@@ -308,7 +290,7 @@ Status WriteGlb(const std::string& path, const Mesh& mesh, const GltfWriteOption
   AppendU32(&bin_header, static_cast<uint32_t>(bin.bin().size()));
   AppendU32(&bin_header, kChunkBin);
   const std::string_view bin_view(reinterpret_cast<const char*>(bin.bin().data()), bin.bin().size());
-  PB_RETURN_IF_ERROR(WriteAtomically(path, {header, json, bin_header, bin_view}));
+  PB_RETURN_IF_ERROR(WriteParts(path, {header, json, bin_header, bin_view}, env));
   out.bytes = total;
   return Status::Ok();
 }

@@ -41,14 +41,15 @@
 //          tangent-space, +Y up); each texture is an image in its own
 //          bufferView with mimeType image/png, sampler linear/mipmapped,
 //          clamp to edge. A mesh without textures gets the factors only.
-// The file is written to "<path>.tmp" and renamed: no partial file is left
-// under either name on failure.
+// The file is written durably (env->NewAtomicFile: a temporary, fsync,
+// rename): on failure `path` keeps what it held and no partial file is left.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "base/env.h"
 #include "base/status.h"
 #include "stages/geometry/core/mesh.h"
 #include "stages/geometry/core/tangents.h"
@@ -78,7 +79,7 @@ struct GltfWriteReport {
 // textures but no uvs, or a texture that is not a PNG; Status::Io naming the
 // file when it cannot be written.
 Status WriteGlb(const std::string& path, const Mesh& mesh, const GltfWriteOptions& options,
-                GltfWriteReport* report = nullptr);
+                GltfWriteReport* report = nullptr, Env* env = Env::Default());
 
 struct GlbModel {
   Mesh mesh;                            // origin from extras.pointbake_origin (else the

@@ -10,6 +10,7 @@
 
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/testing/test_data.h"
+#include "base/testing/durable_write_check.h"
 
 namespace pb {
 namespace {
@@ -231,6 +232,16 @@ TEST_F(GltfTest, UnwritableFolderNamesThePathAndLeavesNoFile) {
   EXPECT_EQ(status.code(), Status::Code::kIo);
   EXPECT_NE(status.message().find(path), std::string::npos) << status.message();
   EXPECT_TRUE(std::filesystem::is_empty(dir_));
+}
+
+TEST_F(GltfTest, FailedWritesKeepTheEarlierFile) {
+  ASSERT_TRUE(WriteGlb(Path("model.glb"), Grid(2, 1), GltfWriteOptions{}).ok());
+  GltfWriteOptions textured;
+  textured.base_color_png = Png(8, 8, false);
+  EXPECT_EQ(testing::ExpectFailedWritesKeepEarlierFiles(dir_, [&](Env* env) {
+              return WriteGlb(Path("model.glb"), Grid(3, 2), textured, nullptr, env);
+            }),
+            1);
 }
 
 TEST_F(GltfTest, ReaderRejectsDamagedFiles) {

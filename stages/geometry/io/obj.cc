@@ -40,23 +40,6 @@ void AppendIndex(std::string* out, uint64_t value) {
   out->append(buffer, result.ptr);
 }
 
-struct PendingFile {
-  std::string path;
-  std::string temp;
-};
-
-// Writes `bytes` to path.tmp; *created tells whether that file now exists.
-Status WriteTemp(const PendingFile& file, std::string_view bytes, bool* created) {
-  FILE* f = std::fopen(file.temp.c_str(), "wb");
-  *created = f != nullptr;
-  if (!f) return Status::Errno(file.temp, "open");
-  const bool wrote = std::fwrite(bytes.data(), 1, bytes.size(), f) == bytes.size();
-  const bool closed = std::fclose(f) == 0;
-  if (!wrote) return Status::Errno(file.temp, "write");
-  if (!closed) return Status::Errno(file.temp, "close");
-  return Status::Ok();
-}
-
 std::string ObjText(const Mesh& mesh, const std::vector<float>& normals, const ObjWriteOptions& options,
                     const std::string& mtl_name) {
   const size_t n = mesh.vertex_count();
@@ -132,7 +115,7 @@ std::string MtlText(const ObjWriteOptions& options) {
 }  // namespace
 
 Status WriteObj(const std::string& obj_path, const Mesh& mesh, const ObjWriteOptions& options,
-                ObjWriteReport* report) {
+                ObjWriteReport* report, Env* env) {
   ObjWriteReport local;
   ObjWriteReport& out = report ? *report : local;
   out = ObjWriteReport{};
@@ -166,46 +149,23 @@ Status WriteObj(const std::string& obj_path, const Mesh& mesh, const ObjWriteOpt
 
   const std::filesystem::path obj(obj_path);
   const std::string mtl_name = obj.stem().string() + ".mtl";
-  std::vector<std::pair<PendingFile, std::string_view>> files;
-  const std::string obj_text = ObjText(mesh, normals, options, mtl_name);
-  const std::string mtl_text = MtlText(options);
-  auto pending = [](const std::filesystem::path& path) {
-    return PendingFile{path.string(), path.string() + ".tmp"};
-  };
-  files.push_back({pending(obj), obj_text});
-  files.push_back({pending(obj.parent_path() / mtl_name), mtl_text});
   auto bytes_of = [](const std::vector<uint8_t>& v) {
     return std::string_view(reinterpret_cast<const char*>(v.data()), v.size());
   };
-  if (has_color) files.push_back({pending(obj.parent_path() / "color.png"), bytes_of(options.base_color_png)});
-  if (has_normal) files.push_back({pending(obj.parent_path() / "normal.png"), bytes_of(options.normal_png)});
+  // The .obj is published last: it is the file a viewer opens.
+  const std::string obj_text = ObjText(mesh, normals, options, mtl_name);
+  const std::string mtl_text = MtlText(options);
+  std::vector<FileContents> files;
+  if (has_color) files.push_back({(obj.parent_path() / "color.png").string(), bytes_of(options.base_color_png)});
+  if (has_normal) files.push_back({(obj.parent_path() / "normal.png").string(), bytes_of(options.normal_png)});
+  files.push_back({(obj.parent_path() / mtl_name).string(), mtl_text});
+  files.push_back({obj.string(), obj_text});
 
-  size_t written = 0;  // temporary files created so far
-  auto remove_temps = [&files, &written]() {
-    for (size_t i = 0; i < written; ++i) std::remove(files[i].first.temp.c_str());
-  };
-  for (const auto& [file, bytes] : files) {
-    bool created = false;
-    const Status status = WriteTemp(file, bytes, &created);
-    if (!status.ok()) {
-      if (created) std::remove(file.temp.c_str());
-      remove_temps();
-      return status;
-    }
-    ++written;
-  }
-  for (size_t i = 0; i < files.size(); ++i) {
-    if (std::rename(files[i].first.temp.c_str(), files[i].first.path.c_str()) != 0) {
-      const Status status = Status::Errno(files[i].first.path, "rename");
-      for (size_t j = 0; j < i; ++j) std::remove(files[j].first.path.c_str());
-      for (size_t j = i; j < files.size(); ++j) std::remove(files[j].first.temp.c_str());
-      return status;
-    }
-  }
-  for (const auto& [file, bytes] : files) {
-    out.files.push_back(file.path);
-    out.bytes += bytes.size();
-  }
+  PB_RETURN_IF_ERROR(WriteFilesAtomic(env, files));
+  out.files.push_back(obj.string());
+  out.files.push_back(files[files.size() - 2].path);
+  for (size_t i = 0; i + 2 < files.size(); ++i) out.files.push_back(files[i].path);
+  for (const FileContents& file : files) out.bytes += file.bytes.size();
   return Status::Ok();
 }
 

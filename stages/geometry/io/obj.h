@@ -37,14 +37,16 @@
 //   color.png, normal.png                  <- the given PNG bytes, unchanged
 // Frames stay in the mesh's (z-up) coordinates. OBJ has no tangents: viewers
 // derive them from uvs and normals (MikkTSpace in Blender).
-// Every file is written to "<file>.tmp" first and all are renamed at the
-// end; on failure no file of the set is left behind.
+// The files are written as one durable set (WriteFilesAtomic, base/env.h):
+// all are synced before any is renamed, the .obj last, so a write that fails
+// (full disk, I/O error) leaves the earlier files as they were.
 #pragma once
 
 #include <cstdint>
 #include <string>
 #include <vector>
 
+#include "base/env.h"
 #include "base/status.h"
 #include "stages/geometry/core/mesh.h"
 
@@ -70,7 +72,7 @@ struct ObjWriteReport {
 // textures but no uvs, or a texture that is not a PNG; Status::Io naming
 // the file when one cannot be written.
 Status WriteObj(const std::string& obj_path, const Mesh& mesh, const ObjWriteOptions& options,
-                ObjWriteReport* report = nullptr);
+                ObjWriteReport* report = nullptr, Env* env = Env::Default());
 
 struct ObjModel {
   Mesh mesh;                            // origin from "# origin" (else the

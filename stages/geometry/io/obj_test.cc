@@ -9,6 +9,7 @@
 
 #include "stages/geometry/core/tangents.h"
 #include "stages/geometry/testing/test_data.h"
+#include "base/testing/durable_write_check.h"
 
 namespace pb {
 namespace {
@@ -70,6 +71,23 @@ TEST_F(ObjTest, TexturedMeshRoundTrips) {
   EXPECT_EQ(back.indices, mesh.indices);
   EXPECT_EQ(model->base_color_png, kFakePngColor);
   EXPECT_EQ(model->normal_png, kFakePngNormal);
+}
+
+// The four files of a textured model: a failure at any of them keeps the
+// whole earlier set (nothing is renamed before every file is synced).
+TEST_F(ObjTest, FailedWritesKeepTheEarlierFiles) {
+  ObjWriteOptions textured;
+  textured.base_color_png = kFakePngColor;
+  textured.normal_png = kFakePngNormal;
+  ASSERT_TRUE(WriteObj(Path("model.obj"), Grid(2), textured).ok());
+  ObjWriteOptions other = textured;
+  other.name = "other";
+  other.base_color_png = kFakePngNormal;
+  other.normal_png = kFakePngColor;
+  EXPECT_EQ(testing::ExpectFailedWritesKeepEarlierFiles(dir_, [&](Env* env) {
+              return WriteObj(Path("model.obj"), Grid(3), other, nullptr, env);
+            }),
+            4);
 }
 
 TEST_F(ObjTest, CoordinatesAreAbsolute) {
@@ -174,19 +192,20 @@ TEST_F(ObjTest, UnwritableFolderNamesThePathAndLeavesNoFile) {
   const std::string path = Path("missing/model.obj");
   const Status status = WriteObj(path, Grid(2), options);
   EXPECT_EQ(status.code(), Status::Code::kIo);
-  EXPECT_NE(status.message().find(Path("missing/model.obj")), std::string::npos) << status.message();
+  EXPECT_NE(status.message().find(Path("missing/color.png")), std::string::npos) << status.message();
   EXPECT_TRUE(std::filesystem::is_empty(dir_));
-  // A folder in which the texture cannot be written (a directory is in its
-  // way): the .obj and .mtl written before it are removed too.
-  std::filesystem::create_directories(Path("out/color.png.tmp"));
+  // A folder in which the texture cannot be renamed into place (a directory
+  // is in its way): the texture is renamed first, so the .obj and .mtl never
+  // appear, and every temporary is removed.
+  std::filesystem::create_directories(Path("out/color.png"));
   const Status blocked = WriteObj(Path("out/model.obj"), Grid(2), options);
   EXPECT_EQ(blocked.code(), Status::Code::kIo);
-  EXPECT_NE(blocked.message().find("color.png.tmp"), std::string::npos) << blocked.message();
+  EXPECT_NE(blocked.message().find("out/color.png: rename"), std::string::npos) << blocked.message();
   std::vector<std::string> left;
   for (const auto& entry : std::filesystem::directory_iterator(Path("out"))) {
     left.push_back(entry.path().filename().string());
   }
-  EXPECT_EQ(left, std::vector<std::string>{"color.png.tmp"});
+  EXPECT_EQ(left, std::vector<std::string>{"color.png"});
 }
 
 }  // namespace

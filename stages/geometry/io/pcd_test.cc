@@ -3,7 +3,6 @@
 #include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
-#include <malloc.h>
 #include <stdlib.h>
 #include <unistd.h>
 
@@ -523,98 +522,6 @@ TEST_F(PcdTest, ErrorCorruptLzfStreams) {
                                         "DATA binary_compressed\n" +
                   block(2, 1200, std::string("\x00\x00", 2)),
               "2 compressed bytes cannot expand to 1200");
-}
-
-// ---------------------------------------------------------------------------
-// Peak memory (run with --gtest_also_run_disabled_tests; Linux only; writes
-// up to ~300 MB into the temp dir).
-
-// A /proc/self/status value in kB ("VmRSS", "VmHWM"), -1 if absent.
-int64_t ProcStatusKb(const std::string& key) {
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  while (std::getline(status, line)) {
-    if (line.rfind(key + ":", 0) == 0) {
-      return std::strtoll(line.c_str() + key.size() + 1, nullptr, 10);
-    }
-  }
-  return -1;
-}
-
-// 5 million points x y z rgb normal_x normal_y normal_z (all 4 bytes), in
-// `data` = ascii, binary or binary_compressed, written to `path`.
-void WriteLargeCloud(const std::string& path, const std::string& data, int n) {
-  auto value = [](int i, int field) -> float {
-    const uint32_t hash = static_cast<uint32_t>(i) * 2654435761u;
-    switch (field) {
-      case 0: return 0.01f * static_cast<float>(i % 1000);
-      case 1: return 0.01f * static_cast<float>(i / 1000 % 1000);
-      case 2: return 0.001f * static_cast<float>(hash >> 22);
-      case 3: return std::bit_cast<float>(hash >> 8);  // packed 0x00RRGGBB
-      case 4: return 0.6f;
-      case 5: return (hash & 1) ? 0.8f : -0.8f;
-      default: return 0;
-    }
-  };
-  std::ofstream out(path, std::ios::binary);
-  out << "FIELDS x y z rgb normal_x normal_y normal_z\nSIZE 4 4 4 4 4 4 4\n"
-         "TYPE F F F U F F F\nWIDTH "
-      << n << "\nHEIGHT 1\nPOINTS " << n << "\nDATA " << data << "\n";
-  if (data == "binary_compressed") {
-    std::string soa;
-    soa.reserve(size_t{28} * n);
-    for (int field = 0; field < 7; ++field) {
-      for (int i = 0; i < n; ++i) Append(&soa, value(i, field));
-    }
-    out << CompressedBody(soa);
-    return;
-  }
-  std::string chunk;
-  for (int i = 0; i < n; ++i) {
-    if (data == "binary") {
-      for (int field = 0; field < 7; ++field) Append(&chunk, value(i, field));
-    } else {
-      char line[160];
-      std::snprintf(line, sizeof line, "%.9g %.9g %.9g %u %.9g %.9g %.9g\n", value(i, 0),
-                    value(i, 1), value(i, 2), std::bit_cast<uint32_t>(value(i, 3)), value(i, 4),
-                    value(i, 5), value(i, 6));
-      chunk += line;
-    }
-    if (chunk.size() > (1 << 20)) {
-      out << chunk;
-      chunk.clear();
-    }
-  }
-  out << chunk;
-}
-
-TEST_F(PcdTest, DISABLED_PeakMemoryStaysNearTheDecodedCloud) {
-  constexpr int kPoints = 5'000'000;
-  for (const std::string data : {"binary_compressed", "binary", "ascii"}) {
-    const std::string path = (dir_ / ("large_" + data + ".pcd")).string();
-    WriteLargeCloud(path, data, kPoints);
-    // Return freed heap pages (so the read cannot reuse resident memory
-    // unseen), then reset VmHWM to the current RSS (Linux >= 4.0).
-    ::malloc_trim(0);
-    std::ofstream("/proc/self/clear_refs") << "5";
-    const int64_t before_kb = ProcStatusKb("VmRSS");
-    if (before_kb < 0 || ProcStatusKb("VmHWM") > before_kb + 1024) {
-      GTEST_SKIP() << "cannot reset the peak RSS (/proc/self/clear_refs)";
-    }
-    const auto read = ReadPcd(path, {});
-    const int64_t peak_kb = ProcStatusKb("VmHWM");
-    ASSERT_TRUE(read.ok()) << read.status().message();
-    ASSERT_EQ(read->points.size(), static_cast<size_t>(kPoints));
-    const double cloud_bytes = 4.0 * read->points.positions.size() +
-                               4.0 * read->points.normals.size() + read->points.colors.size();
-    const double ratio = 1024.0 * static_cast<double>(peak_kb - before_kb) / cloud_bytes;
-    std::printf("pcd %s: decoded cloud %.1f MB; peak RSS %.1f MB = %.1f MB before the read "
-                "+ %.1f MB: ratio %.3f (whole process %.3f)\n",
-                data.c_str(), cloud_bytes / 1e6, peak_kb * 1024 / 1e6, before_kb * 1024 / 1e6,
-                (peak_kb - before_kb) * 1024 / 1e6, ratio, peak_kb * 1024 / cloud_bytes);
-    EXPECT_LE(ratio, 1.3) << data;
-    std::filesystem::remove(path);
-  }
 }
 
 // ---------------------------------------------------------------------------

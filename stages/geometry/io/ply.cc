@@ -9,6 +9,7 @@
 #include <cstring>
 #include <initializer_list>
 #include <limits>
+#include <memory>
 #include <optional>
 #include <span>
 #include <type_traits>
@@ -1030,21 +1031,14 @@ class PlyParser {
 // ---------------------------------------------------------------------------
 // Writing.
 
+// Appends through a 1 MiB buffer to a durable write (Env::NewAtomicFile): the
+// PLY is streamed, never built whole in memory.
 class OutputFile {
  public:
-  explicit OutputFile(std::string path) : path_(std::move(path)) {}
-  ~OutputFile() {
-    if (file_) std::fclose(file_);
-  }
-  OutputFile(const OutputFile&) = delete;
-  OutputFile& operator=(const OutputFile&) = delete;
-
-  Status Open() {
-    file_ = std::fopen(path_.c_str(), "wb");
-    if (!file_) return Status::Errno(path_, "open");
+  explicit OutputFile(std::unique_ptr<AtomicFile> file) : file_(std::move(file)) {
     buffer_.reserve(kChunkBytes);
-    return Status::Ok();
   }
+
   void Append(const void* data, size_t n) {
     const char* bytes = static_cast<const char*>(data);
     buffer_.insert(buffer_.end(), bytes, bytes + n);
@@ -1058,24 +1052,18 @@ class OutputFile {
   }
   Status MaybeFlush() { return buffer_.size() >= kChunkBytes ? Flush() : Status::Ok(); }
   Status Flush() {
-    if (!buffer_.empty() && std::fwrite(buffer_.data(), 1, buffer_.size(), file_) != buffer_.size()) {
-      return Status::Errno(path_, "write");
-    }
+    if (!buffer_.empty()) PB_RETURN_IF_ERROR(file_->Append({buffer_.data(), buffer_.size()}));
     buffer_.clear();
     return Status::Ok();
   }
-  Status Close() {
+  Status Commit() {
     PB_RETURN_IF_ERROR(Flush());
-    FILE* file = file_;
-    file_ = nullptr;
-    if (std::fclose(file) != 0) return Status::Errno(path_, "close");
-    return Status::Ok();
+    return file_->Commit();
   }
 
  private:
   static constexpr size_t kChunkBytes = size_t{1} << 20;
-  std::string path_;
-  FILE* file_ = nullptr;
+  std::unique_ptr<AtomicFile> file_;
   std::vector<char> buffer_;
 };
 
@@ -1096,7 +1084,7 @@ struct PlyArrays {
   size_t face_count() const { return indices.size() / 3; }
 };
 
-Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh) {
+Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh, Env* env) {
   const size_t n = mesh.positions.size() / 3;
   std::string header = "ply\nformat binary_little_endian 1.0\n";
   header += is_mesh ? "comment pointbake mesh " + std::to_string(kPlyMeshVersion) + "\n"
@@ -1123,8 +1111,8 @@ Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh) {
   }
   header += "end_header\n";
 
-  OutputFile out(path);
-  PB_RETURN_IF_ERROR(out.Open());
+  PB_ASSIGN_OR_RETURN(std::unique_ptr<AtomicFile> file, env->NewAtomicFile(path));
+  OutputFile out(std::move(file));
   out.Append(header.data(), header.size());
   for (size_t i = 0; i < n; ++i) {
     for (int k = 0; k < 3; ++k) out.AppendLittleEndian(mesh.positions[3 * i + k]);
@@ -1150,7 +1138,7 @@ Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh) {
       PB_RETURN_IF_ERROR(out.MaybeFlush());
     }
   }
-  return out.Close();
+  return out.Commit();
 }
 
 }  // namespace
@@ -1177,7 +1165,7 @@ Expected<PlyPoints> ReadPlyPoints(const std::string& path, const PlyReadOptions&
   return result;
 }
 
-Status WritePlyPoints(const std::string& path, const PointCloud& cloud) {
+Status WritePlyPoints(const std::string& path, const PointCloud& cloud, Env* env) {
   PB_RETURN_IF_ERROR(Validate(cloud).WithContext("writing " + path));
   PlyArrays arrays;
   arrays.origin = cloud.origin;
@@ -1187,10 +1175,10 @@ Status WritePlyPoints(const std::string& path, const PointCloud& cloud) {
   arrays.intensities = cloud.intensities;
   arrays.station_ids = cloud.station_ids;
   arrays.stations = cloud.stations;
-  return WritePly(path, arrays, /*is_mesh=*/false);
+  return WritePly(path, arrays, /*is_mesh=*/false, env);
 }
 
-Status WritePlyMesh(const std::string& path, const Mesh& mesh) {
+Status WritePlyMesh(const std::string& path, const Mesh& mesh, Env* env) {
   PB_RETURN_IF_ERROR(Validate(mesh).WithContext("writing " + path));
   PlyArrays arrays;
   arrays.origin = mesh.origin;
@@ -1200,7 +1188,7 @@ Status WritePlyMesh(const std::string& path, const Mesh& mesh) {
   arrays.uvs = mesh.uvs;
   arrays.tangents = mesh.tangents;
   arrays.indices = mesh.indices;
-  return WritePly(path, arrays, /*is_mesh=*/true);
+  return WritePly(path, arrays, /*is_mesh=*/true, env);
 }
 
 }  // namespace pb

@@ -63,6 +63,7 @@
 #include <string>
 #include <vector>
 
+#include "base/env.h"
 #include "base/status.h"
 #include "stages/geometry/core/mesh.h"
 #include "stages/geometry/core/point_cloud.h"
@@ -108,10 +109,11 @@ Expected<PlyPoints> ReadPlyPoints(const std::string& path, const PlyReadOptions&
 // without triangles.
 Expected<PlyMesh> ReadPlyMesh(const std::string& path, const PlyReadOptions& options = {});
 
-// Write the binary layout above to `path` directly (callers that need
-// atomicity write to a temporary name and rename). Status::Invalid if the
-// attribute arrays disagree with the vertex count.
-Status WritePlyPoints(const std::string& path, const PointCloud& cloud);
-Status WritePlyMesh(const std::string& path, const Mesh& mesh);
+// Write the binary layout above to `path`, durably (env->NewAtomicFile:
+// streamed to a temporary, fsynced, renamed; on failure `path` keeps what it
+// held). Status::Invalid if the attribute arrays disagree with the vertex
+// count.
+Status WritePlyPoints(const std::string& path, const PointCloud& cloud, Env* env = Env::Default());
+Status WritePlyMesh(const std::string& path, const Mesh& mesh, Env* env = Env::Default());
 
 }  // namespace pb

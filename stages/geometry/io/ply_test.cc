@@ -1,12 +1,12 @@
 #include "stages/geometry/io/ply.h"
 
 #include "stages/geometry/testing/test_data.h"
+#include "base/testing/durable_write_check.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
 
 #include <bit>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -408,10 +408,37 @@ TEST_F(PlyTest, StanfordBunny) {
 namespace pb {
 namespace {
 
+// A failed write (full disk, I/O error) keeps the earlier file and leaves no
+// file that looks complete.
+TEST(PlyDurableWriteTest, FailedWritesKeepTheEarlierFile) {
+  Mesh older;
+  older.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0};
+  older.indices = {0, 1, 2};
+  Mesh newer = older;
+  newer.positions[0] = 0.5f;
+  newer.colors = {1, 2, 3, 4, 5, 6, 7, 8, 9};
+  testing::TempDir meshes;
+  ASSERT_TRUE(WritePlyMesh(meshes.Path("mesh.ply"), older).ok());
+  EXPECT_EQ(testing::ExpectFailedWritesKeepEarlierFiles(meshes.path(), [&](Env* env) {
+              return WritePlyMesh(meshes.Path("mesh.ply"), newer, env);
+            }),
+            1);
+
+  PointCloud older_cloud, newer_cloud;
+  older_cloud.positions = {0, 0, 0, 1, 2, 3};
+  newer_cloud.positions = {4, 5, 6, 7, 8, 9};
+  newer_cloud.normals = {0, 0, 1, 0, 1, 0};
+  testing::TempDir clouds;
+  ASSERT_TRUE(WritePlyPoints(clouds.Path("points.ply"), older_cloud).ok());
+  EXPECT_EQ(testing::ExpectFailedWritesKeepEarlierFiles(clouds.path(), [&](Env* env) {
+              return WritePlyPoints(clouds.Path("points.ply"), newer_cloud, env);
+            }),
+            1);
+}
+
 TEST(PlyStationsTest, StationIndexBeyondTheListIsAnError) {
-  char tmpl[] = "/tmp/pbply.XXXXXX";
-  const std::string dir = ::mkdtemp(tmpl);
-  const std::string path = dir + "/s.ply";
+  testing::TempDir dir;
+  const std::string path = dir.Path("s.ply");
   std::ofstream(path) << "ply\nformat ascii 1.0\ncomment station 0 1 2 3\nelement vertex 2\n"
                          "property float x\nproperty float y\nproperty float z\n"
                          "property ushort station\nend_header\n0 0 0 0\n1 1 1 3\n";
@@ -427,7 +454,6 @@ TEST(PlyStationsTest, StationIndexBeyondTheListIsAnError) {
   EXPECT_NE(misnumbered.status().message().find("s.ply:3: expected 'comment station 0 X Y Z'"),
             std::string::npos)
       << misnumbered.status().message();
-  std::filesystem::remove_all(dir);
 }
 
 // A vertex property of the fast-path tests: PLY type name, property name and
@@ -612,43 +638,6 @@ TEST_F(PlyTest, BinaryFastPathErrorsNameVertexAndByte) {
   EXPECT_THAT(corrupt.status().message(),
               HasSubstr("h.ply: truncated: vertex 3000 of 999999999999 at byte " +
                         std::to_string(huge_header + 3000 * record)));
-}
-
-// Throughput of the binary fast path on the pointbake points layout (float
-// xyz + uchar rgb + ushort station, 17 bytes a point, ~170 MB). Run by hand:
-//   geometry_test --gtest_also_run_disabled_tests --gtest_filter='PlyTiming.*'
-// Prints MB/s (10^6 bytes per second), best of 3.
-TEST(PlyTiming, DISABLED_ReadBinaryPly10MWithStations) {
-  const std::string path =
-      (std::filesystem::temp_directory_path() / "pb_ply_timing_stations.ply").string();
-  const size_t n = 10'000'000;
-  if (!std::filesystem::exists(path)) {
-    PointCloud cloud;
-    cloud.positions.resize(3 * n);
-    cloud.colors.resize(3 * n);
-    cloud.station_ids.resize(n);
-    cloud.stations = {{0, 0, 0}, {1, 2, 3}};
-    for (size_t i = 0; i < 3 * n; ++i) {
-      cloud.positions[i] = static_cast<float>(i % 1000) * 0.01f;
-      cloud.colors[i] = static_cast<uint8_t>(i);
-    }
-    for (size_t i = 0; i < n; ++i) cloud.station_ids[i] = static_cast<uint16_t>(i % 2);
-    ASSERT_TRUE(WritePlyPoints(path, cloud).ok());
-  }
-  const double bytes = static_cast<double>(std::filesystem::file_size(path));
-  double best = 1e30;
-  for (int run = 0; run < 3; ++run) {
-    const auto start = std::chrono::steady_clock::now();
-    auto read = ReadPlyPoints(path);
-    const double seconds =
-        std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-    ASSERT_TRUE(read.ok()) << read.status().message();
-    ASSERT_EQ(read->points.size(), n);
-    ASSERT_EQ(read->points.station_ids[n - 1], 1);
-    best = std::min(best, seconds);
-  }
-  std::printf("ReadPlyPoints %zu points, %.0f MB: best %.3f s = %.0f MB/s\n", n, bytes / 1e6,
-              best, bytes / 1e6 / best);
 }
 
 }  // namespace

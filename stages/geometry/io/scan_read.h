@@ -2,12 +2,15 @@
 // each format's header declares
 //   Expected<ScanReadResult> Read<Format>(const std::string& path,
 //                                         const ScanReadOptions& options);
-// and io.read_points picks one by extension or `format:`.
+// and the one dispatch table below (ScanFormats) picks one by name or by
+// extension, for io.read_points and its parameter schema.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
 #include "stages/geometry/core/point_cloud.h"
@@ -32,5 +35,27 @@ struct ScanReadResult {
   std::vector<std::string> warnings;  // shown to the user, e.g. "3 scans merged"
   std::string format;                 // e.g. "pcd binary_compressed", "e57"
 };
+
+// One row of the dispatch table: a new scan format is a reader and a row.
+struct ScanFormat {
+  std::string_view name;        // the `format:` value, e.g. "xyz"
+  std::string_view extensions;  // lower case, with the dot, space separated
+  Expected<ScanReadResult> (*read)(const std::string& path, const ScanReadOptions& options);
+};
+
+// Every scan format, in the order messages list them.
+std::span<const ScanFormat> ScanFormats();
+
+// "ply (.ply), pcd (.pcd), xyz (.xyz .txt .pts .csv), ..." for messages.
+std::string SupportedScanFormats();
+
+// The format called `name`, or for "auto" the one whose extensions hold
+// `path`'s (case-insensitive). Status::Unsupported naming the file, the
+// unknown name or extension, and the supported formats otherwise.
+Expected<const ScanFormat*> FindScanFormat(const std::string& path, std::string_view name);
+
+// Reads `path` with FindScanFormat(path, format)'s reader.
+Expected<ScanReadResult> ReadScan(const std::string& path, std::string_view format,
+                                  const ScanReadOptions& options);
 
 }  // namespace pb

@@ -7,7 +7,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
 #include <map>
 #include <set>
@@ -16,9 +15,12 @@
 #include <vector>
 
 #include "stages/geometry/synth/scene.h"
+#include "stages/geometry/testing/meshes.h"
 
 namespace pb {
 namespace {
+
+using testing::Icosphere;
 
 // A (n+1) x (n+1) vertex grid on [0,1]^2 at z = 0, 2 n^2 faces facing +z,
 // colored red by y.
@@ -38,54 +40,6 @@ Mesh Grid(int n) {
       mesh.indices.insert(mesh.indices.end(), {id(i, j), id(i + 1, j + 1), id(i, j + 1)});
     }
   }
-  return mesh;
-}
-
-// Unit icosphere: icosahedron subdivided `levels` times (20 * 4^levels
-// faces), outward-facing, with normals and a red channel by height z.
-Mesh Icosphere(int levels) {
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<std::array<double, 3>> v = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
-                                          {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
-                                          {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<uint32_t> f = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
-                             4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
-                             6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
-  auto normalize = [](std::array<double, 3> p) {
-    const double l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    return std::array<double, 3>{p[0] / l, p[1] / l, p[2] / l};
-  };
-  for (auto& p : v) p = normalize(p);
-  for (int level = 0; level < levels; ++level) {
-    std::map<std::pair<uint32_t, uint32_t>, uint32_t> midpoints;
-    auto mid = [&](uint32_t a, uint32_t b) {
-      const auto key = std::minmax(a, b);
-      auto it = midpoints.find(key);
-      if (it != midpoints.end()) return it->second;
-      v.push_back(normalize({v[a][0] + v[b][0], v[a][1] + v[b][1], v[a][2] + v[b][2]}));
-      const uint32_t id = static_cast<uint32_t>(v.size() - 1);
-      midpoints.emplace(key, id);
-      return id;
-    };
-    std::vector<uint32_t> next;
-    next.reserve(4 * f.size());
-    for (size_t i = 0; i < f.size(); i += 3) {
-      const uint32_t a = f[i], b = f[i + 1], c = f[i + 2];
-      const uint32_t ab = mid(a, b), bc = mid(b, c), ca = mid(c, a);
-      next.insert(next.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
-    }
-    f = std::move(next);
-  }
-  Mesh mesh;
-  for (const auto& p : v) {
-    for (int k = 0; k < 3; ++k) {
-      mesh.positions.push_back(static_cast<float>(p[k]));
-      mesh.normals.push_back(static_cast<float>(p[k]));
-    }
-    mesh.colors.insert(mesh.colors.end(),
-                       {static_cast<uint8_t>(std::lround(127.5 * (p[2] + 1))), 100, 0});
-  }
-  mesh.indices = std::move(f);
   return mesh;
 }
 
@@ -381,48 +335,6 @@ TEST(MeshDecimate, SynthTruthMeshByTen) {
       in.nonmanifold_vertices, static_cast<unsigned long long>(report.rejected_link),
       static_cast<unsigned long long>(report.rejected_flip),
       static_cast<unsigned long long>(report.rejected_degenerate));
-}
-
-// Measurements, not checks: ~5·10^6 faces -> 2.5·10^5. Time and peak RSS of
-// the decimation alone (the peak is reset after generating the input, where
-// the kernel allows it).
-void MeasureLarge(const char* name, const Mesh& mesh) {
-  if (FILE* clear = std::fopen("/proc/self/clear_refs", "w")) {
-    std::fputs("5", clear);
-    std::fclose(clear);
-  }
-  const auto start = std::chrono::steady_clock::now();
-  DecimateReport report;
-  const Mesh out = Decimate(mesh, 250000, &report);
-  const double seconds =
-      std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  std::ifstream status("/proc/self/status");
-  std::string line;
-  double peak_mib = 0;
-  while (std::getline(status, line)) {
-    if (line.rfind("VmHWM:", 0) == 0) peak_mib = std::stod(line.substr(6)) / 1024.0;
-  }
-  std::printf(
-      "%s: %zu -> %zu faces in %.2f s, peak RSS %.0f MiB (collapses %llu, rejected "
-      "link %llu flip %llu degenerate %llu)\n",
-      name, mesh.face_count(), out.face_count(), seconds, peak_mib,
-      static_cast<unsigned long long>(report.collapses),
-      static_cast<unsigned long long>(report.rejected_link),
-      static_cast<unsigned long long>(report.rejected_flip),
-      static_cast<unsigned long long>(report.rejected_degenerate));
-  const Topology topo = Check(out);
-  EXPECT_EQ(topo.nonmanifold_edges, 0u);
-  EXPECT_EQ(topo.nonmanifold_vertices, 0u);
-}
-
-TEST(MeshDecimate, DISABLED_LargeSphereTiming) {
-  MeasureLarge("icosphere", Icosphere(9));  // 5,242,880 faces
-}
-
-TEST(MeshDecimate, DISABLED_LargeSynthTiming) {
-  auto scene = MakeSynthScene("room", 1, {});
-  ASSERT_TRUE(scene.ok()) << scene.status().message();
-  MeasureLarge("synth room, 7 mm cells", SynthTruthMesh(*scene, 0.007));
 }
 
 }  // namespace

@@ -1,4 +1,5 @@
 #include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/testing/meshes.h"
 
 #include <gtest/gtest.h>
 
@@ -39,38 +40,13 @@ double BruteForceDistance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec
   return best;
 }
 
-// A sphere of `radius` around the origin: an icosahedron subdivided `levels`
-// times, vertices pushed onto the sphere, faces outward.
+// A sphere of `radius` around the origin: testing::Icosphere scaled, faces
+// outward, positions only.
 Mesh Sphere(double radius, int levels) {
-  const double t = (1 + std::sqrt(5.0)) / 2;
-  std::vector<Vec3> v = {{-1, t, 0},  {1, t, 0},  {-1, -t, 0}, {1, -t, 0}, {0, -1, t},  {0, 1, t},
-                         {0, -1, -t}, {0, 1, -t}, {t, 0, -1},  {t, 0, 1},  {-t, 0, -1}, {-t, 0, 1}};
-  std::vector<uint32_t> f = {0, 11, 5,  0, 5,  1, 0, 1, 7, 0, 7,  10, 0, 10, 11, 1, 5, 9, 5, 11,
-                             4, 11, 10, 2, 10, 7, 6, 7, 1, 8, 3,  9,  4, 3,  4,  2, 3, 2, 6, 3,
-                             6, 8,  3,  8, 9,  4, 9, 5, 2, 4, 11, 6,  2, 10, 8,  6, 7, 9, 8, 1};
-  for (int level = 0; level < levels; ++level) {
-    std::map<std::pair<uint32_t, uint32_t>, uint32_t> mid;
-    auto midpoint = [&](uint32_t a, uint32_t b) {
-      const auto key = std::minmax(a, b);
-      auto it = mid.find(key);
-      if (it != mid.end()) return it->second;
-      v.push_back({(v[a][0] + v[b][0]) / 2, (v[a][1] + v[b][1]) / 2, (v[a][2] + v[b][2]) / 2});
-      return mid[key] = static_cast<uint32_t>(v.size() - 1);
-    };
-    std::vector<uint32_t> next;
-    for (size_t i = 0; i < f.size(); i += 3) {
-      const uint32_t a = f[i], b = f[i + 1], c = f[i + 2];
-      const uint32_t ab = midpoint(a, b), bc = midpoint(b, c), ca = midpoint(c, a);
-      next.insert(next.end(), {a, ab, ca, b, bc, ab, c, ca, bc, ab, bc, ca});
-    }
-    f = std::move(next);
-  }
-  Mesh mesh;
-  for (const Vec3& p : v) {
-    const double n = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
-    for (int a = 0; a < 3; ++a) mesh.positions.push_back(static_cast<float>(radius * p[a] / n));
-  }
-  mesh.indices = std::move(f);
+  Mesh mesh = testing::Icosphere(levels);
+  for (float& p : mesh.positions) p = static_cast<float>(radius * p);
+  mesh.normals.clear();
+  mesh.colors.clear();
   return mesh;
 }
 

@@ -199,15 +199,6 @@ double FlipDefaultPpd() {
   return double(0.7f * (3840.0f / 0.7f) * (pi / 180.0f));
 }
 
-Expected<double> SsimPlane(const std::vector<double>& reference, const std::vector<double>& test,
-                           int width, int height) {
-  PB_RETURN_IF_ERROR(CheckSsimSize(width, height, kSsimWindow, "SSIM"));
-  const size_t n = size_t(width) * size_t(height);
-  if (reference.size() != n || test.size() != n)
-    return Status::Invalid("SSIM: planes do not hold width x height values");
-  return SsimValidMeans(reference, test, width, height).ssim;
-}
-
 Expected<double> Psnr(const Image& reference, const Image& test) {
   PB_ASSIGN_OR_RETURN(auto pair, ToRgb8Pair(reference, test));
   const auto& [a, b] = pair;

@@ -54,11 +54,6 @@ namespace pb {
 // reference implementation does (67.02064514160156).
 double FlipDefaultPpd();
 
-// SSIM of two gray planes of `width` x `height` doubles (row-major), as
-// defined above. Status::Invalid when a side is below 11 pixels.
-Expected<double> SsimPlane(const std::vector<double>& reference, const std::vector<double>& test,
-                           int width, int height);
-
 struct SsimResult {
   double luma = 0;  // on Y = 0.299 R + 0.587 G + 0.114 B
   double rgb = 0;   // mean of the SSIMs of R, G, B

@@ -4,18 +4,13 @@
 #include <gtest/gtest.h>
 #include <tbb/global_control.h>
 
-#include <chrono>
 #include <cmath>
-#include <ctime>
 #include <cstdio>
 #include <cstring>
 #include <numbers>
 #include <random>
 #include <vector>
 
-#include "stages/geometry/points/knn.h"
-#include "stages/geometry/points/outliers.h"
-#include "stages/geometry/points/spacing.h"
 
 namespace pb {
 namespace {
@@ -215,73 +210,6 @@ TEST(NormalsTest, SameNormalsWithOneAndTwoThreads) {
   }
   EXPECT_EQ(one.normals, two.normals);
   EXPECT_EQ(report_one.flipped, report_two.flipped);
-}
-
-// Timing on ~10^7 points of a noisy curved surface 2 mm apart, in shuffled
-// order. Run by hand:
-//   geometry_test --gtest_also_run_disabled_tests --gtest_filter='NormalsTest.DISABLED_Bench*'
-TEST(NormalsTest, DISABLED_BenchTenMillionPoints) {
-  const int side = 3163;
-  std::mt19937 rng(1);
-  std::normal_distribution<float> noise(0.0f, 0.0003f);
-  std::vector<uint32_t> order(static_cast<size_t>(side) * side);
-  for (size_t i = 0; i < order.size(); ++i) order[i] = static_cast<uint32_t>(i);
-  std::shuffle(order.begin(), order.end(), rng);
-  PointCloud cloud;
-  cloud.positions.resize(3 * order.size());
-  for (size_t i = 0; i < order.size(); ++i) {
-    const float x = 0.002f * (order[i] % side), y = 0.002f * (order[i] / side);
-    cloud.positions[3 * i] = x + noise(rng);
-    cloud.positions[3 * i + 1] = y + noise(rng);
-    cloud.positions[3 * i + 2] = 0.2f * std::sin(2 * x) * std::cos(3 * y) + noise(rng);
-  }
-  // Wall and CPU seconds (all threads): on a shared machine CPU time / cores
-  // estimates the unloaded wall time.
-  using Clock = std::chrono::steady_clock;
-  struct Start {
-    Clock::time_point wall = Clock::now();
-    std::clock_t cpu = std::clock();
-  };
-  auto seconds = [](const Start& since) {
-    static char text[64];
-    std::snprintf(text, sizeof(text), "%.2f s wall, %.2f s CPU",
-                  std::chrono::duration<double>(Clock::now() - since.wall).count(),
-                  static_cast<double>(std::clock() - since.cpu) / CLOCKS_PER_SEC);
-    return text;
-  };
-  Start start;
-  auto index = KnnIndex::Build(cloud.positions);
-  ASSERT_TRUE(index.ok());
-  std::printf("points %zu\nindex build: %s\n", cloud.size(), seconds(start));
-  std::fflush(stdout);
-  start = Start();
-  ASSERT_TRUE(EstimateNormals(cloud, {.orientation = NormalOrientation::kNone}).ok());
-  std::fflush(stdout);
-  std::printf("normals k=16, no orientation (build included): %s\n", seconds(start));
-  // Fingerprint of the output bits, to compare builds: FNV-1a over the floats.
-  uint64_t hash = 1469598103934665603ull;
-  for (float f : cloud.normals) {
-    uint32_t bits;
-    std::memcpy(&bits, &f, sizeof(bits));
-    hash = (hash ^ bits) * 1099511628211ull;
-  }
-  std::printf("normals fingerprint %016llx\n", static_cast<unsigned long long>(hash));
-  cloud.station_ids.assign(cloud.size(), 0);
-  cloud.stations = {{3.0, 3.0, 2.0}};
-  start = Start();
-  ASSERT_TRUE(EstimateNormals(cloud, {.orientation = NormalOrientation::kStations}).ok());
-  std::printf("normals k=16, station orientation (build included): %s\n", seconds(start));
-  start = Start();
-  ASSERT_TRUE(EstimateNormals(cloud, {.orientation = NormalOrientation::kPropagate}).ok());
-  std::printf("normals k=16, propagation (build included): %s\n", seconds(start));
-  start = Start();
-  OutlierReport outliers;
-  ASSERT_TRUE(RemoveStatisticalOutliers(cloud, {}, &outliers).ok());
-  std::printf("outliers k=16 (build included): %s, removed %zu\n", seconds(start), outliers.removed);
-  start = Start();
-  auto spacing = MedianSpacing(cloud, {});
-  ASSERT_TRUE(spacing.ok());
-  std::printf("spacing (build included): %s, %.6f m\n", seconds(start), *spacing);
 }
 
 }  // namespace

@@ -336,24 +336,33 @@ TEST(RenderTest, TruthRenderMatchesRasterizedTruthMesh) {
   }
 }
 
+// Each bad input fails for its own reason, named in the message.
 TEST(RenderTest, BadCameraAndMaterialAreErrors) {
   const Mesh quad = Quad(1.0, 0.0f, {1, 2, 3});
+  auto expect_invalid = [](const Expected<Image>& result, const std::string& why) {
+    ASSERT_FALSE(result.ok()) << why;
+    EXPECT_EQ(result.status().code(), Status::Code::kInvalid) << result.status().message();
+    EXPECT_NE(result.status().message().find(why), std::string::npos) << result.status().message();
+  };
   RenderCamera camera = HeadOn(2.0, 16);
   camera.target = camera.eye;
-  EXPECT_FALSE(RenderMesh(quad, {}, camera, RenderOptions{}).ok());
+  expect_invalid(RenderMesh(quad, {}, camera, RenderOptions{}), "eye and target are the same point");
   camera = HeadOn(2.0, 16);
   camera.up = {0, 1, 0};  // parallel to the view
-  EXPECT_FALSE(RenderMesh(quad, {}, camera, RenderOptions{}).ok());
+  expect_invalid(RenderMesh(quad, {}, camera, RenderOptions{}),
+                 "up is zero or parallel to the view direction");
   camera = HeadOn(2.0, 16);
   camera.fov_deg = 180;
-  EXPECT_FALSE(RenderMesh(quad, {}, camera, RenderOptions{}).ok());
+  expect_invalid(RenderMesh(quad, {}, camera, RenderOptions{}), "fov_deg must be in (0, 180), got 180");
   const MipTexture texture = BuildColorTexture(NoiseTexture(4, 1)).value();
-  EXPECT_FALSE(RenderMesh(quad, {&texture, &texture}, HeadOn(2.0, 16), RenderOptions{}).ok());  // no tangents
+  expect_invalid(RenderMesh(quad, {&texture, &texture}, HeadOn(2.0, 16), RenderOptions{}),
+                 "a normal map needs a color map and a mesh with uvs and tangents");
   Mesh broken = quad;
   broken.indices.push_back(99);
   broken.indices.push_back(0);
   broken.indices.push_back(1);
-  EXPECT_FALSE(RenderMesh(broken, {}, HeadOn(2.0, 16), RenderOptions{}).ok());
+  expect_invalid(RenderMesh(broken, {}, HeadOn(2.0, 16), RenderOptions{}),
+                 "face 2 refers to vertex 99 but the mesh has 4 vertices");
 }
 
 }  // namespace
