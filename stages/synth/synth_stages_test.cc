@@ -37,7 +37,7 @@ TEST_F(SynthStagesTest, RegistersSynthScan) {
   EXPECT_EQ(type->outputs[1].name, "truth");
   EXPECT_EQ(type->outputs[1].type, "mesh");
   const nlohmann::json schema = CheckedSchema(*type);
-  EXPECT_EQ(schema["properties"]["preset"]["enum"], nlohmann::json({"room", "tower", "vault"}));
+  EXPECT_EQ(schema["properties"]["preset"]["enum"], nlohmann::json({"room", "tower", "vault", "facade", "sculpture"}));
   EXPECT_EQ(schema["properties"]["points"]["default"], 2000000);
   EXPECT_EQ(schema["properties"]["points"]["minimum"], 1000);
   EXPECT_EQ(schema["properties"]["stations"]["maximum"], 16);
