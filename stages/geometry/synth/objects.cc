@@ -495,12 +495,17 @@ ElementHit IntersectCylinder(const SynthCylinder& c, const V3& o, const V3& d) {
 }
 
 ElementHit IntersectBlob(const SynthBlob& b, const V3& o, const V3& d) {
-  const V3 rel = Sub(o, b.center_m);
-  const double bq = Dot(rel, d), cq = Dot(rel, rel) - b.r_max_m * b.r_max_m;
-  const double disc = bq * bq - cq;
+  // March only inside the bounding ellipsoid (E scaled by bound_scale).
+  V3 os, ds;
+  for (int a = 0; a < 3; ++a) {
+    const double axis = b.bound_scale * b.semi_axes_m[a];
+    os[a] = (o[a] - b.center_m[a]) / axis, ds[a] = d[a] / axis;
+  }
+  const double aq = Dot(ds, ds), bq = Dot(os, ds), cq = Dot(os, os) - 1;
+  const double disc = bq * bq - aq * cq;
   if (disc < 0) return {};
   const double root = std::sqrt(disc);
-  const double t0 = std::max(-bq - root, 1e-9), t1 = -bq + root;
+  const double t0 = std::max((-bq - root) / aq, 1e-9), t1 = (-bq + root) / aq;
   if (!(t1 > t0)) return {};
   auto implicit = [&](double t) { return BlobImplicit(b, Add(o, Scale(d, t))); };
   const double t = MarchImplicit(implicit, t0, t1, b.lipschitz, 1e-4);
@@ -599,12 +604,14 @@ int NearestElement(const SynthScene& s, const V3& p, Local* local) {
 void PrepareBlob(SynthBlob& b) {
   constexpr int kDirections = 40000;
   const double golden = kPi * (3 - std::sqrt(5.0));
-  double r_min = kInf, r_max = 0, slope = 0;
+  double r_min = kInf, r_max = 0, slope = 0, scale = 0;
   for (int k = 0; k < kDirections; ++k) {
     const double z = 1 - (k + 0.5) * 2.0 / kDirections, r = std::sqrt(1 - z * z);
     const V3 w = {r * std::cos(golden * k), r * std::sin(golden * k), z};
     const double radius = BlobRadius(b, w);
     r_min = std::min(r_min, radius), r_max = std::max(r_max, radius);
+    const double ex = w[0] / b.semi_axes_m[0], ey = w[1] / b.semi_axes_m[1], ez = w[2] / b.semi_axes_m[2];
+    scale = std::max(scale, radius * std::sqrt(ex * ex + ey * ey + ez * ez));
     const V3 g = BlobGradient(b, Add(b.center_m, Scale(w, radius)));
     // g = w - grad_T R / rho: its tangential part is the slope over the
     // radius, the term |grad f| adds to 1 (smaller farther out).
@@ -612,6 +619,7 @@ void PrepareBlob(SynthBlob& b) {
   }
   b.r_min_m = 0.97 * r_min;
   b.r_max_m = 1.03 * r_max;
+  b.bound_scale = 1.03 * scale;
   const double g = 1.25 * slope;
   b.lipschitz = std::sqrt(1 + g * g);
 }

@@ -97,6 +97,7 @@ struct SynthBlob {
   // Derived by the preset (not in scene.json's description of the shape):
   // radius bounds and the Lipschitz bound of |p - c| - R(w) used to march rays.
   double r_min_m = 0, r_max_m = 0, lipschitz = 1;
+  double bound_scale = 1;  // max R(w) / E(w): the blob lies in E scaled by this
 };
 
 // Scanner stations on a ring around `center_m` at ~height_m: station k at
@@ -117,7 +118,7 @@ struct SynthObjects {
   SynthStationRing stations;
 };
 
-// Fills a blob's derived r_min_m, r_max_m and lipschitz (of |p - c| - R(w)
+// Fills a blob's derived r_min_m, r_max_m, bound_scale and lipschitz (of |p - c| - R(w)
 // outside the blob: sqrt(1 + max |grad_T R| / R)^2)) from 40,000 directions
 // (with margins: 3 % on the radii, 1.25x on the slope; the directions are
 // 0.018 rad apart, the narrowest feature ~0.1 rad wide).
