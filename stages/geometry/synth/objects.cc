@@ -94,7 +94,7 @@ V3 ReliefNormal(const V3& n, const V3& tu, const V3& tv, double u, double v, Rel
   return Normalize(Sub(n, Add(Scale(tu, du), Scale(tv, dv))));
 }
 
-Local PatchLocal(const SynthScene& s, const SynthPatch& p, const V3& point) {
+Local PatchLocal(const SynthScene& s, const SynthPatch& p, const V3& point, bool with_normal = true) {
   const V3 rel = Sub(point, p.origin_m), n = PatchNormal(p);
   const double u = Dot(rel, p.axis_u), v = Dot(rel, p.axis_v), w = Dot(rel, n);
   const double cu = std::clamp(u, 0.0, p.length_u_m), cv = std::clamp(v, 0.0, p.length_v_m);
@@ -102,7 +102,7 @@ Local PatchLocal(const SynthScene& s, const SynthPatch& p, const V3& point) {
   out.u = cu, out.v = cv;
   out.foot = point;
   auto relief = [&](double a, double b) { return PatchRelief(s, p, a, b); };
-  out.normal = ReliefNormal(n, p.axis_u, p.axis_v, cu, cv, relief);
+  out.normal = with_normal ? ReliefNormal(n, p.axis_u, p.axis_v, cu, cv, relief) : n;
   if (cu == u && cv == v && w > -kPatchMassM) {
     out.distance = w - relief(u, v);
   } else {
@@ -126,7 +126,7 @@ void BoxFaceFrame(int face, V3* n, V3* tu, V3* tv) {
   (*tv)[(a + 2) % 3] = 1;
 }
 
-Local BoxLocal(const SynthBox& b, const V3& p) {
+Local BoxLocal(const SynthBox& b, const V3& p, bool with_normal = true) {
   V3 q;
   int axis = 0;
   for (int a = 0; a < 3; ++a) {
@@ -146,7 +146,9 @@ Local BoxLocal(const SynthBox& b, const V3& p) {
   V3 n, tu, tv;
   BoxFaceFrame(out.face, &n, &tu, &tv);
   const int face = out.face;
-  out.normal = ReliefNormal(n, tu, tv, out.u, out.v, [&](double a, double bb) { return BoxRelief(b, face, a, bb); });
+  out.normal = with_normal ? ReliefNormal(n, tu, tv, out.u, out.v,
+                                          [&](double a, double bb) { return BoxRelief(b, face, a, bb); })
+                           : n;
   return out;
 }
 
@@ -240,6 +242,20 @@ double BlobRadius(const SynthBlob& b, const V3& w) {
   return ellipsoid * (1 + bumps) * waist - b.groove_depth_m * BlobGroove(b, w);
 }
 
+// Cell of unit direction w in a cube map of 6 x n x n cells.
+size_t CubeCell(const V3& w, int n) {
+  int a = 0;
+  for (int k = 1; k < 3; ++k) {
+    if (std::abs(w[k]) > std::abs(w[a])) a = k;
+  }
+  const double inv = 1 / std::abs(w[a]);
+  const double u = w[(a + 1) % 3] * inv, v = w[(a + 2) % 3] * inv;
+  const int i = std::clamp(static_cast<int>((u + 1) * 0.5 * n), 0, n - 1);
+  const int j = std::clamp(static_cast<int>((v + 1) * 0.5 * n), 0, n - 1);
+  const int face = 2 * a + (w[a] > 0 ? 1 : 0);
+  return (size_t(face) * n + j) * n + i;
+}
+
 double BlobImplicit(const SynthBlob& b, const V3& p) {
   const V3 rel = Sub(p, b.center_m);
   const double rho = Length(rel);
@@ -324,14 +340,16 @@ Local BlobLocal(const SynthBlob& b, const V3& p) {
 
 // --- per element ---
 
-Local ElementLocal(const SynthScene& s, int element, const V3& p) {
+// with_normal = false: patches and boxes skip their relief normal (the
+// distance search needs only the winner's).
+Local ElementLocal(const SynthScene& s, int element, const V3& p, bool with_normal = true) {
   const SynthObjects& o = *s.objects;
   const ElementRef e = Element(o, element);
   switch (e.kind) {
     case Kind::kPatch:
-      return PatchLocal(s, o.patches[e.index], p);
+      return PatchLocal(s, o.patches[e.index], p, with_normal);
     case Kind::kBox:
-      return BoxLocal(o.boxes[e.index], p);
+      return BoxLocal(o.boxes[e.index], p, with_normal);
     case Kind::kCylinder:
       return CylinderLocal(o.cylinders[e.index], p);
     case Kind::kBlob:
@@ -421,13 +439,14 @@ ElementHit IntersectBox(const SynthBox& b, const V3& o, const V3& d) {
 }
 
 // First sign change of f along [t0, t1] (f(t0) > 0 expected), marching with
-// steps f / lipschitz (at least min_step), then bisection.
-template <typename Fn>
-double MarchImplicit(Fn f, double t0, double t1, double lipschitz, double min_step) {
+// steps step(t, f) (a distance the surface is known not to be within; at
+// least min_step), then regula falsi.
+template <typename Fn, typename StepFn>
+double MarchImplicit(Fn f, double t0, double t1, StepFn step, double min_step) {
   double t = t0, value = f(t);
   if (value <= 0) return t0;
   while (t < t1) {
-    const double next = std::min(t1, t + std::max(value / lipschitz, min_step));
+    const double next = std::min(t1, t + std::max(step(t, value), min_step));
     const double next_value = f(next);
     if (next_value <= 0) {
       // Regula falsi with the Illinois modification on [t, next].
@@ -488,7 +507,8 @@ ElementHit IntersectCylinder(const SynthCylinder& c, const V3& o, const V3& d) {
     const double rho_min = c.radius_m - c.flute_depth_m;
     const double g = c.flute_depth_m * 0.5 * c.flutes / rho_min;
     auto implicit = [&](double tt) { return CylinderImplicit(c, CylinderCoords(c, f, Add(o, Scale(d, tt)))); };
-    t = MarchImplicit(implicit, t_in, t_out, 1.2 * std::sqrt(1 + g * g), 1e-4);
+    const double lipschitz = 1.2 * std::sqrt(1 + g * g);
+    t = MarchImplicit(implicit, t_in, t_out, [lipschitz](double, double f_t) { return f_t / lipschitz; }, 1e-4);
     if (!std::isfinite(t)) return {};
   }
   return {t, Add(o, Scale(d, t))};
@@ -508,7 +528,14 @@ ElementHit IntersectBlob(const SynthBlob& b, const V3& o, const V3& d) {
   const double t0 = std::max((-bq - root) / aq, 1e-9), t1 = (-bq + root) / aq;
   if (!(t1 > t0)) return {};
   auto implicit = [&](double t) { return BlobImplicit(b, Add(o, Scale(d, t))); };
-  const double t = MarchImplicit(implicit, t0, t1, b.lipschitz, 1e-4);
+  auto step = [&](double t, double f_t) {
+    const V3 rel = Sub(Add(o, Scale(d, t)), b.center_m);
+    const double rho = Length(rel);
+    if (b.cube_cells == 0 || rho < 1e-9) return f_t / b.lipschitz;
+    const double local = b.local_lipschitz[CubeCell(Scale(rel, 1 / rho), b.cube_cells)];
+    return std::max(f_t / b.lipschitz, std::min(f_t / local, 0.05 * rho));
+  };
+  const double t = MarchImplicit(implicit, t0, t1, step, 1e-4);
   if (!std::isfinite(t)) return {};
   return {t, Add(o, Scale(d, t))};
 }
@@ -584,19 +611,18 @@ int NearestElement(const SynthScene& s, const V3& p, Local* local) {
   Local best_local, deepest_local;
   for (int e = 0; e < n; ++e) {
     if (best >= 0 && deepest < 0 && DistanceLowerBound(*s.objects, e, p) >= best_local.distance) continue;
-    const Local l = ElementLocal(s, e, p);
+    const Local l = ElementLocal(s, e, p, /*with_normal=*/false);
     if (l.distance < 0) {
       if (deepest < 0 || l.distance < deepest_local.distance) deepest = e, deepest_local = l;
     } else if (best < 0 || l.distance < best_local.distance) {
       best = e, best_local = l;
     }
   }
-  if (deepest >= 0) {
-    *local = deepest_local;
-    return deepest;
-  }
-  *local = best_local;
-  return best;
+  const int winner = deepest >= 0 ? deepest : best;
+  *local = deepest >= 0 ? deepest_local : best_local;
+  const Kind kind = Element(*s.objects, winner).kind;
+  if (kind == Kind::kPatch || kind == Kind::kBox) *local = ElementLocal(s, winner, p);
+  return winner;
 }
 
 }  // namespace
@@ -622,6 +648,35 @@ void PrepareBlob(SynthBlob& b) {
   b.bound_scale = 1.03 * scale;
   const double g = 1.25 * slope;
   b.lipschitz = std::sqrt(1 + g * g);
+  // Local bounds: the slope over the directions within 0.12 rad of each
+  // cube cell's center (a cell's half-diagonal is < 0.045 rad, a step's cone
+  // < 0.05 rad), 32 directions on a spiral, 1.3x margin.
+  constexpr int kCells = 32, kSamples = 32;
+  constexpr double kRadius = 0.12;
+  b.cube_cells = kCells;
+  b.local_lipschitz.assign(size_t(6) * kCells * kCells, static_cast<float>(b.lipschitz));
+  tbb::parallel_for(0, 6 * kCells, [&](int row) {
+    const int face = row / kCells, j = row % kCells, a = face / 2;
+    for (int i = 0; i < kCells; ++i) {
+      V3 center;
+      center[a] = face % 2 ? 1 : -1;
+      center[(a + 1) % 3] = (i + 0.5) * 2.0 / kCells - 1;
+      center[(a + 2) % 3] = (j + 0.5) * 2.0 / kCells - 1;
+      center = Normalize(center);
+      const V3 t1 = Perpendicular(center), t2 = Cross(center, t1);
+      double cell_slope = 0;
+      for (int k = 0; k < kSamples; ++k) {
+        const double r = kRadius * std::sqrt((k + 0.5) / kSamples), angle = golden * k;
+        const V3 w = Normalize(Add(center, Add(Scale(t1, r * std::cos(angle)), Scale(t2, r * std::sin(angle)))));
+        const double radius = BlobRadius(b, w);
+        const V3 gw = BlobGradient(b, Add(b.center_m, Scale(w, radius)));
+        cell_slope = std::max(cell_slope, Length(Sub(gw, Scale(w, Dot(gw, w)))));
+      }
+      const double local_g = 1.3 * cell_slope;
+      b.local_lipschitz[(size_t(face) * kCells + j) * kCells + i] =
+          static_cast<float>(std::min(b.lipschitz, std::sqrt(1 + local_g * local_g)));
+    }
+  });
 }
 
 SurfaceSample ObjectsSample(const SynthScene& s, const Vec3& p) {
@@ -662,6 +717,14 @@ std::array<double, 3> ObjectsHitAlbedo(const SynthScene& s, const SynthHit& hit)
   local.face = hit.part % 8;
   local.u = hit.u, local.v = hit.v;
   return ElementAlbedo(s, hit.part / 8, local, hit.point);
+}
+
+bool ObjectsInside(const SynthScene& s, const Vec3& p) {
+  const int n = ElementCount(*s.objects);
+  for (int e = 0; e < n; ++e) {
+    if (Inside(s, e, p)) return true;
+  }
+  return false;
 }
 
 double ObjectsArea(const SynthObjects& o) {

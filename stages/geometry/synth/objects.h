@@ -98,6 +98,11 @@ struct SynthBlob {
   // radius bounds and the Lipschitz bound of |p - c| - R(w) used to march rays.
   double r_min_m = 0, r_max_m = 0, lipschitz = 1;
   double bound_scale = 1;  // max R(w) / E(w): the blob lies in E scaled by this
+  // Lipschitz bounds per direction cell of a cube map (6 x n x n), each the
+  // bound over the directions within 0.12 rad of the cell's center: rays
+  // march with it in steps up to 0.05 |p - c| (so they stay in that cone).
+  int cube_cells = 0;
+  std::vector<float> local_lipschitz;
 };
 
 // Scanner stations on a ring around `center_m` at ~height_m: station k at
@@ -118,7 +123,8 @@ struct SynthObjects {
   SynthStationRing stations;
 };
 
-// Fills a blob's derived r_min_m, r_max_m, bound_scale and lipschitz (of |p - c| - R(w)
+// Fills a blob's derived r_min_m, r_max_m, bound_scale, local_lipschitz
+// and lipschitz (of |p - c| - R(w)
 // outside the blob: sqrt(1 + max |grad_T R| / R)^2)) from 40,000 directions
 // (with margins: 3 % on the radii, 1.25x on the slope; the directions are
 // 0.018 rad apart, the narrowest feature ~0.1 rad wide).
@@ -137,6 +143,9 @@ std::optional<SynthHit> ObjectsIntersect(const SynthScene& scene, const Vec3& or
 std::array<double, 3> ObjectsHitAlbedo(const SynthScene& scene, const SynthHit& hit);
 Mesh ObjectsTruthMesh(const SynthScene& scene, double cell_m);
 void ObjectsBounds(const SynthScene& scene, Vec3* min_m, Vec3* max_m);
+// Whether p is inside an element's solid (patches: within their mass),
+// relief ignored; the truth mesh hides the cells whose outside lies in one.
+bool ObjectsInside(const SynthScene& scene, const Vec3& p);
 // Total area of the elements' surfaces (hidden parts included), m^2.
 double ObjectsArea(const SynthObjects& objects);
 // Status::Invalid when count exceeds the ring's max_stations.

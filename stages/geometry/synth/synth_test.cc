@@ -387,6 +387,46 @@ TEST(SynthOpenScene, SculptureDistanceIsExactNearTheSurface) {
   EXPECT_LT(above.distance_m, 0.7);
 }
 
+// Rays march the blob with per-direction Lipschitz bounds: no ray may step
+// over a crossing. A brute-force walk (0.5 mm steps, 1.4 m around the blob,
+// ObjectsInside)
+// finds no point inside the surface before the reported hit, and a hit
+// where the walk finds one (grazing rays at the silhouette included).
+TEST(SynthOpenScene, SculptureRaysStopAtTheFirstCrossing) {
+  const SynthScene scene = Preset("sculpture");
+  const Vec3 center = {0, 0, 1.47};
+  size_t rays = 0, hits = 0, skipped = 0, missed = 0;
+  for (const Vec3& eye : {Vec3{1.9, 0.0, 1.75}, Vec3{-1.2, -1.4, 2.3}}) {
+    for (int i = 0; i < 24; ++i) {
+      for (int j = 0; j < 12; ++j) {
+        // Targets on a disk around the blob's axis: many pass near the silhouette.
+        const double a = 2 * std::numbers::pi * i / 24, r = 0.2 + 0.2 * j / 11;
+        const Vec3 target = {r * std::cos(a), r * std::sin(a), 1.0 + 0.9 * j / 11};
+        Vec3 d = {target[0] - eye[0], target[1] - eye[1], target[2] - eye[2]};
+        const double n = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+        for (double& x : d) x /= n;
+        const std::optional<SynthHit> hit = Intersect(scene, eye, d);
+        ++rays;
+        const double t_end = hit ? hit->t : 6.0;
+        if (hit) ++hits;
+        double first_inside = -1;
+        for (double t = 0.3; t < t_end - 1e-6; t += 0.0005) {
+          const Vec3 p = {eye[0] + t * d[0], eye[1] + t * d[1], eye[2] + t * d[2]};
+          if (Distance3(p, center) > 0.7 || p[2] < 0.96) continue;  // the blob only
+          if (ObjectsInside(scene, p)) {
+            first_inside = t;
+            break;
+          }
+        }
+        if (first_inside >= 0) (hit ? ++skipped : ++missed);
+      }
+    }
+  }
+  EXPECT_GT(hits, rays / 3);
+  EXPECT_EQ(skipped, 0u);
+  EXPECT_EQ(missed, 0u);
+}
+
 // One station in front: every point is on the true surface, seen from that
 // station (the true normal faces it and nothing lies between), colored by
 // the albedo; the wall behind the pump and the space around are not scanned.
