@@ -20,9 +20,9 @@ constexpr const char* kSchema = R"({
   "additionalProperties": false,
   "properties": {
     "preset": {
-      "enum": ["room", "tower", "vault"],
+      "enum": ["room", "tower", "vault", "facade", "sculpture"],
       "default": "room",
-      "description": "Scene: 'room' (6 x 4.5 x 3.2 m, brick walls, stone floor, a door and two windows), 'tower' (round, radius 3 m, height 6 m, a door and slit windows) or 'vault' (7 x 4.5 m room with a barrel-vaulted ceiling, crown at 4.85 m)."
+      "description": "Scene: 'room' (6 x 4.5 x 3.2 m, brick walls, stone floor, a door and two windows), 'tower' (round, radius 3 m, height 6 m, a door and slit windows), 'vault' (7 x 4.5 m room with a barrel-vaulted ceiling, crown at 4.85 m); open scenes: 'facade' (two brick facades meeting in a corner on a paved yard, open to the sky and the sides, with a pump, a bench and a fluted column; stations on an arc in front, at most 5: scan it with 1) or 'sculpture' (a carved, bumpy marble blob on a plinth; stations on a ring around it)."
     },
     "points": {
       "type": "integer",
@@ -54,14 +54,14 @@ constexpr const char* kSchema = R"({
       "minimum": 1,
       "maximum": 16,
       "default": 3,
-      "description": "Number of scanner stations, placed deterministically inside the room at about 1.5 m height."
+      "description": "Number of scanner stations, placed deterministically inside the room at about 1.5 m height (open scenes: on their arc or ring)."
     },
     "size_m": {
       "type": "array",
       "items": {"type": "number", "exclusiveMinimum": 0},
       "minItems": 3,
       "maxItems": 3,
-      "description": "Optional [width, depth, height] in meters overriding the preset's (tower: width = depth = diameter; vault: height is the crown)."
+      "description": "Optional [width, depth, height] in meters overriding the preset's (tower: width = depth = diameter; vault: height is the crown; not for the open scenes facade and sculpture)."
     },
     "truth_cell_mm": {
       "type": "number",
@@ -188,7 +188,7 @@ StageType SynthScanStage() {
   StageType type;
   type.id = kId;
   type.version = 1;
-  type.summary = "Simulated laser scan of a synthetic brick room, with ground truth";
+  type.summary = "Simulated laser scan of a synthetic brick room or open scene, with ground truth";
   type.doc =
       "Builds an analytic scene (preset room, tower or vault: brick walls in running bond with "
       "recessed mortar joints and per-brick colors, an uneven stone floor, plaster ceiling, "
@@ -196,7 +196,9 @@ StageType SynthScanStage() {
       "positions about 1.5 m above the floor, a regular azimuth/elevation sweep whose step is "
       "chosen so that the valid returns total about `points`, Gaussian range noise `noise_mm` "
       "along each ray, colors from the true albedo plus `color_noise`. Rays through openings "
-      "return nothing. Deterministic: the same parameters give the same bytes for any thread "
+      "return nothing. The open presets `facade` (scanned from one side: unscanned space behind "
+      "and under objects and beyond the open sides) and `sculpture` (curved, carved relief) are "
+      "built from analytic elements (stages/geometry/synth/objects.h). Deterministic: the same parameters give the same bytes for any thread "
       "count.\n\n"
       "Outputs: `points` (points.ply with colors, station ids and station positions; meta "
       "`spacing_m` = median in-surface nearest-neighbor distance, `stations`, `preset`) and "

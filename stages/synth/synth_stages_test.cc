@@ -37,7 +37,7 @@ TEST_F(SynthStagesTest, RegistersSynthScan) {
   EXPECT_EQ(type->outputs[1].name, "truth");
   EXPECT_EQ(type->outputs[1].type, "mesh");
   const nlohmann::json schema = CheckedSchema(*type);
-  EXPECT_EQ(schema["properties"]["preset"]["enum"], nlohmann::json({"room", "tower", "vault"}));
+  EXPECT_EQ(schema["properties"]["preset"]["enum"], nlohmann::json({"room", "tower", "vault", "facade", "sculpture"}));
   EXPECT_EQ(schema["properties"]["points"]["default"], 2000000);
   EXPECT_EQ(schema["properties"]["points"]["minimum"], 1000);
   EXPECT_EQ(schema["properties"]["stations"]["maximum"], 16);
@@ -83,6 +83,33 @@ TEST_F(SynthStagesTest, ScansARoomWithTruth) {
     if (std::abs(SampleSurface(scene.value(), p).distance_m) > 0.01) ++far;
   }
   EXPECT_LE(far, 2u);
+}
+
+TEST_F(SynthStagesTest, ScansTheOpenFacadeFromOneStation) {
+  FakeContext ctx(dir_, {{"preset", "facade"}, {"points", 40000}, {"stations", 1}, {"truth_cell_mm", 40}},
+                  /*threads=*/2);
+  const Status status = Run("synth.scan", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["stations"], 1);
+  EXPECT_EQ(ctx.meta_["points"]["preset"], "facade");
+  auto points = ReadPlyPoints(ctx.files_["points/points.ply"]);
+  ASSERT_TRUE(points.ok()) << points.status().message();
+  ASSERT_EQ(points->points.stations.size(), 1u);
+  auto scene = ReadSynthScene(ctx.files_["truth/scene.json"]);
+  ASSERT_TRUE(scene.ok()) << scene.status().message();
+  EXPECT_EQ(scene->preset, "facade");
+  ASSERT_NE(scene->objects, nullptr);
+  size_t far = 0;
+  const PointCloud& cloud = points->points;
+  for (size_t i = 0; i < cloud.size(); i += 7) {
+    const Vec3 p = {cloud.positions[3 * i], cloud.positions[3 * i + 1], cloud.positions[3 * i + 2]};
+    if (std::abs(SampleSurface(scene.value(), p).distance_m) > 0.01) ++far;
+  }
+  EXPECT_LE(far, 2u);
+  FakeContext sized(dir_ / "sized", {{"preset", "sculpture"}, {"points", 5000}, {"size_m", {2, 2, 2}}});
+  EXPECT_THAT(Run("synth.scan", sized).message(), HasSubstr("preset 'sculpture' has a fixed size"));
+  FakeContext crowded(dir_ / "crowded", {{"preset", "facade"}, {"points", 5000}, {"stations", 8}});
+  EXPECT_THAT(Run("synth.scan", crowded).message(), HasSubstr("at most 5 stations"));
 }
 
 TEST_F(SynthStagesTest, SameParametersSameBytes) {

@@ -16,6 +16,8 @@
 #include <string>
 #include <unordered_set>
 
+#include "stages/geometry/synth/objects.h"
+
 namespace pb {
 namespace {
 
@@ -90,6 +92,7 @@ uint64_t Sum(const std::vector<uint32_t>& counts) {
 }
 
 double SurfaceArea(const SynthScene& s) {
+  if (s.objects) return ObjectsArea(*s.objects);
   const double w = s.width_m, d = s.depth_m, h = s.height_m;
   switch (s.shape) {
     case SynthShape::kTower:
@@ -99,6 +102,7 @@ double SurfaceArea(const SynthScene& s) {
       return 2 * w * spring + 2 * (d * spring + kPi * d * d / 8) + w * d + kPi * d / 2 * w;
     }
     case SynthShape::kBox:
+    case SynthShape::kObjects:
       break;
   }
   return 2 * (w + d) * h + 2 * w * d;
@@ -107,6 +111,10 @@ double SurfaceArea(const SynthScene& s) {
 }  // namespace
 
 std::vector<Vec3> SynthStations(const SynthScene& scene, int count) {
+  if (scene.objects) {
+    Expected<std::vector<Vec3>> ring = ObjectsStations(*scene.objects, count);
+    return ring.ok() ? std::move(ring).value() : std::vector<Vec3>();
+  }
   std::vector<Vec3> stations;
   const double golden_angle = kPi * (3 - std::sqrt(5.0));
   const double half_x = 0.6 * scene.width_m / 2, half_y = 0.6 * scene.depth_m / 2;
@@ -136,6 +144,7 @@ Expected<SynthScanResult> SimulateScan(const SynthScene& scene, const SynthScanO
   if (!(options.min_elevation_deg > -90 && options.min_elevation_deg < 80)) {
     return Status::Invalid("min_elevation_deg: must be in (-90, 80)");
   }
+  if (scene.objects) PB_RETURN_IF_ERROR(ObjectsStations(*scene.objects, options.stations).status());
   const std::vector<Vec3> stations = SynthStations(scene, options.stations);
   const int n = options.stations;
   const double min_el = options.min_elevation_deg * kPi / 180;

@@ -52,7 +52,8 @@ struct SynthScanResult {
 };
 
 // Station positions (meters, absolute): a sunflower pattern over the inner
-// 60% of the floor plan, heights 1.45..1.55 m. Deterministic.
+// 60% of the floor plan, heights 1.45..1.55 m; open scenes: their ring
+// (objects.h; empty if count exceeds its room). Deterministic.
 std::vector<Vec3> SynthStations(const SynthScene& scene, int count);
 
 // Scans the scene. Status::Invalid for out-of-range options.

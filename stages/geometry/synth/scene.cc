@@ -15,54 +15,22 @@
 #include <limits>
 #include <numbers>
 
+#include "stages/geometry/synth/materials.h"
+#include "stages/geometry/synth/objects.h"
+#include "stages/geometry/synth/synth_math.h"
+
 namespace pb {
 namespace {
 
 constexpr double kPi = std::numbers::pi;
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// --- hashing and noise: pure functions of their arguments (no global RNG) ---
-
-uint64_t SplitMix64(uint64_t x) {
-  x += 0x9E3779B97F4A7C15ull;
-  x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-  x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-  return x ^ (x >> 31);
-}
-uint64_t Hash(uint64_t a, uint64_t b, uint64_t c = 0, uint64_t d = 0) {
-  return SplitMix64(SplitMix64(SplitMix64(SplitMix64(a) ^ b) ^ c) ^ d);
-}
-// Uniform in [0, 1).
-double Unit(uint64_t h) { return static_cast<double>(h >> 11) * 0x1.0p-53; }
-uint64_t Key(int64_t i) { return static_cast<uint64_t>(i); }
-
-double SmoothStep(double x) {
-  x = std::clamp(x, 0.0, 1.0);
-  return x * x * (3 - 2 * x);
-}
-
-// Value noise in [0, 1] on a unit lattice, smoothly interpolated.
-double ValueNoise(uint64_t seed, double x, double y) {
-  const double fx = std::floor(x), fy = std::floor(y);
-  const int64_t ix = static_cast<int64_t>(fx), iy = static_cast<int64_t>(fy);
-  const double sx = SmoothStep(x - fx), sy = SmoothStep(y - fy);
-  auto at = [&](int64_t dx, int64_t dy) { return Unit(Hash(seed, Key(ix + dx), Key(iy + dy), 77)); };
-  const double a = at(0, 0) + (at(1, 0) - at(0, 0)) * sx;
-  const double b = at(0, 1) + (at(1, 1) - at(0, 1)) * sx;
-  return a + (b - a) * sy;
-}
-
-Vec3 Add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 Scale(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 Cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-Vec3 Normalize(const Vec3& a) {
-  const double n = std::sqrt(Dot(a, a));
-  return n > 0 ? Scale(a, 1 / n) : a;
-}
+using synth::Add;
+using synth::Cross;
+using synth::Dot;
+using synth::Normalize;
+using synth::Scale;
+using synth::Sub;
 
 // --- scene dimensions ---
 
@@ -90,6 +58,7 @@ Frame SurfaceFrame(const SynthScene& s, SynthSurface surface, int wall, double u
               {0, std::sin(phi), std::cos(phi)}};
     }
     case SynthSurface::kWall:
+    case SynthSurface::kObject:  // open scenes have their own frames (objects.cc)
       break;
   }
   if (s.shape == SynthShape::kTower) {
@@ -111,92 +80,16 @@ Frame SurfaceFrame(const SynthScene& s, SynthSurface surface, int wall, double u
 
 // --- relief (meters along the inward normal) and albedo per surface ---
 
-struct BrickCell {
-  int64_t course = 0, index = 0;
-  double edge_m = 0;  // distance inside the brick face to its nearest edge; <= 0 in mortar
-};
-
-BrickCell LocateBrick(const SynthBrick& b, double u, double v) {
-  const double course_h = b.height_m + b.joint_m, cell_len = b.length_m + b.joint_m;
-  BrickCell cell;
-  cell.course = static_cast<int64_t>(std::floor(v / course_h));
-  const double lv = v - static_cast<double>(cell.course) * course_h;
-  const double shifted = u + ((cell.course & 1) ? cell_len / 2 : 0);  // running bond
-  cell.index = static_cast<int64_t>(std::floor(shifted / cell_len));
-  const double lu = shifted - static_cast<double>(cell.index) * cell_len;
-  cell.edge_m = std::min({lu - b.joint_m, cell_len - lu, lv - b.joint_m, course_h - lv});
-  return cell;
-}
-
-struct StoneCell {
-  int64_t row = 0, index = 0;
-  double edge_m = 0;
-};
-
-StoneCell LocateStone(const SynthScene& s, double x, double y) {
-  const SynthFloor& f = s.floor;
-  StoneCell cell;
-  cell.row = static_cast<int64_t>(std::floor(y / f.stone_width_m));
-  const double ly = y - static_cast<double>(cell.row) * f.stone_width_m;
-  const double shifted = x + Unit(Hash(s.seed, 0xF100, Key(cell.row))) * f.stone_length_m;
-  cell.index = static_cast<int64_t>(std::floor(shifted / f.stone_length_m));
-  const double lx = shifted - static_cast<double>(cell.index) * f.stone_length_m;
-  cell.edge_m = std::min({lx - f.joint_m, f.stone_length_m - lx, ly - f.joint_m, f.stone_width_m - ly});
-  return cell;
-}
-
-double FloorField(const SynthScene& s, double x, double y) {
-  const double p1 = 2 * kPi * Unit(Hash(s.seed, 0xF1E1, 1));
-  const double p2 = 2 * kPi * Unit(Hash(s.seed, 0xF1E1, 2));
-  const double p3 = 2 * kPi * Unit(Hash(s.seed, 0xF1E1, 3));
-  return s.floor.unevenness_m * (0.6 * std::sin(2 * kPi * x / 1.7 + p1) * std::sin(2 * kPi * y / 2.3 + p2) +
-                                 0.4 * std::sin(2 * kPi * (0.6 * x + 0.8 * y) / 3.1 + p3));
-}
-
 double Relief(const SynthScene& s, SynthSurface surface, double u, double v) {
-  if (surface == SynthSurface::kWall) {
-    const BrickCell cell = LocateBrick(s.brick, u, v);
-    return -s.brick.joint_depth_m * (1 - SmoothStep(cell.edge_m / s.brick.bevel_m));
-  }
-  if (surface == SynthSurface::kFloor) {
-    const StoneCell cell = LocateStone(s, u, v);
-    const double stone = s.floor.stone_offset_m *
-                         (2 * Unit(Hash(s.seed, 0xF200, Key(cell.row), Key(cell.index))) - 1);
-    const double face = SmoothStep(cell.edge_m / 0.003);
-    return FloorField(s, u, v) + face * stone - (1 - face) * s.floor.joint_depth_m;
-  }
+  if (surface == SynthSurface::kWall) return BrickRelief(s.brick, u, v);
+  if (surface == SynthSurface::kFloor) return StoneRelief(s.floor, s.seed, u, v);
   return 0;  // plaster
 }
 
 std::array<double, 3> Albedo(const SynthScene& s, SynthSurface surface, int wall, double u, double v) {
-  if (surface == SynthSurface::kWall) {
-    const BrickCell cell = LocateBrick(s.brick, u, v);
-    if (cell.edge_m <= 0) {
-      const double k = 0.93 + 0.10 * ValueNoise(s.seed ^ 0x307, u / 0.02, v / 0.02);
-      return {0.68 * k, 0.66 * k, 0.62 * k};
-    }
-    const uint64_t h = Hash(s.seed, Key(wall + 1), Key(cell.course), Key(cell.index));
-    double k = 0.75 + 0.40 * Unit(SplitMix64(h ^ 1));
-    if (Unit(SplitMix64(h ^ 2)) < 0.1) k *= 0.65;  // an over-burnt brick
-    const double red_shift = 0.10 * (Unit(SplitMix64(h ^ 3)) - 0.5);
-    const double yellow_shift = 0.08 * (Unit(SplitMix64(h ^ 4)) - 0.5);
-    const double grain = 0.96 + 0.08 * ValueNoise(h, u / 0.03, v / 0.03);
-    return {std::clamp((0.62 + red_shift) * k * grain, 0.0, 1.0),
-            std::clamp((0.33 + yellow_shift) * k * grain, 0.0, 1.0),
-            std::clamp((0.23 + 0.5 * yellow_shift) * k * grain, 0.0, 1.0)};
-  }
-  if (surface == SynthSurface::kFloor) {
-    const StoneCell cell = LocateStone(s, u, v);
-    if (cell.edge_m <= 0) return {0.36, 0.34, 0.31};
-    const uint64_t h = Hash(s.seed, 0xF300, Key(cell.row), Key(cell.index));
-    const double k = 0.80 + 0.35 * Unit(SplitMix64(h ^ 1));
-    const double warm = 0.06 * (Unit(SplitMix64(h ^ 2)) - 0.5);
-    const double grain = 0.95 + 0.10 * ValueNoise(h, u / 0.05, v / 0.05);
-    return {std::clamp((0.56 + warm) * k * grain, 0.0, 1.0), std::clamp(0.52 * k * grain, 0.0, 1.0),
-            std::clamp((0.46 - warm) * k * grain, 0.0, 1.0)};
-  }
-  const double k = 0.97 + 0.05 * ValueNoise(s.seed ^ 0xCE1, u / 0.5, v / 0.5);
-  return {0.88 * k, 0.86 * k, 0.82 * k};
+  if (surface == SynthSurface::kWall) return BrickAlbedo(s.brick, s.seed, wall, u, v);
+  if (surface == SynthSurface::kFloor) return StoneAlbedo(s.floor, s.seed, u, v);
+  return PlasterAlbedo(s.seed, u, v);
 }
 
 bool InOpening(const SynthScene& s, int wall, double u, double v) {
@@ -240,7 +133,32 @@ Status ReadNumber(const nlohmann::json& obj, const std::string& where, const cha
 }
 
 const char* ShapeName(SynthShape shape) {
-  return shape == SynthShape::kBox ? "box" : shape == SynthShape::kVault ? "vault" : "tower";
+  switch (shape) {
+    case SynthShape::kBox:
+      return "box";
+    case SynthShape::kVault:
+      return "vault";
+    case SynthShape::kTower:
+      return "tower";
+    case SynthShape::kObjects:
+      break;
+  }
+  return "objects";
+}
+
+// An open preset (objects.h): the elements, and the extent as the size.
+Expected<SynthScene> MakeObjectsScene(const std::string& preset, uint64_t seed) {
+  SynthScene scene;
+  scene.preset = preset;
+  scene.seed = seed;
+  scene.shape = SynthShape::kObjects;
+  std::optional<SynthObjects> objects = MakeObjectsPreset(preset);
+  if (!objects) return Status::Invalid("unknown open scene preset '" + preset + "'");
+  scene.objects = std::make_shared<const SynthObjects>(std::move(*objects));
+  Vec3 lo, hi;
+  ObjectsBounds(scene, &lo, &hi);
+  scene.width_m = hi[0] - lo[0], scene.depth_m = hi[1] - lo[1], scene.height_m = hi[2] - lo[2];
+  return scene;
 }
 
 // Keeps openings inside their walls after a size override.
@@ -258,7 +176,10 @@ void FitOpenings(SynthScene& scene) {
 
 }  // namespace
 
-int WallCount(const SynthScene& scene) { return scene.shape == SynthShape::kTower ? 1 : 4; }
+int WallCount(const SynthScene& scene) {
+  if (scene.objects) return 0;
+  return scene.shape == SynthShape::kTower ? 1 : 4;
+}
 
 double WallLength(const SynthScene& scene, int wall) {
   if (scene.shape == SynthShape::kTower) return 2 * kPi * Radius(scene);
@@ -273,6 +194,7 @@ double WallTop(const SynthScene& scene, int wall, double u_m) {
 }
 
 void SceneBounds(const SynthScene& scene, Vec3* min_m, Vec3* max_m) {
+  if (scene.objects) return ObjectsBounds(scene, min_m, max_m);
   const double floor_low = scene.floor.unevenness_m + scene.floor.stone_offset_m + scene.floor.joint_depth_m;
   const double wall_out = scene.brick.joint_depth_m;
   *min_m = {-scene.width_m / 2 - wall_out, -scene.depth_m / 2 - wall_out, -floor_low};
@@ -280,6 +202,10 @@ void SceneBounds(const SynthScene& scene, Vec3* min_m, Vec3* max_m) {
 }
 
 Expected<SynthScene> MakeSynthScene(const std::string& preset, uint64_t seed, const std::optional<Vec3>& size_m) {
+  if (IsObjectsPreset(preset)) {
+    if (size_m) return Status::Invalid("size_m: preset '" + preset + "' has a fixed size");
+    return MakeObjectsScene(preset, seed);
+  }
   SynthScene scene;
   scene.preset = preset;
   scene.seed = seed;
@@ -293,7 +219,8 @@ Expected<SynthScene> MakeSynthScene(const std::string& preset, uint64_t seed, co
     scene.shape = SynthShape::kVault;
     scene.width_m = 7.0, scene.depth_m = 4.5, scene.height_m = 4.85;
   } else {
-    return Status::Invalid("unknown synthetic scene preset '" + preset + "' (expected room, tower or vault)");
+    return Status::Invalid("unknown synthetic scene preset '" + preset +
+                           "' (expected room, tower, vault, facade or sculpture)");
   }
   if (size_m) {
     scene.width_m = (*size_m)[0], scene.depth_m = (*size_m)[1], scene.height_m = (*size_m)[2];
@@ -337,6 +264,28 @@ nlohmann::json ToJson(const SynthScene& s) {
                         {"width_m", o.width_m},
                         {"height_m", o.height_m}});
   }
+  if (s.objects) {
+    return {{"format", "pointbake synthetic scene"},
+            {"version", kSynthSceneVersion},
+            {"preset", s.preset},
+            {"seed", s.seed},
+            {"shape", ShapeName(s.shape)},
+            {"size_m", {s.width_m, s.depth_m, s.height_m}},
+            {"brick",
+             {{"length_m", s.brick.length_m},
+              {"height_m", s.brick.height_m},
+              {"joint_m", s.brick.joint_m},
+              {"joint_depth_m", s.brick.joint_depth_m},
+              {"bevel_m", s.brick.bevel_m}}},
+            {"floor",
+             {{"stone_length_m", s.floor.stone_length_m},
+              {"stone_width_m", s.floor.stone_width_m},
+              {"joint_m", s.floor.joint_m},
+              {"joint_depth_m", s.floor.joint_depth_m},
+              {"unevenness_m", s.floor.unevenness_m},
+              {"stone_offset_m", s.floor.stone_offset_m}}},
+            {"objects", ObjectsToJson(*s.objects)}};
+  }
   return {{"format", "pointbake synthetic scene"},
           {"version", kSynthSceneVersion},
           {"preset", s.preset},
@@ -377,6 +326,39 @@ Expected<SynthScene> SynthSceneFromJson(const nlohmann::json& j) {
     s.seed = j["seed"].get<uint64_t>();
   }
   const std::string shape = j.value("shape", std::string());
+  if (shape == "objects") {
+    // Open presets are rebuilt from their name; the file's elements must be
+    // the preset's (see scene.h).
+    if (!IsObjectsPreset(s.preset)) {
+      return Status::Invalid("preset: shape \"objects\" needs preset \"facade\" or \"sculpture\", got \"" +
+                             s.preset + "\"");
+    }
+    PB_ASSIGN_OR_RETURN(SynthScene rebuilt, MakeObjectsScene(s.preset, s.seed));
+    if (!j.contains("objects") || j["objects"] != ObjectsToJson(*rebuilt.objects)) {
+      return Status::Invalid("objects: differ from preset '" + s.preset + "' (version " +
+                             std::to_string(kSynthSceneVersion) + "); edited element lists are not supported");
+    }
+    if (j.contains("brick") || j.contains("floor")) {
+      // Materials may be tuned like the rooms'; validated by the same code below.
+      SynthScene materials = rebuilt;
+      const nlohmann::json& b = j.value("brick", nlohmann::json::object());
+      const nlohmann::json& f = j.value("floor", nlohmann::json::object());
+      if (!b.is_object() || !f.is_object()) return Status::Invalid("brick, floor: expected objects");
+      PB_RETURN_IF_ERROR(ReadNumber(b, "brick.", "length_m", &materials.brick.length_m, false, 0));
+      PB_RETURN_IF_ERROR(ReadNumber(b, "brick.", "height_m", &materials.brick.height_m, false, 0));
+      PB_RETURN_IF_ERROR(ReadNumber(b, "brick.", "joint_m", &materials.brick.joint_m, false, 0));
+      PB_RETURN_IF_ERROR(ReadNumber(b, "brick.", "joint_depth_m", &materials.brick.joint_depth_m, false, -1e-300));
+      PB_RETURN_IF_ERROR(ReadNumber(b, "brick.", "bevel_m", &materials.brick.bevel_m, false, 0));
+      PB_RETURN_IF_ERROR(ReadNumber(f, "floor.", "stone_length_m", &materials.floor.stone_length_m, false, 0));
+      PB_RETURN_IF_ERROR(ReadNumber(f, "floor.", "stone_width_m", &materials.floor.stone_width_m, false, 0));
+      PB_RETURN_IF_ERROR(ReadNumber(f, "floor.", "joint_m", &materials.floor.joint_m, false, 0));
+      PB_RETURN_IF_ERROR(ReadNumber(f, "floor.", "joint_depth_m", &materials.floor.joint_depth_m, false, -1e-300));
+      PB_RETURN_IF_ERROR(ReadNumber(f, "floor.", "unevenness_m", &materials.floor.unevenness_m, false, -1e-300));
+      PB_RETURN_IF_ERROR(ReadNumber(f, "floor.", "stone_offset_m", &materials.floor.stone_offset_m, false, -1e-300));
+      return materials;
+    }
+    return rebuilt;
+  }
   if (shape == "box") {
     s.shape = SynthShape::kBox;
   } else if (shape == "vault") {
@@ -384,7 +366,7 @@ Expected<SynthScene> SynthSceneFromJson(const nlohmann::json& j) {
   } else if (shape == "tower") {
     s.shape = SynthShape::kTower;
   } else {
-    return Status::Invalid("shape: expected \"box\", \"vault\" or \"tower\"");
+    return Status::Invalid("shape: expected \"box\", \"vault\", \"tower\" or \"objects\"");
   }
   const auto size = j.find("size_m");
   if (size == j.end() || !size->is_array() || size->size() != 3 || !(*size)[0].is_number() ||
@@ -464,6 +446,7 @@ Expected<SynthScene> ReadSynthScene(const std::string& path) {
 }
 
 SurfaceSample SampleSurface(const SynthScene& s, const Vec3& p) {
+  if (s.objects) return ObjectsSample(s, p);
   // Candidates: (base distance, surface, wall, u, v); the nearest base surface wins.
   struct Candidate {
     double base_distance;
@@ -509,6 +492,7 @@ SurfaceSample SampleSurface(const SynthScene& s, const Vec3& p) {
 }
 
 std::optional<SynthHit> Intersect(const SynthScene& s, const Vec3& o, const Vec3& d) {
+  if (s.objects) return ObjectsIntersect(s, o, d);
   // The room is convex, so the first hit is where the ray leaves it: the
   // smallest exit parameter over the bounding constraints.
   SynthHit hit;
@@ -575,6 +559,8 @@ std::optional<SynthHit> Intersect(const SynthScene& s, const Vec3& o, const Vec3
       }
       if (InOpening(s, hit.wall, hit.u, hit.v)) return std::nullopt;
       break;
+    case SynthSurface::kObject:  // not in rooms
+      break;
   }
   const Frame frame = SurfaceFrame(s, hit.surface, hit.wall, hit.u, hit.v);
   hit.base_normal = frame.normal;
@@ -583,6 +569,7 @@ std::optional<SynthHit> Intersect(const SynthScene& s, const Vec3& o, const Vec3
 }
 
 std::array<double, 3> HitAlbedo(const SynthScene& scene, const SynthHit& hit) {
+  if (scene.objects) return ObjectsHitAlbedo(scene, hit);
   return Albedo(scene, hit.surface, hit.wall, hit.u, hit.v);
 }
 
@@ -685,6 +672,7 @@ void Compact(Mesh& mesh) {
 }  // namespace
 
 Mesh SynthTruthMesh(const SynthScene& s, double cell_m) {
+  if (s.objects) return ObjectsTruthMesh(s, cell_m);
   Mesh mesh;
   const double hw = s.width_m / 2, hd = s.depth_m / 2;
   auto no_map = [](double*, double*) {};

@@ -43,6 +43,7 @@
 #include <array>
 #include <cstdint>
 #include <nlohmann/json.hpp>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
@@ -54,7 +55,9 @@ namespace pb {
 
 using Vec3 = std::array<double, 3>;
 
-enum class SynthShape { kBox, kVault, kTower };
+enum class SynthShape { kBox, kVault, kTower, kObjects };
+
+struct SynthObjects;  // open scenes (objects.h)
 
 // A door or window: a rectangle in a wall's (u, v) coordinates.
 struct SynthOpening {
@@ -84,7 +87,7 @@ struct SynthFloor {
 };
 
 struct SynthScene {
-  std::string preset;  // "room", "tower", "vault" or "" (custom)
+  std::string preset;  // "room", "tower", "vault", "facade", "sculpture" or "" (custom)
   uint64_t seed = 1;   // colors and floor relief
   SynthShape shape = SynthShape::kBox;
   double width_m = 6.0;   // x extent (tower: diameter)
@@ -93,15 +96,20 @@ struct SynthScene {
   SynthBrick brick;
   SynthFloor floor;
   std::vector<SynthOpening> openings;
+  // kObjects (presets "facade", "sculpture"): the elements; the dimensions
+  // above are then the extent of the scene's bounds, informative only.
+  std::shared_ptr<const SynthObjects> objects;
 };
 
 // Surface ids reported by Intersect and SampleSurface.
-enum class SynthSurface { kWall, kFloor, kCeiling, kVault };
+// Open scenes: brick facades are kWall, the ground kFloor, everything else
+// (boxes, cylinders, blobs) kObject.
+enum class SynthSurface { kWall, kFloor, kCeiling, kVault, kObject };
 
 struct SurfaceSample {
   std::array<double, 3> albedo{};  // sRGB-encoded, [0, 1]
-  Vec3 normal{};                   // true unit normal (relief included), into the room
-  double distance_m = 0;           // signed distance to the true surface, > 0 inside the room
+  Vec3 normal{};                   // true unit normal (relief included), into the room (open scenes: outward)
+  double distance_m = 0;           // signed distance to the true surface, > 0 inside the room (open: outside)
   SynthSurface surface = SynthSurface::kWall;
   int wall = -1;                   // wall index for kWall, else -1
   bool in_opening = false;         // the nearest surface point is inside a door/window
@@ -114,6 +122,7 @@ struct SynthHit {
   SynthSurface surface = SynthSurface::kWall;
   int wall = -1;
   double u = 0, v = 0;  // surface coordinates of the base hit (floor/ceiling: x, y)
+  int part = -1;        // open scenes: element * 8 + face (objects.h)
 };
 
 // The presets: "room" (6 x 4.5 x 3.2 m box, a door and two windows),
@@ -121,14 +130,21 @@ struct SynthHit {
 // "vault" (7 x 4.5 m, springing 2.6 m, crown 4.85 m, a door and two
 // windows). `size_m` (width, depth, height) overrides the dimensions; openings
 // keep their size and their relative place along the wall, and are shrunk to
-// fit small walls. Status::Invalid for an unknown preset or unusable size.
+// fit small walls. The open presets (objects.h): "facade" (two brick facades
+// meeting in a corner on a paved yard, open to the sky and the sides, with a
+// pump, a bench and a fluted column, for one station in front) and
+// "sculpture" (a carved blob on a plinth, stations around it); they take no
+// size_m. Status::Invalid for an unknown preset or unusable size.
 Expected<SynthScene> MakeSynthScene(const std::string& preset, uint64_t seed,
                                     const std::optional<Vec3>& size_m = std::nullopt);
 
 // scene.json: {"format": "pointbake synthetic scene", "version": 1, "preset",
 // "seed", "shape": "box"|"vault"|"tower", "size_m": [w, d, h], "brick": {...},
 // "floor": {...}, "openings": [{"kind", "wall", "center_u_m", "sill_m",
-// "width_m", "height_m"}]} with the field names of the structs above.
+// "width_m", "height_m"}]} with the field names of the structs above. Open
+// presets: "shape": "objects" and "objects": their elements (objects.h's
+// ObjectsToJson); reading rebuilds the preset and rejects a file whose
+// elements differ from it (edited element lists are not supported).
 inline constexpr int kSynthSceneVersion = 1;
 nlohmann::json ToJson(const SynthScene& scene);
 // Validates everything (errors name the key, e.g. "openings[1].width_m: must
@@ -147,11 +163,13 @@ void SceneBounds(const SynthScene& scene, Vec3* min_m, Vec3* max_m);
 
 // Ground truth at any 3-D point: the nearest surface's albedo and true normal
 // at the point's projection, and the signed distance to the true surface.
-// Meaningful inside the room and within a few centimeters of its surfaces.
+// Meaningful inside the room and within a few centimeters of its surfaces;
+// open scenes: anywhere (exactness in objects.h).
 SurfaceSample SampleSurface(const SynthScene& scene, const Vec3& point);
 
 // First surface hit by the ray origin + t * dir (dir unit length, origin
-// inside the room), or nullopt if the ray leaves through an opening.
+// inside the room; open scenes: outside every object), or nullopt if the ray
+// leaves through an opening or into the sky.
 std::optional<SynthHit> Intersect(const SynthScene& scene, const Vec3& origin, const Vec3& dir);
 // The albedo at a hit (cheaper than SampleSurface: no nearest-surface search).
 std::array<double, 3> HitAlbedo(const SynthScene& scene, const SynthHit& hit);
