@@ -806,6 +806,7 @@ stages:
   const RunResult nofile = pbtest::Run({"campaign", "-n"});
   EXPECT_EQ(nofile.exit_code, 2) << nofile.Describe();
   EXPECT_NE(nofile.err.find("a campaign FILE is required"), std::string::npos) << nofile.Describe();
+}
 
 // The executor from a user config file: a bad value is reported at its file,
 // line and column before anything runs; an executor that cannot reach Slurm

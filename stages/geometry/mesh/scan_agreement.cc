@@ -17,26 +17,6 @@
 
 namespace pb {
 
-size_t CountBoundaryEdges(const Mesh& mesh) {
-  std::vector<uint64_t> edges;
-  edges.reserve(mesh.indices.size());
-  for (size_t f = 0; f < mesh.face_count(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = mesh.indices[3 * f + k], b = mesh.indices[3 * f + (k + 1) % 3];
-      if (a == b) continue;
-      edges.push_back((uint64_t(std::min(a, b)) << 32) | std::max(a, b));
-    }
-  std::sort(edges.begin(), edges.end());
-  size_t boundary = 0;
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    boundary += j - i == 1;
-    i = j;
-  }
-  return boundary;
-}
-
 Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan,
                                              std::span<const float> local_spacing_m,
                                              const ScanAgreementOptions& options) {
@@ -50,16 +30,7 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
     return Status::Invalid("scan agreement: spacing_factor, samples and neighbors must be positive");
 
   ScanAgreement result;
-  // Mean edge over the faces' three edges.
-  double edge_sum = 0;
-  for (size_t f = 0; f < mesh.face_count(); ++f)
-    for (int k = 0; k < 3; ++k) {
-      const float* a = &mesh.positions[size_t(mesh.indices[3 * f + k]) * 3];
-      const float* b = &mesh.positions[size_t(mesh.indices[3 * f + (k + 1) % 3]) * 3];
-      const double dx = double(a[0]) - b[0], dy = double(a[1]) - b[1], dz = double(a[2]) - b[2];
-      edge_sum += std::sqrt(dx * dx + dy * dy + dz * dz);
-    }
-  result.mean_edge_m = mesh.face_count() ? edge_sum / double(3 * mesh.face_count()) : 0;
+  result.mean_edge_m = MeanEdgeLength(mesh);
   result.boundary_edges = CountBoundaryEdges(mesh);
   result.boundary_edges_per_1000_faces =
       mesh.face_count() ? 1000.0 * double(result.boundary_edges) / double(mesh.face_count()) : 0;

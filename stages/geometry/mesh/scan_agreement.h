@@ -31,6 +31,7 @@
 #include "stages/geometry/core/mesh.h"
 #include "stages/geometry/core/point_cloud.h"
 #include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/mesh/trim.h"  // CountBoundaryEdges, MeanEdgeLength
 
 namespace pb {
 
@@ -61,8 +62,5 @@ struct ScanAgreement {
 Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan,
                                              std::span<const float> local_spacing_m,
                                              const ScanAgreementOptions& options = {});
-
-// Edges (unordered vertex pairs) used by exactly one face.
-size_t CountBoundaryEdges(const Mesh& mesh);
 
 }  // namespace pb
