@@ -1,3 +1,5 @@
+#include "stages/export/export_io.h"
+
 #include "stages/builtin.h"
 
 #include <algorithm>

@@ -5,6 +5,7 @@
 
 #include "engine/stage.h"
 #include "stages/builtin.h"
+#include "stages/export/export_io.h"
 #include "stages/geometry/io/obj.h"
 #include "stages/params.h"
 
