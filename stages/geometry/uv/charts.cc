@@ -39,13 +39,7 @@ V3 Position(const Mesh& mesh, uint32_t v) {
 
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
-// Per face: area-weighted normal (length = 2 * area) and, per edge k (from
-// corner k to k+1), the face across it, or kNone when the edge is a border,
-// non-manifold or joins faces of opposite orientation.
-struct Topology {
-  std::vector<V3> area_normal;
-  std::vector<uint32_t> neighbor;  // 3 per face
-};
+}  // namespace
 
 Topology BuildTopology(const Mesh& mesh) {
   const size_t faces = mesh.face_count(), vertices = mesh.vertex_count();
@@ -94,6 +88,8 @@ Topology BuildTopology(const Mesh& mesh) {
   });
   return topo;
 }
+
+namespace {
 
 V3 Normalized(const V3& v) {
   const double n = Norm(v);
@@ -317,6 +313,8 @@ std::vector<std::vector<uint32_t>> SplitInHalves(const std::vector<uint32_t>& fa
   return parts;
 }
 
+}  // namespace
+
 // Rotates the chart to its minimal-area bounding rectangle, landscape, with
 // its min corner at the origin. Rotations only: no chart is mirrored.
 void FitRectangle(FlatChart* chart) {
@@ -385,8 +383,6 @@ void FitRectangle(FlatChart* chart) {
   chart->width_m = turn ? height : width;
   chart->height_m = turn ? width : height;
 }
-
-}  // namespace
 
 std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& options,
                                       double* seam_length_m,
