@@ -21,7 +21,7 @@ constexpr const char* kSchema = R"({
     "method": {
       "type": "string",
       "enum": ["charts", "conformal", "per_triangle"],
-      "default": "charts",
+      "default": "conformal",
       "description": "charts: grow charts of faces with similar normals (Blender Smart UV Project's criterion), project each on its plane, pack their bounding boxes. conformal: charts that follow curved surfaces (grown by normal cone, cut at creases), flattened by least-squares conformal maps, split where they stretch, packed by shape with quarter turns; for scanned organic or carved surfaces. per_triangle: every face its own right-isosceles chart in a grid (MeshLab's trivial parametrization; a baseline)."
     },
     "size": {
@@ -69,7 +69,7 @@ constexpr const char* kSchema = R"({
 
 Status Run(StageContext& ctx) {
   UnwrapOptions options;
-  PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method", "charts"));
+  PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method", "conformal"));
   if (method == "charts") {
     options.method = UnwrapMethod::kCharts;
   } else if (method == "conformal") {
@@ -152,17 +152,17 @@ Status Run(StageContext& ctx) {
 StageType UnwrapStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;
   type.summary =
-      "UV atlas: charts of similar normals, planar projection, one packed square texture";
+      "UV atlas: conformal charts that follow the surface (or planar ones), one packed square texture";
   type.doc =
       "Gives the mesh per-vertex UVs in [0,1]^2 for one `size` x `size` texture. `charts` "
-      "(default) grows charts across manifold edges while face normals stay within "
+      "grows charts across manifold edges while face normals stay within "
       "`max_angle_deg` of the chart's mean normal and within `max_stretch` of planar "
       "projection, projects each chart on its plane, splits charts whose projection folds or "
       "overlaps, rotates each to its minimal bounding rectangle and packs all at one texel "
       "density (skyline packer, scale found by bisection) with `gutter` texels between charts "
-      "and at the border. `conformal` grows charts by normal cone (`cone_deg`) over smooth surface, "
+      "and at the border. `conformal` (default) grows charts by normal cone (`cone_deg`) over smooth surface, "
       "cuts them at creases, flattens each by a least-squares conformal map, splits any whose "
       "L2 stretch exceeds `max_chart_stretch` (or that folds or overlaps itself), and packs the "
       "chart shapes (not their boxes) with quarter turns at one texel density. `per_triangle` gives every face its own cell (MeshLab's trivial "

@@ -25,9 +25,8 @@ constexpr uint32_t kIsolated = kNoFace - 1;
 // Charts under this many faces are merged into a neighbour where the normals
 // allow it.
 constexpr size_t kSmallChartFaces = 16;
-// A chart this flat is projected on its plane instead of solved (L-inf
-// stretch 1/cos(2.5 deg) = 1.001).
-constexpr double kPlanarCos = 0.99905;
+// Curved charts with more vertices than this are split rather than solved.
+constexpr size_t kMaxSolveVertices = 60000;
 
 double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double Norm(const V3& a) { return std::sqrt(Dot(a, a)); }
@@ -156,7 +155,7 @@ std::vector<uint32_t> GrowCharts(const FaceData& data, double cone_cos,
 // one other chart moves there if its normal is within `cos_limit` of that
 // chart's mean normal. Greedy growth leaves saw-tooth borders on noisy
 // meshes; they cost seam length and packing space.
-void SmoothBorders(const FaceData& data, uint32_t count, double cos_limit,
+void SmoothBorders(const FaceData& data, uint32_t count, double cos_limit, double crease_cos,
                    std::vector<uint32_t>* chart_of_io) {
   std::vector<uint32_t>& chart_of = *chart_of_io;
   const size_t faces = data.area.size();
@@ -175,7 +174,10 @@ void SmoothBorders(const FaceData& data, uint32_t count, double cos_limit,
       int n = 0;
       for (int k = 0; k < 3; ++k) {
         const uint32_t g = data.topo.neighbor[3 * f + k];
-        if (g != kNone && chart_of[g] != own && chart_of[g] != kIsolated) other[n++] = chart_of[g];
+        if (g != kNone && chart_of[g] != own && chart_of[g] != kIsolated &&
+            Dot(data.unit_normal[f], data.unit_normal[g]) >= crease_cos) {
+          other[n++] = chart_of[g];
+        }
       }
       if (n < 2) continue;
       uint32_t target = kNone;
@@ -204,7 +206,8 @@ void SmoothBorders(const FaceData& data, uint32_t count, double cos_limit,
 // order of their lowest face.
 std::vector<std::vector<uint32_t>> MergeSmallCharts(const Mesh& mesh, const FaceData& data,
                                                     std::vector<uint32_t> chart_of,
-                                                    uint32_t count, double merge_cos) {
+                                                    uint32_t count, double merge_cos,
+                                                    double crease_cos) {
   const size_t faces = data.area.size();
   std::vector<std::vector<uint32_t>> members(count);
   std::vector<V3> normal_sum(count, V3{0, 0, 0});
@@ -228,6 +231,7 @@ std::vector<std::vector<uint32_t>> MergeSmallCharts(const Mesh& mesh, const Face
       for (int k = 0; k < 3; ++k) {
         const uint32_t g = data.topo.neighbor[3 * size_t(f) + k];
         if (g == kNone || chart_of[g] == c || chart_of[g] == kIsolated) continue;
+        if (Dot(data.unit_normal[f], data.unit_normal[g]) < crease_cos) continue;  // a crease
         const V3 a = Position(mesh, mesh.indices[3 * size_t(f) + k]);
         const V3 b = Position(mesh, mesh.indices[3 * size_t(f) + (k + 1) % 3]);
         const double length = Norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]});
@@ -308,43 +312,29 @@ FlatChart ChartSkeleton(const Mesh& mesh, std::vector<uint32_t> faces) {
   return chart;
 }
 
-// Flattens (step 3) and validates (step 4); false if the chart must split.
-bool FlattenChart(const Mesh& mesh, const FaceData& data, double max_stretch, FlatChart* chart) {
-  V3 sum{0, 0, 0};
-  bool planar = true;
-  for (uint32_t f : chart->faces) sum = Add(sum, data.topo.area_normal[f]);
-  const V3 normal = Normalized(sum);
-  for (uint32_t f : chart->faces) {
-    if (data.area[f] > 0 && Dot(data.unit_normal[f], normal) < kPlanarCos) {
-      planar = false;
-      break;
-    }
-  }
-  const size_t n = chart->vertices.size();
-  chart->uv_m.assign(2 * n, 0.0);
+// Projects the chart on the plane through its first vertex with unit
+// normal `normal` (right-handed basis: front faces stay counter-clockwise).
+void ProjectOnPlane(const Mesh& mesh, const V3& normal, FlatChart* chart) {
+  const int least = std::fabs(normal[0]) <= std::fabs(normal[1])
+                        ? (std::fabs(normal[0]) <= std::fabs(normal[2]) ? 0 : 2)
+                        : (std::fabs(normal[1]) <= std::fabs(normal[2]) ? 1 : 2);
+  V3 helper{0, 0, 0};
+  helper[least] = 1;
+  const V3 t1 = Normalized(Cross(helper, normal));
+  const V3 t2 = Cross(normal, t1);
   const V3 origin = Position(mesh, chart->vertices.front());
-  if (planar && Norm(normal) > 0) {
-    const int least = std::fabs(normal[0]) <= std::fabs(normal[1])
-                          ? (std::fabs(normal[0]) <= std::fabs(normal[2]) ? 0 : 2)
-                          : (std::fabs(normal[1]) <= std::fabs(normal[2]) ? 1 : 2);
-    V3 helper{0, 0, 0};
-    helper[least] = 1;
-    const V3 t1 = Normalized(Cross(helper, normal));
-    const V3 t2 = Cross(normal, t1);
-    for (size_t i = 0; i < n; ++i) {
-      const V3 p = Position(mesh, chart->vertices[i]);
-      const V3 d{p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
-      chart->uv_m[2 * i] = Dot(d, t1);
-      chart->uv_m[2 * i + 1] = Dot(d, t2);
-    }
-  } else {
-    std::vector<double> positions(3 * n);
-    for (size_t i = 0; i < n; ++i) {
-      const V3 p = Position(mesh, chart->vertices[i]);
-      for (int d = 0; d < 3; ++d) positions[3 * i + d] = p[d] - origin[d];
-    }
-    if (!LscmFlatten(positions, chart->corners, &chart->uv_m)) return chart->faces.size() == 1;
+  chart->uv_m.assign(2 * chart->vertices.size(), 0.0);
+  for (size_t i = 0; i < chart->vertices.size(); ++i) {
+    const V3 p = Position(mesh, chart->vertices[i]);
+    const V3 d{p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
+    chart->uv_m[2 * i] = Dot(d, t1);
+    chart->uv_m[2 * i + 1] = Dot(d, t2);
   }
+}
+
+// Scales a flattened chart to UV area = 3-D area and checks it (step 4):
+// every face counter-clockwise, L2 stretch at most max_stretch, no overlaps.
+bool ScaleAndCheck(const Mesh& mesh, const FaceData& data, double max_stretch, FlatChart* chart) {
   const size_t faces = chart->faces.size();
   double area3 = 0, area2 = 0, extent = 0;
   std::vector<Box2> boxes(faces);
@@ -360,7 +350,6 @@ bool FlattenChart(const Mesh& mesh, const FaceData& data, double max_stretch, Fl
     extent = std::max({extent, boxes[i][2] - boxes[i][0], boxes[i][3] - boxes[i][1]});
   }
   if (!(area2 > 0) || !(area3 > 0)) return faces == 1;
-  // One texel density: UV area = 3-D area.
   const double scale = std::sqrt(area3 / area2);
   for (double& x : chart->uv_m) x *= scale;
   if (faces == 1) return true;
@@ -375,6 +364,32 @@ bool FlattenChart(const Mesh& mesh, const FaceData& data, double max_stretch, Fl
     return !overlap;
   });
   return !overlap;
+}
+
+// Flattens (step 3) and validates (step 4); false if the chart must split.
+// A planar projection is kept when it stretches no more than a tenth of the
+// allowed excess (nearly flat charts, like relief walls: exact rectangles
+// pack better, and it costs no solve); larger charts than kMaxSolveVertices
+// that need a solve are split instead (the factorization grows faster than
+// the chart).
+bool FlattenChart(const Mesh& mesh, const FaceData& data, double max_stretch, FlatChart* chart) {
+  V3 sum{0, 0, 0};
+  for (uint32_t f : chart->faces) sum = Add(sum, data.topo.area_normal[f]);
+  const V3 normal = Normalized(sum);
+  if (Norm(normal) > 0) {
+    ProjectOnPlane(mesh, normal, chart);
+    if (ScaleAndCheck(mesh, data, 1.0 + 0.1 * (max_stretch - 1.0), chart)) return true;
+  }
+  const size_t n = chart->vertices.size();
+  if (n > kMaxSolveVertices) return false;
+  const V3 origin = Position(mesh, chart->vertices.front());
+  std::vector<double> positions(3 * n);
+  for (size_t i = 0; i < n; ++i) {
+    const V3 p = Position(mesh, chart->vertices[i]);
+    for (int d = 0; d < 3; ++d) positions[3 * i + d] = p[d] - origin[d];
+  }
+  if (!LscmFlatten(positions, chart->corners, &chart->uv_m)) return chart->faces.size() == 1;
+  return ScaleAndCheck(mesh, data, max_stretch, chart);
 }
 
 // Local index of face f in the increasing list `faces`.
@@ -469,7 +484,7 @@ std::vector<std::vector<uint32_t>> SplitChart(const Topology& topo,
 // neighbouring chart (longest shared border first, up to three tried) if
 // the union flattens validly. Sequential, in order of size then position.
 void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_stretch,
-                          std::vector<FlatChart>* charts_io) {
+                          double crease_cos, std::vector<FlatChart>* charts_io) {
   std::vector<FlatChart>& charts = *charts_io;
   std::vector<uint32_t> chart_of(data.area.size(), kNone);
   std::vector<uint32_t> small;
@@ -489,6 +504,7 @@ void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_str
       for (int k = 0; k < 3; ++k) {
         const uint32_t g = data.topo.neighbor[3 * size_t(f) + k];
         if (g == kNone || chart_of[g] == c || chart_of[g] == kNone) continue;
+        if (Dot(data.unit_normal[f], data.unit_normal[g]) < crease_cos) continue;  // a crease
         const V3 a = Position(mesh, mesh.indices[3 * size_t(f) + k]);
         const V3 b = Position(mesh, mesh.indices[3 * size_t(f) + (k + 1) % 3]);
         const double length = Norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]});
@@ -561,9 +577,9 @@ std::vector<FlatChart> MakeSurfaceCharts(const Mesh& mesh, const SurfaceChartOpt
   const double merge_cos = std::cos(std::min(89.0, 1.5 * options.cone_deg) * M_PI / 180.0);
   uint32_t count = 0;
   std::vector<uint32_t> chart_of = GrowCharts(data, cone_cos, options.isolated_faces, &count);
-  SmoothBorders(data, count, merge_cos, &chart_of);
+  SmoothBorders(data, count, merge_cos, cone_cos, &chart_of);
   std::vector<std::vector<uint32_t>> pending =
-      MergeSmallCharts(mesh, data, std::move(chart_of), count, merge_cos);
+      MergeSmallCharts(mesh, data, std::move(chart_of), count, merge_cos, cone_cos);
   if (progress) progress(0.3);
 
   // Flatten; split what fails, until nothing does. A split chart's parts
@@ -608,7 +624,7 @@ std::vector<FlatChart> MakeSurfaceCharts(const Mesh& mesh, const SurfaceChartOpt
     pending = std::move(next_pending);
     if (progress) progress(std::min(0.9, 0.3 + 0.1 * (round + 1)));
   }
-  MergeFlatSmallCharts(mesh, data, options.max_chart_stretch, &charts);
+  MergeFlatSmallCharts(mesh, data, options.max_chart_stretch, cone_cos, &charts);
   for (uint32_t f : options.isolated_faces) {
     FlatChart chart = ChartSkeleton(mesh, {f});
     chart.isolated = true;

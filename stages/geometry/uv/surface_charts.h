@@ -8,18 +8,26 @@
 //    smooth surface first and meets its neighbours at creases), taking faces
 //    within `cone_deg` of that mean and never crossing an edge whose dihedral
 //    angle exceeds `cone_deg` (a crease is a seam).
-// 2. Merging. A chart of fewer than 16 faces joins the neighbouring chart it
-//    shares the longest boundary with, if its faces are within 1.5 cone_deg of
-//    that chart's mean normal (growth leaves such scraps between charts).
-// 3. Flattening. A chart whose faces are all within 2.5 deg of its mean normal
-//    is projected on that plane (exact for flat walls, and cheap); any other by
-//    LSCM (conformal.h).
+// 2. Smoothing and merging. A face with two or three neighbours in one other
+//    chart moves there if its normal is within 1.5 cone_deg of that chart's
+//    mean (greedy growth leaves saw-tooth borders on noisy meshes). A chart of
+//    fewer than 16 faces joins the neighbouring chart it shares the longest
+//    boundary with, if its faces are within 1.5 cone_deg of the union's mean
+//    normal (growth leaves such scraps between charts). Neither crosses a
+//    crease.
+// 3. Flattening. A chart whose projection on the plane of its mean normal
+//    stretches it by at most a tenth of the allowed excess (L2 <= 1.003 by
+//    default: flat or relief walls) keeps that projection (exact rectangles
+//    for walls, and no solve); any other is flattened by LSCM (conformal.h),
+//    or split first if it has more than 60,000 vertices.
 // 4. Validation and splitting. A flattened chart must have every face
 //    counter-clockwise, no two faces overlapping, and its L2 stretch
 //    (Sander et al. 2001, normalized on the chart) at most
 //    `max_chart_stretch`; otherwise it is split in two by a breadth-first
 //    race from two far-apart faces (geodesic halves) and each half is
 //    flattened again. A one-face chart is always valid.
+//    Afterwards a chart still under 16 faces joins a neighbour (longest
+//    non-crease border first, three tried) if the union flattens validly.
 // 5. Each chart is scaled so that its UV area equals its 3-D area (one texel
 //    density for the whole atlas) and rotated to its minimal-area rectangle.
 //
