@@ -25,6 +25,9 @@ constexpr uint32_t kIsolated = kNoFace - 1;
 // Charts under this many faces are merged into a neighbour where the normals
 // allow it.
 constexpr size_t kSmallChartFaces = 16;
+// Smoothing and merging never cross an edge folding more than this (or
+// cone_deg if larger).
+constexpr double kMergeCreaseDeg = 75;
 // Curved charts with more vertices than this are split rather than solved.
 constexpr size_t kMaxSolveVertices = 60000;
 
@@ -367,7 +370,7 @@ bool ScaleAndCheck(const Mesh& mesh, const FaceData& data, double max_stretch, F
 }
 
 // Flattens (step 3) and validates (step 4); false if the chart must split.
-// A planar projection is kept when it stretches no more than a tenth of the
+// A planar projection is kept when it stretches no more than 1/50 of the
 // allowed excess (nearly flat charts, like relief walls: exact rectangles
 // pack better, and it costs no solve); larger charts than kMaxSolveVertices
 // that need a solve are split instead (the factorization grows faster than
@@ -378,7 +381,7 @@ bool FlattenChart(const Mesh& mesh, const FaceData& data, double max_stretch, Fl
   const V3 normal = Normalized(sum);
   if (Norm(normal) > 0) {
     ProjectOnPlane(mesh, normal, chart);
-    if (ScaleAndCheck(mesh, data, 1.0 + 0.1 * (max_stretch - 1.0), chart)) return true;
+    if (ScaleAndCheck(mesh, data, 1.0 + 0.02 * (max_stretch - 1.0), chart)) return true;
   }
   const size_t n = chart->vertices.size();
   if (n > kMaxSolveVertices) return false;
@@ -575,11 +578,14 @@ std::vector<FlatChart> MakeSurfaceCharts(const Mesh& mesh, const SurfaceChartOpt
   if (progress) progress(0.15);
   const double cone_cos = std::cos(options.cone_deg * M_PI / 180.0);
   const double merge_cos = std::cos(std::min(89.0, 1.5 * options.cone_deg) * M_PI / 180.0);
+  // Growth stops at any fold beyond the cone; merging only at folds a scan's
+  // noise does not make (single faces of a noisy scan often fold 45 deg).
+  const double crease_cos = std::cos(std::max(options.cone_deg, kMergeCreaseDeg) * M_PI / 180.0);
   uint32_t count = 0;
   std::vector<uint32_t> chart_of = GrowCharts(data, cone_cos, options.isolated_faces, &count);
-  SmoothBorders(data, count, merge_cos, cone_cos, &chart_of);
+  SmoothBorders(data, count, merge_cos, crease_cos, &chart_of);
   std::vector<std::vector<uint32_t>> pending =
-      MergeSmallCharts(mesh, data, std::move(chart_of), count, merge_cos, cone_cos);
+      MergeSmallCharts(mesh, data, std::move(chart_of), count, merge_cos, crease_cos);
   if (progress) progress(0.3);
 
   // Flatten; split what fails, until nothing does. A split chart's parts
@@ -624,7 +630,7 @@ std::vector<FlatChart> MakeSurfaceCharts(const Mesh& mesh, const SurfaceChartOpt
     pending = std::move(next_pending);
     if (progress) progress(std::min(0.9, 0.3 + 0.1 * (round + 1)));
   }
-  MergeFlatSmallCharts(mesh, data, options.max_chart_stretch, cone_cos, &charts);
+  MergeFlatSmallCharts(mesh, data, options.max_chart_stretch, crease_cos, &charts);
   for (uint32_t f : options.isolated_faces) {
     FlatChart chart = ChartSkeleton(mesh, {f});
     chart.isolated = true;

@@ -13,10 +13,11 @@
 //    mean (greedy growth leaves saw-tooth borders on noisy meshes). A chart of
 //    fewer than 16 faces joins the neighbouring chart it shares the longest
 //    boundary with, if its faces are within 1.5 cone_deg of the union's mean
-//    normal (growth leaves such scraps between charts). Neither crosses a
-//    crease.
+//    normal (growth leaves such scraps between charts). Neither crosses an
+//    edge folding more than 75 deg (growth stops at cone_deg; single faces
+//    of a noisy scan often fold 45 deg, which merging may cross).
 // 3. Flattening. A chart whose projection on the plane of its mean normal
-//    stretches it by at most a tenth of the allowed excess (L2 <= 1.003 by
+//    stretches it by at most 1/50 of the allowed excess (L2 <= 1.0006 by
 //    default: flat or relief walls) keeps that projection (exact rectangles
 //    for walls, and no solve); any other is flattened by LSCM (conformal.h),
 //    or split first if it has more than 60,000 vertices.
