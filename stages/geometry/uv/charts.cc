@@ -407,6 +407,10 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
     std::vector<FlatChart> flat(pending.size());
     std::vector<Flatness> ok(pending.size(), Flatness::kOk);
     std::vector<std::vector<std::vector<uint32_t>>> parts(pending.size());
+    // Faces of charts settled in earlier rounds must not keep their old
+    // pending index: Components and SplitInHalves would take them for faces
+    // of the chart now at that index (and write out of its bounds).
+    std::fill(slots.owner.begin(), slots.owner.end(), kNone);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, pending.size(), 16), [&](const auto& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         for (size_t j = 0; j < pending[i].size(); ++j) {
