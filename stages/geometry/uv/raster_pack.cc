@@ -394,46 +394,58 @@ class Atlas {
 int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint32_t>& order,
                     double s, int size, int gutter, int64_t give_up_height,
                     std::vector<RasterPlacement>* placements) {
-  std::vector<Shapes> shapes(charts.size());
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, charts.size(), 16), [&](const auto& r) {
-    for (size_t c = r.begin(); c < r.end(); ++c) shapes[c] = MakeShapes(charts[c], s, gutter);
-  });
   Atlas atlas(size, 2 * size);
   int64_t used = 0;
   placements->assign(charts.size(), RasterPlacement());
-  for (uint32_t c : order) {
-    // The four turns are searched side by side (each to its own first fit)
-    // and compared in a fixed order.
-    const int turns = charts[c].isolated ? 1 : 4;
-    int found_x[4], found_y[4];
-    bool found[4] = {false, false, false, false};
-    tbb::parallel_for(0, turns, [&](int k) {
-      thread_local Atlas::Scratch scratch;
-      found[k] = atlas.Find(shapes[c].probe[k], shapes[c].check_rows[k],
-                            std::numeric_limits<int64_t>::max(), &scratch, &found_x[k], &found_y[k]);
-    });
-    int64_t best_top = std::numeric_limits<int64_t>::max();
-    int best_x = 0, best_y = 0, best_k = -1;
-    for (int k = 0; k < turns; ++k) {
-      if (!found[k]) continue;
-      const int64_t top = int64_t(found_y[k]) + shapes[c].probe[k].h;
-      if (top < best_top || (top == best_top && found_x[k] < best_x)) {
-        best_top = top;
-        best_x = found_x[k];
-        best_y = found_y[k];
-        best_k = k;
+  // Shapes are made block by block in parallel (an attempt that gives up
+  // early does not rasterize the rest), placed one by one.
+  constexpr size_t kBlock = 64;
+  std::vector<Shapes> block;
+  for (size_t begin = 0; begin < order.size(); begin += kBlock) {
+    const size_t end = std::min(order.size(), begin + kBlock);
+    block.assign(end - begin, Shapes());
+    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4), [&](const auto& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        block[i - begin] = MakeShapes(charts[order[i]], s, gutter);
       }
+    });
+    for (size_t i = begin; i < end; ++i) {
+      const uint32_t c = order[i];
+      const Shapes& shape = block[i - begin];
+      // The four turns are searched side by side (each to its own first
+      // fit) and compared in a fixed order.
+      const int turns = charts[c].isolated ? 1 : 4;
+      int found_x[4], found_y[4];
+      bool found[4] = {false, false, false, false};
+      tbb::parallel_for(0, turns, [&](int k) {
+        thread_local Atlas::Scratch scratch;
+        found[k] = atlas.Find(shape.probe[k], shape.check_rows[k],
+                              std::numeric_limits<int64_t>::max(), &scratch, &found_x[k],
+                              &found_y[k]);
+      });
+      int64_t best_top = std::numeric_limits<int64_t>::max();
+      int best_x = 0, best_y = 0, best_k = -1;
+      for (int k = 0; k < turns; ++k) {
+        if (!found[k]) continue;
+        const int64_t top = int64_t(found_y[k]) + shape.probe[k].h;
+        if (top < best_top || (top == best_top && found_x[k] < best_x)) {
+          best_top = top;
+          best_x = found_x[k];
+          best_y = found_y[k];
+          best_k = k;
+        }
+      }
+      if (best_k < 0) return std::numeric_limits<int64_t>::max();
+      atlas.Stamp(shape.stamp[best_k], best_x + gutter, best_y + gutter);
+      used = std::max(used, int64_t(best_y) + shape.probe[best_k].h);
+      if (used > give_up_height) return used;
+      RasterPlacement& p = (*placements)[c];
+      p.x = best_x + gutter;
+      p.y = best_y + gutter;
+      p.box_width = shape.stamp[0].w;
+      p.box_height = shape.stamp[0].h;
+      p.quarter_turns = best_k;
     }
-    if (best_k < 0) return std::numeric_limits<int64_t>::max();
-    atlas.Stamp(shapes[c].stamp[best_k], best_x + gutter, best_y + gutter);
-    used = std::max(used, int64_t(best_y) + shapes[c].probe[best_k].h);
-    if (used > give_up_height) return used;
-    RasterPlacement& p = (*placements)[c];
-    p.x = best_x + gutter;
-    p.y = best_y + gutter;
-    p.box_width = shapes[c].stamp[0].w;
-    p.box_height = shapes[c].stamp[0].h;
-    p.quarter_turns = best_k;
   }
   return used;
 }
