@@ -154,7 +154,7 @@ StageType UnwrapStage() {
   type.id = kId;
   type.version = 2;
   type.summary =
-      "UV atlas: conformal charts that follow the surface (or planar ones), one packed square texture";
+      "UV atlas: conformal charts that follow the surface (or planar ones), one square texture";
   type.doc =
       "Gives the mesh per-vertex UVs in [0,1]^2 for one `size` x `size` texture. `charts` "
       "grows charts across manifold edges while face normals stay within "
@@ -162,10 +162,11 @@ StageType UnwrapStage() {
       "projection, projects each chart on its plane, splits charts whose projection folds or "
       "overlaps, rotates each to its minimal bounding rectangle and packs all at one texel "
       "density (skyline packer, scale found by bisection) with `gutter` texels between charts "
-      "and at the border. `conformal` (default) grows charts by normal cone (`cone_deg`) over smooth surface, "
-      "cuts them at creases, flattens each by a least-squares conformal map, splits any whose "
-      "L2 stretch exceeds `max_chart_stretch` (or that folds or overlaps itself), and packs the "
-      "chart shapes (not their boxes) with quarter turns at one texel density. `per_triangle` gives every face its own cell (MeshLab's trivial "
+      "and at the border. `conformal` (default) grows charts by normal cone (`cone_deg`) over "
+      "smooth surface, cuts them at creases, flattens each by a least-squares conformal map, "
+      "splits any whose L2 stretch exceeds `max_chart_stretch` (or that folds or overlaps "
+      "itself), and packs the chart shapes (not their boxes) with quarter turns at one texel "
+      "density. `per_triangle` gives every face its own cell (MeshLab's trivial "
       "parametrization). Vertices are split along seams, copying normals and colors; faces "
       "keep their order and winding and are counter-clockwise in UV (no mirrored charts). "
       "Non-manifold edges are treated as seams, so uncleaned meshes work too. Deterministic "
@@ -173,8 +174,8 @@ StageType UnwrapStage() {
       "`size` with `gutter`.\n\n"
       "Counters: `charts`, `coverage` (fraction of the atlas covered by triangles), "
       "`stretch_l2` and `stretch_linf` (Sander et al. 2001 texture stretch, normalized so 1 "
-      "is no distortion), `seam_length_m`, `vertices_out`, `texels_per_meter`. The output meta's `uv` object has "
-      "the parameters and these figures.";
+      "is no distortion), `seam_length_m`, `vertices_out`, `texels_per_meter`. The output "
+      "meta's `uv` object has the parameters and these figures.";
   type.params_schema = kSchema;
   type.inputs = {
       {"mesh", "mesh", "The mesh to unwrap (mesh.ply); existing UVs are replaced.", false}};

@@ -143,7 +143,8 @@ Mesh MakeBumpySphere(double radius, int levels, double bump) {
   for (const auto& v : p) {
     const double r = radius * (1 + bump * std::sin(5 * v[0]) * std::sin(4 * v[1] + 1) *
                                        std::sin(3 * v[2] + 2));
-    mesh.positions.insert(mesh.positions.end(), {float(r * v[0]), float(r * v[1]), float(r * v[2])});
+    mesh.positions.insert(mesh.positions.end(),
+                          {float(r * v[0]), float(r * v[1]), float(r * v[2])});
   }
   for (const auto& f : faces) mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
   return mesh;
@@ -535,7 +536,8 @@ TEST(UvRasterPackTest, ManySmallIrregularChartsFillTheSquare) {
     }
     for (int k = 0; k < sides; ++k) {
       chart.faces.push_back(uint32_t(k));
-      chart.corners.insert(chart.corners.end(), {0u, uint32_t(k + 1), uint32_t((k + 1) % sides + 1)});
+      chart.corners.insert(chart.corners.end(),
+                           {0u, uint32_t(k + 1), uint32_t((k + 1) % sides + 1)});
     }
     FitRectangle(&chart);
     for (int k = 0; k < sides; ++k) {

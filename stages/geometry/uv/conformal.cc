@@ -3,7 +3,6 @@
 
 #include <Eigen/Sparse>
 #include <Eigen/SparseCholesky>
-
 #include <algorithm>
 #include <cmath>
 #include <limits>

@@ -155,9 +155,15 @@ Mask Turn(const Mask& in, int quarter_turns) {
       for (uint64_t m = row[word]; m != 0; m &= m - 1) {
         const int i = word * 64 + __builtin_ctzll(m);
         switch (quarter_turns) {
-          case 1: out.Set(in.h - 1 - j, i); break;
-          case 2: out.Set(in.w - 1 - i, in.h - 1 - j); break;
-          default: out.Set(j, in.w - 1 - i); break;
+          case 1:
+            out.Set(in.h - 1 - j, i);
+            break;
+          case 2:
+            out.Set(in.w - 1 - i, in.h - 1 - j);
+            break;
+          default:
+            out.Set(j, in.w - 1 - i);
+            break;
         }
       }
     }
@@ -285,7 +291,8 @@ class Atlas {
           // Skip free runs that end before a + lo + len.
           while (k < runs.size() && runs[k].second < a + lo + len) ++k;
           for (size_t m = k; m < runs.size() && runs[m].first <= b + lo; ++m) {
-            const int c = std::max(a, runs[m].first - lo), d = std::min(b, runs[m].second - len - lo);
+            const int c = std::max(a, runs[m].first - lo),
+                      d = std::min(b, runs[m].second - len - lo);
             if (c <= d) next_.push_back({c, d});
           }
         }
@@ -344,7 +351,8 @@ class Atlas {
       int last = -1;
       for (int w = (end - 1) >> 6; w >= (begin >> 6) && last < 0; --w) {
         uint64_t m = row[w];
-        if (w == ((end - 1) >> 6) && ((end - 1) & 63) != 63) m &= (uint64_t(2) << ((end - 1) & 63)) - 1;
+        if (w == ((end - 1) >> 6) && ((end - 1) & 63) != 63)
+          m &= (uint64_t(2) << ((end - 1) & 63)) - 1;
         if (w == (begin >> 6)) m &= ~uint64_t(0) << (begin & 63);
         if (m != 0) last = w * 64 + 63 - __builtin_clzll(m);
       }
@@ -419,9 +427,9 @@ int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint
       bool found[4] = {false, false, false, false};
       tbb::parallel_for(0, turns, [&](int k) {
         thread_local Atlas::Scratch scratch;
-        found[k] = atlas.Find(shape.probe[k], shape.check_rows[k],
-                              std::numeric_limits<int64_t>::max(), &scratch, &found_x[k],
-                              &found_y[k]);
+        found[k] =
+            atlas.Find(shape.probe[k], shape.check_rows[k], std::numeric_limits<int64_t>::max(),
+                       &scratch, &found_x[k], &found_y[k]);
       });
       int64_t best_top = std::numeric_limits<int64_t>::max();
       int best_x = 0, best_y = 0, best_k = -1;
@@ -456,10 +464,20 @@ std::array<double, 2> PlacedTexel(const RasterPlacement& p, double s, double u, 
   const double U = u * s, V = v * s;
   double x = U, y = V;
   switch (p.quarter_turns) {
-    case 1: x = p.box_height - V; y = U; break;
-    case 2: x = p.box_width - U; y = p.box_height - V; break;
-    case 3: x = V; y = p.box_width - U; break;
-    default: break;
+    case 1:
+      x = p.box_height - V;
+      y = U;
+      break;
+    case 2:
+      x = p.box_width - U;
+      y = p.box_height - V;
+      break;
+    case 3:
+      x = V;
+      y = p.box_width - U;
+      break;
+    default:
+      break;
   }
   return {double(p.x) + x, double(p.y) + y};
 }
@@ -488,7 +506,8 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
       const double* a = &chart.uv_m[2 * chart.corners[3 * f]];
       const double* b = &chart.uv_m[2 * chart.corners[3 * f + 1]];
       const double* d = &chart.uv_m[2 * chart.corners[3 * f + 2]];
-      chart_area[c] += 0.5 * std::fabs((b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1]));
+      chart_area[c] +=
+          0.5 * std::fabs((b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1]));
     }
     area_m2 += chart_area[c];
     longest_m = std::max(longest_m, charts[c].width_m);
@@ -522,8 +541,9 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     }
     if (lo > 0 && (hi <= lo * 1.008 || (fits && s >= s_limit) || attempt >= 7)) break;
     const bool measured = used != kNever && used <= give_up;
-    double next = measured ? s * std::sqrt(double(size) / double(std::max<int64_t>(used, 1))) * 0.998
-                           : 0.7 * s;
+    double next = measured
+                      ? s * std::sqrt(double(size) / double(std::max<int64_t>(used, 1))) * 0.998
+                      : 0.7 * s;
     if (lo > 0 && hi < std::numeric_limits<double>::infinity()) {
       next = measured ? std::clamp(next, lo + 0.2 * (hi - lo), hi - 0.2 * (hi - lo))
                       : std::sqrt(lo * hi);
@@ -544,7 +564,8 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     for (size_t c = 0; c < charts.size(); ++c) {
       if (!charts[c].isolated) key[c] = variant == 1 ? charts[c].width_m : charts[c].height_m;
     }
-    std::stable_sort(other.begin(), other.end(), [&](uint32_t a, uint32_t b) { return key[a] > key[b]; });
+    std::stable_sort(other.begin(), other.end(),
+                     [&](uint32_t a, uint32_t b) { return key[a] > key[b]; });
     for (int climb = 0; climb < 8 && lo * 1.012 <= s_limit; ++climb) {
       const double step = 1.012;
       ++result.attempts;
@@ -559,7 +580,8 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
   // on a skyline (pack.h): keep whichever packing has the larger scale.
   std::vector<ChartExtent> extents(charts.size());
   for (size_t c = 0; c < charts.size(); ++c) {
-    extents[c] = charts[c].isolated ? ChartExtent{0, 0} : ChartExtent{charts[c].width_m, charts[c].height_m};
+    extents[c] =
+        charts[c].isolated ? ChartExtent{0, 0} : ChartExtent{charts[c].width_m, charts[c].height_m};
   }
   auto boxes = PackCharts(extents, size, g);
   if (boxes.ok() && boxes->texels_per_meter > lo) {

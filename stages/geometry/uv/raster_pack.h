@@ -29,10 +29,10 @@
 namespace pb {
 
 struct RasterPlacement {
-  int64_t x = 0, y = 0;      // lower-left corner of the turned integer box, texels
-  int box_width = 0;         // the chart's integer box before turning, texels
+  int64_t x = 0, y = 0;  // lower-left corner of the turned integer box, texels
+  int box_width = 0;     // the chart's integer box before turning, texels
   int box_height = 0;
-  int quarter_turns = 0;     // 0..3, counter-clockwise
+  int quarter_turns = 0;  // 0..3, counter-clockwise
 };
 
 struct RasterPackResult {

@@ -208,9 +208,8 @@ void SmoothBorders(const FaceData& data, uint32_t count, double cos_limit, doubl
 // Merging (step 2): returns the faces of each chart, increasing, charts in
 // order of their lowest face.
 std::vector<std::vector<uint32_t>> MergeSmallCharts(const Mesh& mesh, const FaceData& data,
-                                                    std::vector<uint32_t> chart_of,
-                                                    uint32_t count, double merge_cos,
-                                                    double crease_cos) {
+                                                    std::vector<uint32_t> chart_of, uint32_t count,
+                                                    double merge_cos, double crease_cos) {
   const size_t faces = data.area.size();
   std::vector<std::vector<uint32_t>> members(count);
   std::vector<V3> normal_sum(count, V3{0, 0, 0});
@@ -223,9 +222,8 @@ std::vector<std::vector<uint32_t>> MergeSmallCharts(const Mesh& mesh, const Face
   for (uint32_t c = 0; c < count; ++c) {
     if (members[c].size() < kSmallChartFaces) small.push_back(c);
   }
-  std::stable_sort(small.begin(), small.end(), [&](uint32_t a, uint32_t b) {
-    return members[a].size() < members[b].size();
-  });
+  std::stable_sort(small.begin(), small.end(),
+                   [&](uint32_t a, uint32_t b) { return members[a].size() < members[b].size(); });
   std::vector<std::pair<uint32_t, double>> shared;  // (chart, boundary length)
   for (uint32_t c : small) {
     if (members[c].empty() || members[c].size() >= kSmallChartFaces) continue;
@@ -559,8 +557,10 @@ double ChartStretchL2(const Mesh& mesh, const FlatChart& chart) {
     const double s1 = t[0], t1 = t[1], s2 = t[2], t2 = t[3], s3 = t[4], t3 = t[5];
     double a = 0, c = 0;
     for (int d = 0; d < 3; ++d) {
-      const double ss = (q[0][d] * (t2 - t3) + q[1][d] * (t3 - t1) + q[2][d] * (t1 - t2)) / (2 * a2);
-      const double st = (q[0][d] * (s3 - s2) + q[1][d] * (s1 - s3) + q[2][d] * (s2 - s1)) / (2 * a2);
+      const double ss =
+          (q[0][d] * (t2 - t3) + q[1][d] * (t3 - t1) + q[2][d] * (t1 - t2)) / (2 * a2);
+      const double st =
+          (q[0][d] * (s3 - s2) + q[1][d] * (s1 - s3) + q[2][d] * (s2 - s1)) / (2 * a2);
       a += ss * ss;
       c += st * st;
     }
