@@ -10,7 +10,8 @@
 # Prints a Markdown table; with DOC=docs/uv.md it also replaces the table
 # between the lines "<!-- bench/uv_unwrap.sh -->" and "<!-- end -->" there.
 # Env: SIZE (default 4096), THREADS (0 = all cores), BLENDER=0 skips Blender,
-#      METHODS (default "conformal charts").
+#      METHODS (default "conformal charts"), SYNTH_CELLS="0.05 0.007" also
+#      unwraps SynthTruthMesh(room, cell) (0.007 m: ~4.8e6 faces; no Blender).
 # Meshes: build/pointbake run bench/uv_meshes.yaml (bunny, and the pump with
 # --set scan.path=...) and bench/uv_meshes_room.yaml.
 set -euo pipefail
@@ -40,6 +41,13 @@ out="$tmp/table.md"
   echo "| mesh | faces | method | time | charts | coverage | L2 | L∞ | seams |"
   echo "|---|---:|---|---:|---:|---:|---:|---:|---:|"
 } > "$out"
+for cell in ${SYNTH_CELLS:-}; do
+  for method in ${METHODS:-conformal charts}; do
+    line=$(PB_UV_SYNTH_CELL=$cell PB_UV_SIZE=$size PB_UV_THREADS=${THREADS:-0} PB_UV_METHOD=$method run_tool)
+    seconds=$(echo "$line" | sed -E 's/.*: ([0-9.]+) s \(incl.*/\1 s/')
+    row "room truth, cell $cell m" "$method" "$seconds" "$line" >> "$out"
+  done
+done
 for spec in "$@"; do
   name=${spec%%=*}
   mesh=${spec#*=}
