@@ -91,8 +91,13 @@ int main() {
   if (const char* size = std::getenv("PB_UV_SIZE")) options.size_texels = std::atoi(size);
   if (const char* method = std::getenv("PB_UV_METHOD")) {
     if (std::string(method) == "per_triangle") options.method = UnwrapMethod::kPerTriangle;
+    if (std::string(method) == "conformal") options.method = UnwrapMethod::kConformal;
+    if (std::string(method) == "charts") options.method = UnwrapMethod::kCharts;
   }
   if (const char* threads = std::getenv("PB_UV_THREADS")) options.threads = std::atoi(threads);
+  if (const char* cone = std::getenv("PB_UV_CONE")) options.cone_deg = std::atof(cone);
+  if (const char* bound = std::getenv("PB_UV_MAX_CHART_STRETCH"))
+    options.max_chart_stretch = std::atof(bound);
   if (const char* stretch = std::getenv("PB_UV_MAX_STRETCH"))
     options.max_stretch = std::atof(stretch);
   AtlasReport report;

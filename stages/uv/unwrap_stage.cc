@@ -20,9 +20,9 @@ constexpr const char* kSchema = R"({
   "properties": {
     "method": {
       "type": "string",
-      "enum": ["charts", "per_triangle"],
-      "default": "charts",
-      "description": "charts: grow charts of faces with similar normals (Blender Smart UV Project's criterion), project each on its plane, pack them all. per_triangle: every face its own right-isosceles chart in a grid (MeshLab's trivial parametrization; a baseline)."
+      "enum": ["charts", "conformal", "per_triangle"],
+      "default": "conformal",
+      "description": "charts: grow charts of faces with similar normals (Blender Smart UV Project's criterion), project each on its plane, pack their bounding boxes. conformal: charts that follow curved surfaces (grown by normal cone, cut at creases), flattened by least-squares conformal maps, split where they stretch, packed by shape with quarter turns; for scanned organic or carved surfaces. per_triangle: every face its own right-isosceles chart in a grid (MeshLab's trivial parametrization; a baseline)."
     },
     "size": {
       "type": "integer",
@@ -45,6 +45,19 @@ constexpr const char* kSchema = R"({
       "default": 66,
       "description": "charts: a face joins a chart only if its normal is within this angle of the chart's mean normal (Blender's Smart UV Project angle limit, 66 by default)."
     },
+    "cone_deg": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "exclusiveMaximum": 90,
+      "default": 45,
+      "description": "conformal: a chart grows over faces whose normals are within this angle of its mean normal, and never across an edge folding more than this (a crease)."
+    },
+    "max_chart_stretch": {
+      "type": "number",
+      "exclusiveMinimum": 1,
+      "default": 1.03,
+      "description": "conformal: a chart whose conformal map has an L2 texture stretch (Sander et al. 2001, 1 = no distortion) above this is split in two."
+    },
     "max_stretch": {
       "type": "number",
       "minimum": 1,
@@ -59,16 +72,29 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method"));
   if (method == "charts") {
     options.method = UnwrapMethod::kCharts;
+  } else if (method == "conformal") {
+    options.method = UnwrapMethod::kConformal;
   } else if (method == "per_triangle") {
     options.method = UnwrapMethod::kPerTriangle;
   } else {
-    return Status::Invalid(std::string(kId) + ": parameter 'method' must be 'charts' or " +
-                           "'per_triangle', got '" + method + "'");
+    return Status::Invalid(std::string(kId) + ": parameter 'method' must be 'charts', " +
+                           "'conformal' or 'per_triangle', got '" + method + "'");
   }
   PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", {64, 16384}));
   PB_ASSIGN_OR_RETURN(const int64_t gutter, IntegerParam(ctx, kId, "gutter", {0, 64}));
   PB_ASSIGN_OR_RETURN(options.max_angle_deg, NumberParam(ctx, kId, "max_angle_deg"));
   PB_ASSIGN_OR_RETURN(options.max_stretch, NumberParam(ctx, kId, "max_stretch"));
+  PB_ASSIGN_OR_RETURN(options.cone_deg, NumberParam(ctx, kId, "cone_deg"));
+  PB_ASSIGN_OR_RETURN(options.max_chart_stretch, NumberParam(ctx, kId, "max_chart_stretch"));
+  if (!(options.cone_deg > 0 && options.cone_deg < 90)) {
+    return Status::Invalid(std::string(kId) + ": parameter 'cone_deg' must be in (0, 90), got " +
+                           std::to_string(options.cone_deg));
+  }
+  if (!(options.max_chart_stretch > 1)) {
+    return Status::Invalid(std::string(kId) +
+                           ": parameter 'max_chart_stretch' must be > 1, got " +
+                           std::to_string(options.max_chart_stretch));
+  }
   if (!(options.max_angle_deg > 0 && options.max_angle_deg < 90)) {
     return Status::Invalid(std::string(kId) +
                            ": parameter 'max_angle_deg' must be in (0, 90), got " +
@@ -99,6 +125,7 @@ Status Run(StageContext& ctx) {
   ctx.counter("stretch_linf", report.stretch_linf);
   ctx.counter("seam_length_m", report.seam_length_m);
   ctx.counter("vertices_out", static_cast<double>(output.vertex_count()));
+  ctx.counter("texels_per_meter", report.texels_per_meter);
   PB_RETURN_IF_ERROR(WriteOutputMesh(
       ctx, output,
       InputMeshMetaWith(ctx, output,
@@ -108,6 +135,8 @@ Status Run(StageContext& ctx) {
                  {"gutter", gutter},
                  {"max_angle_deg", options.max_angle_deg},
                  {"max_stretch", options.max_stretch},
+                 {"cone_deg", options.cone_deg},
+                 {"max_chart_stretch", options.max_chart_stretch},
                  {"charts", report.charts},
                  {"coverage", report.coverage},
                  {"stretch_l2", report.stretch_l2},
@@ -123,17 +152,21 @@ Status Run(StageContext& ctx) {
 StageType UnwrapStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;
   type.summary =
-      "UV atlas: charts of similar normals, planar projection, one packed square texture";
+      "UV atlas: conformal charts that follow the surface (or planar ones), one square texture";
   type.doc =
       "Gives the mesh per-vertex UVs in [0,1]^2 for one `size` x `size` texture. `charts` "
-      "(default) grows charts across manifold edges while face normals stay within "
+      "grows charts across manifold edges while face normals stay within "
       "`max_angle_deg` of the chart's mean normal and within `max_stretch` of planar "
       "projection, projects each chart on its plane, splits charts whose projection folds or "
       "overlaps, rotates each to its minimal bounding rectangle and packs all at one texel "
       "density (skyline packer, scale found by bisection) with `gutter` texels between charts "
-      "and at the border. `per_triangle` gives every face its own cell (MeshLab's trivial "
+      "and at the border. `conformal` (default) grows charts by normal cone (`cone_deg`) over "
+      "smooth surface, cuts them at creases, flattens each by a least-squares conformal map, "
+      "splits any whose L2 stretch exceeds `max_chart_stretch` (or that folds or overlaps "
+      "itself), and packs the chart shapes (not their boxes) with quarter turns at one texel "
+      "density. `per_triangle` gives every face its own cell (MeshLab's trivial "
       "parametrization). Vertices are split along seams, copying normals and colors; faces "
       "keep their order and winding and are counter-clockwise in UV (no mirrored charts). "
       "Non-manifold edges are treated as seams, so uncleaned meshes work too. Deterministic "
@@ -141,8 +174,8 @@ StageType UnwrapStage() {
       "`size` with `gutter`.\n\n"
       "Counters: `charts`, `coverage` (fraction of the atlas covered by triangles), "
       "`stretch_l2` and `stretch_linf` (Sander et al. 2001 texture stretch, normalized so 1 "
-      "is no distortion), `seam_length_m`, `vertices_out`. The output meta's `uv` object has "
-      "the parameters and these figures.";
+      "is no distortion), `seam_length_m`, `vertices_out`, `texels_per_meter`. The output "
+      "meta's `uv` object has the parameters and these figures.";
   type.params_schema = kSchema;
   type.inputs = {
       {"mesh", "mesh", "The mesh to unwrap (mesh.ply); existing UVs are replaced.", false}};

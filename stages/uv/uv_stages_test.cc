@@ -63,9 +63,13 @@ class UvStagesTest : public StageTest {
 TEST_F(UvStagesTest, UnwrapIsWellFormed) {
   const StageType* type = registry_.Find("uv.unwrap");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 1);
+  EXPECT_EQ(type->version, 2);
   const nlohmann::json schema = CheckedSchema(*type, /*defaults=*/true);
-  EXPECT_EQ(schema["properties"]["method"]["default"], "charts");
+  EXPECT_EQ(schema["properties"]["method"]["default"], "conformal");
+  EXPECT_EQ(schema["properties"]["method"]["enum"],
+            nlohmann::json::array({"charts", "conformal", "per_triangle"}));
+  EXPECT_EQ(schema["properties"]["cone_deg"]["default"], 45);
+  EXPECT_EQ(schema["properties"]["max_chart_stretch"]["default"], 1.03);
   EXPECT_EQ(schema["properties"]["size"]["default"], 4096);
   EXPECT_EQ(schema["properties"]["size"]["minimum"], 64);
   EXPECT_EQ(schema["properties"]["size"]["maximum"], 16384);
@@ -112,7 +116,9 @@ TEST_F(UvStagesTest, CubeGetsSixChartsCountersAndMeta) {
   EXPECT_EQ(meta["faces"], 12);
   EXPECT_EQ(meta["vertices"], 24);
   EXPECT_EQ(meta["has_uvs"], true);
-  EXPECT_EQ(meta["uv"]["method"], "charts");
+  EXPECT_EQ(meta["uv"]["method"], "conformal");
+  EXPECT_EQ(meta["uv"]["cone_deg"], 45);
+  EXPECT_EQ(meta["uv"]["max_chart_stretch"], 1.03);
   EXPECT_EQ(meta["uv"]["size"], 256);
   EXPECT_EQ(meta["uv"]["gutter"], 2);
   EXPECT_EQ(meta["uv"]["charts"], 6);
@@ -129,6 +135,15 @@ TEST_F(UvStagesTest, PerTriangleBaseline) {
   EXPECT_EQ(ctx.counters_["charts"], 12);
   EXPECT_EQ(ctx.counters_["vertices_out"], 36);
   EXPECT_EQ(ctx.meta_["mesh"]["uv"]["method"], "per_triangle");
+}
+
+TEST_F(UvStagesTest, PlanarChartsStayAvailable) {
+  FakeContext ctx(dir_ / "run", {{"method", "charts"}, {"size", 256}, {"gutter", 2}});
+  ctx.AddInput("mesh", "mesh", WriteMesh("mesh.ply", Cube()));
+  const Status status = Run("uv.unwrap", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["charts"], 6);
+  EXPECT_EQ(ctx.meta_["mesh"]["uv"]["method"], "charts");
 }
 
 TEST_F(UvStagesTest, SameBytesWithOneOrTwoThreads) {
@@ -148,15 +163,18 @@ TEST_F(UvStagesTest, SameBytesWithOneOrTwoThreads) {
     }
   }
   const std::string input = WriteMesh("mesh.ply", wavy);
-  FakeContext one(dir_ / "one", {{"size", 1024}}, 1);
-  FakeContext two(dir_ / "two", {{"size", 1024}}, 2);
-  one.AddInput("mesh", "mesh", input);
-  two.AddInput("mesh", "mesh", input);
-  ASSERT_TRUE(Run("uv.unwrap", one).ok());
-  ASSERT_TRUE(Run("uv.unwrap", two).ok());
-  EXPECT_GT(one.counters_["charts"], 4);
-  EXPECT_EQ(Slurp(one.outputs_["mesh"]), Slurp(two.outputs_["mesh"]));
-  EXPECT_EQ(one.counters_, two.counters_);
+  for (const char* method : {"charts", "conformal"}) {
+    SCOPED_TRACE(method);
+    FakeContext one(dir_ / (std::string("one_") + method), {{"size", 1024}, {"method", method}}, 1);
+    FakeContext two(dir_ / (std::string("two_") + method), {{"size", 1024}, {"method", method}}, 2);
+    one.AddInput("mesh", "mesh", input);
+    two.AddInput("mesh", "mesh", input);
+    ASSERT_TRUE(Run("uv.unwrap", one).ok());
+    ASSERT_TRUE(Run("uv.unwrap", two).ok());
+    EXPECT_GT(one.counters_["charts"], 1);
+    EXPECT_EQ(Slurp(one.outputs_["mesh"]), Slurp(two.outputs_["mesh"]));
+    EXPECT_EQ(one.counters_, two.counters_);
+  }
 }
 
 TEST_F(UvStagesTest, NonManifoldInputIsUnwrappedWithSeams) {
@@ -177,7 +195,7 @@ TEST_F(UvStagesTest, ClearErrors) {
   FakeContext method(dir_ / "a", {{"method", "lscm"}});
   method.AddInput("mesh", "mesh", input);
   EXPECT_THAT(Run("uv.unwrap", method).message(),
-              HasSubstr("'method' must be 'charts' or 'per_triangle'"));
+              HasSubstr("'method' must be 'charts', 'conformal' or 'per_triangle'"));
   FakeContext size(dir_ / "b", {{"size", 32}});
   size.AddInput("mesh", "mesh", input);
   const Status size_status = Run("uv.unwrap", size);
@@ -189,6 +207,12 @@ TEST_F(UvStagesTest, ClearErrors) {
   FakeContext stretch(dir_ / "s", {{"max_stretch", 0.5}});
   stretch.AddInput("mesh", "mesh", input);
   EXPECT_THAT(Run("uv.unwrap", stretch).message(), HasSubstr("'max_stretch' must be >= 1"));
+  FakeContext cone(dir_ / "f", {{"cone_deg", 90}});
+  cone.AddInput("mesh", "mesh", input);
+  EXPECT_THAT(Run("uv.unwrap", cone).message(), HasSubstr("'cone_deg' must be in (0, 90)"));
+  FakeContext bound(dir_ / "g", {{"max_chart_stretch", 1.0}});
+  bound.AddInput("mesh", "mesh", input);
+  EXPECT_THAT(Run("uv.unwrap", bound).message(), HasSubstr("'max_chart_stretch' must be > 1"));
   // 12 faces, one per cell, in 64 texels with a 15-texel gutter: no room.
   FakeContext crowded(dir_ / "d", {{"method", "per_triangle"}, {"size", 64}, {"gutter", 15}});
   crowded.AddInput("mesh", "mesh", input);

@@ -19,6 +19,8 @@
 
 #include "stages/geometry/uv/charts.h"
 #include "stages/geometry/uv/pack.h"
+#include "stages/geometry/uv/raster_pack.h"
+#include "stages/geometry/uv/surface_charts.h"
 
 namespace pb {
 namespace {
@@ -36,6 +38,14 @@ Status CheckOptions(const Mesh& mesh, const UnwrapOptions& options) {
   if (!(options.max_angle_deg > 0 && options.max_angle_deg < 90)) {
     return Status::Invalid("uv unwrap: max_angle_deg must be in (0, 90), got " +
                            std::to_string(options.max_angle_deg));
+  }
+  if (!(options.cone_deg > 0 && options.cone_deg < 90)) {
+    return Status::Invalid("uv unwrap: cone_deg must be in (0, 90), got " +
+                           std::to_string(options.cone_deg));
+  }
+  if (!(options.max_chart_stretch > 1)) {
+    return Status::Invalid("uv unwrap: max_chart_stretch must be > 1, got " +
+                           std::to_string(options.max_chart_stretch));
   }
   if (!(options.max_stretch >= 1)) {
     return Status::Invalid("uv unwrap: max_stretch must be >= 1, got " +
@@ -144,6 +154,42 @@ Mesh Layout(const Mesh& mesh, const std::vector<FlatChart>& charts, const PackRe
   return out;
 }
 
+// The unwrapped mesh from raster placements (raster_pack.h).
+Mesh RasterLayout(const Mesh& mesh, const std::vector<FlatChart>& charts,
+                  const RasterPackResult& packed, int size_texels) {
+  Mesh out = EmptyLike(mesh);
+  size_t total_vertices = 0;
+  for (const FlatChart& c : charts) total_vertices += c.vertices.size();
+  out.positions.reserve(3 * total_vertices);
+  out.uvs.reserve(2 * total_vertices);
+  const double s = packed.texels_per_meter, inv_size = 1.0 / size_texels;
+  for (size_t c = 0; c < charts.size(); ++c) {
+    const FlatChart& chart = charts[c];
+    const RasterPlacement& p = packed.placements[c];
+    const uint32_t base = uint32_t(out.vertex_count());
+    for (size_t i = 0; i < chart.vertices.size(); ++i) {
+      AppendVertex(mesh, chart.vertices[i], &out);
+      const auto t = PlacedTexel(p, s, chart.uv_m[2 * i], chart.uv_m[2 * i + 1]);
+      out.uvs.push_back(float(t[0] * inv_size));
+      out.uvs.push_back(float(t[1] * inv_size));
+    }
+    for (size_t i = 0; i < chart.faces.size(); ++i) {
+      for (int k = 0; k < 3; ++k) {
+        out.indices[3 * size_t(chart.faces[i]) + k] = base + chart.corners[3 * i + k];
+      }
+    }
+    if (chart.isolated) {  // the fixed right triangle, one texel on a side
+      constexpr double kCorner[3][2] = {{0, 0}, {1, 0}, {0, 1}};
+      for (int k = 0; k < 3; ++k) {
+        const size_t v = base + chart.corners[k];
+        out.uvs[2 * v] = float((double(p.x) + kCorner[k][0]) * inv_size);
+        out.uvs[2 * v + 1] = float((double(p.y) + kCorner[k][1]) * inv_size);
+      }
+    }
+  }
+  return out;
+}
+
 // Faces whose UV triangle (as stored, float) has under 10^-6 texel^2 of
 // signed area, increasing.
 std::vector<uint32_t> FacesWithoutUvArea(const Mesh& out, int size_texels) {
@@ -216,6 +262,47 @@ Expected<Mesh> UnwrapCharts(const Mesh& mesh, const UnwrapOptions& options, Atla
     }
   });
 }
+Expected<Mesh> UnwrapConformal(const Mesh& mesh, const UnwrapOptions& options,
+                               AtlasReport* report) {
+  PB_RETURN_IF_ERROR(CheckOptions(mesh, options));
+  return InArena(options.threads, [&]() -> Expected<Mesh> {
+    auto progress = [&](double f) {
+      if (options.progress) options.progress(0.7 * f);
+    };
+    SurfaceChartOptions chart_options;
+    chart_options.cone_deg = options.cone_deg;
+    chart_options.max_chart_stretch = options.max_chart_stretch;
+    chart_options.isolated_faces = TinyFaces(mesh, options.size_texels);
+    // As in UnwrapCharts: faces without float UV area are isolated and the
+    // atlas is rebuilt.
+    for (int round = 0;; ++round) {
+      std::vector<FlatChart> charts = MakeSurfaceCharts(
+          mesh, chart_options,
+          round == 0 ? std::function<void(double)>(progress) : std::function<void(double)>());
+      auto packed = RasterPackCharts(charts, options.size_texels, options.gutter_texels);
+      if (!packed.ok()) return packed.status();
+      if (options.progress && round == 0) options.progress(0.9);
+      Mesh out = RasterLayout(mesh, charts, *packed, options.size_texels);
+      std::vector<uint32_t> flat_faces = FacesWithoutUvArea(out, options.size_texels);
+      std::vector<uint32_t> merged;
+      std::set_union(chart_options.isolated_faces.begin(), chart_options.isolated_faces.end(),
+                     flat_faces.begin(), flat_faces.end(), std::back_inserter(merged));
+      if (merged.size() > chart_options.isolated_faces.size()) {
+        chart_options.isolated_faces = std::move(merged);
+        continue;
+      }
+      if (report != nullptr) {
+        *report = MeasureAtlas(out, options.size_texels);
+        report->texels_per_meter = packed->texels_per_meter;
+        report->isolated_faces = chart_options.isolated_faces.size();
+        report->rounds = round + 1;
+      }
+      if (options.progress) options.progress(1.0);
+      return out;
+    }
+  });
+}
+
 Expected<Mesh> UnwrapPerTriangle(const Mesh& mesh, const UnwrapOptions& options,
                                  AtlasReport* report) {
   PB_RETURN_IF_ERROR(CheckOptions(mesh, options));
@@ -251,8 +338,12 @@ Expected<Mesh> UnwrapPerTriangle(const Mesh& mesh, const UnwrapOptions& options,
 }
 
 Expected<Mesh> UnwrapMesh(const Mesh& mesh, const UnwrapOptions& options, AtlasReport* report) {
-  return options.method == UnwrapMethod::kCharts ? UnwrapCharts(mesh, options, report)
-                                                 : UnwrapPerTriangle(mesh, options, report);
+  switch (options.method) {
+    case UnwrapMethod::kCharts: return UnwrapCharts(mesh, options, report);
+    case UnwrapMethod::kConformal: return UnwrapConformal(mesh, options, report);
+    case UnwrapMethod::kPerTriangle: break;
+  }
+  return UnwrapPerTriangle(mesh, options, report);
 }
 
 std::vector<uint32_t> ChartOfFaces(const Mesh& mesh, uint32_t* chart_count) {

@@ -27,6 +27,14 @@
 //                     after packing, which costs a second round) become
 //                     "isolated" one-face charts: a fixed right triangle of
 //                     one texel per side (their stretch is not meaningful).
+//   UnwrapConformal   charts that follow curved surfaces (surface_charts.h):
+//                     grown by normal cone (cone_deg) over smooth surface, cut
+//                     at creases, flattened by least-squares conformal maps
+//                     (conformal.h), split where a chart's L2 stretch exceeds
+//                     max_chart_stretch, folds or overlaps itself; scaled to
+//                     one texel density and packed by shape, not by box, with
+//                     quarter turns (raster_pack.h). Slivers are isolated as
+//                     in UnwrapCharts.
 //   UnwrapPerTriangle MeshLab's trivial per-triangle parametrization: face i
 //                     is a right isosceles triangle in cell i of a square grid
 //                     (row-major from the bottom left), `gutter` texels apart.
@@ -53,7 +61,7 @@
 
 namespace pb {
 
-enum class UnwrapMethod { kCharts, kPerTriangle };
+enum class UnwrapMethod { kCharts, kConformal, kPerTriangle };
 
 struct UnwrapOptions {
   UnwrapMethod method = UnwrapMethod::kCharts;
@@ -62,6 +70,8 @@ struct UnwrapOptions {
   double max_angle_deg = 66;             // charts: face normal vs chart mean normal, (0, 90)
   double max_stretch = 1.25;             // charts: per-face Linf of the projection (>= 1),
                                          // i.e. normals within acos(1/max_stretch) = 36.9 deg
+  double cone_deg = 45;                  // conformal: face normal vs chart mean normal, (0, 90)
+  double max_chart_stretch = 1.03;       // conformal: per-chart L2 stretch bound (> 1)
   int threads = 0;                       // 0: TBB's default; results do not depend on it
   std::function<void(double)> progress;  // fraction done, optional
 };
@@ -98,6 +108,9 @@ struct MeasureOptions {
 // gutter). `report` may be null; it is filled by MeasureAtlas (no overlap
 // check) plus texels_per_meter.
 Expected<Mesh> UnwrapCharts(const Mesh& mesh, const UnwrapOptions& options, AtlasReport* report);
+// Same contract as UnwrapCharts.
+Expected<Mesh> UnwrapConformal(const Mesh& mesh, const UnwrapOptions& options,
+                               AtlasReport* report);
 // Status::Invalid when the grid cells would be smaller than gutter + 2
 // texels (too many faces for the atlas size).
 Expected<Mesh> UnwrapPerTriangle(const Mesh& mesh, const UnwrapOptions& options,

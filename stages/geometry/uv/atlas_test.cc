@@ -5,13 +5,17 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <map>
 #include <string>
 
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/synth/scene.h"
+#include "stages/geometry/uv/conformal.h"
 #include "stages/geometry/uv/pack.h"
+#include "stages/geometry/uv/raster_pack.h"
+#include "stages/geometry/uv/surface_charts.h"
 
 namespace pb {
 namespace {
@@ -94,6 +98,88 @@ Mesh MakeBrickPanel() {
     }
   }
   return mesh;
+}
+
+Image RenderAtlas(const Mesh& mesh, int pixels);
+
+// A sphere of `radius` (an icosahedron subdivided `levels` times) with
+// radial bumps of relative height `bump`: curved everywhere, like a scanned
+// statue, with no plane to project on.
+Mesh MakeBumpySphere(double radius, int levels, double bump) {
+  Mesh mesh;
+  const double t = (1.0 + std::sqrt(5.0)) / 2.0;
+  std::vector<std::array<double, 3>> p = {{-1, t, 0}, {1, t, 0}, {-1, -t, 0}, {1, -t, 0},
+                                          {0, -1, t}, {0, 1, t}, {0, -1, -t}, {0, 1, -t},
+                                          {t, 0, -1}, {t, 0, 1}, {-t, 0, -1}, {-t, 0, 1}};
+  std::vector<std::array<uint32_t, 3>> faces = {
+      {0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+      {11, 10, 2}, {10, 7, 6}, {7, 1, 8},  {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+      {3, 8, 9},  {4, 9, 5},  {2, 4, 11}, {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  auto unit = [](std::array<double, 3> v) {
+    const double n = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+    return std::array<double, 3>{v[0] / n, v[1] / n, v[2] / n};
+  };
+  for (auto& v : p) v = unit(v);
+  for (int level = 0; level < levels; ++level) {
+    std::map<std::pair<uint32_t, uint32_t>, uint32_t> middle;
+    auto mid = [&](uint32_t a, uint32_t b) {
+      const auto key = std::minmax(a, b);
+      auto it = middle.find(key);
+      if (it != middle.end()) return it->second;
+      p.push_back(unit({p[a][0] + p[b][0], p[a][1] + p[b][1], p[a][2] + p[b][2]}));
+      return middle[key] = uint32_t(p.size() - 1);
+    };
+    std::vector<std::array<uint32_t, 3>> next;
+    for (const auto& f : faces) {
+      const uint32_t ab = mid(f[0], f[1]), bc = mid(f[1], f[2]), ca = mid(f[2], f[0]);
+      next.push_back({f[0], ab, ca});
+      next.push_back({f[1], bc, ab});
+      next.push_back({f[2], ca, bc});
+      next.push_back({ab, bc, ca});
+    }
+    faces = std::move(next);
+  }
+  for (const auto& v : p) {
+    const double r = radius * (1 + bump * std::sin(5 * v[0]) * std::sin(4 * v[1] + 1) *
+                                       std::sin(3 * v[2] + 2));
+    mesh.positions.insert(mesh.positions.end(),
+                          {float(r * v[0]), float(r * v[1]), float(r * v[2])});
+  }
+  for (const auto& f : faces) mesh.indices.insert(mesh.indices.end(), {f[0], f[1], f[2]});
+  return mesh;
+}
+
+// Rasterizes the atlas at its texel size (texel centers) and counts texels
+// claimed by two different charts.
+uint64_t TexelsWithTwoOwners(const Mesh& mesh, int size) {
+  uint32_t chart_count = 0;
+  const std::vector<uint32_t> chart = ChartOfFaces(mesh, &chart_count);
+  std::vector<uint32_t> owner(size_t(size) * size, std::numeric_limits<uint32_t>::max());
+  uint64_t shared = 0;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    double x[3], y[3];
+    for (int k = 0; k < 3; ++k) {
+      x[k] = mesh.uvs[2 * size_t(mesh.indices[3 * f + k])] * size;
+      y[k] = mesh.uvs[2 * size_t(mesh.indices[3 * f + k]) + 1] * size;
+    }
+    const int x0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]}))));
+    const int x1 = std::min(size - 1, int(std::ceil(std::max({x[0], x[1], x[2]}))));
+    const int y0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]}))));
+    const int y1 = std::min(size - 1, int(std::ceil(std::max({y[0], y[1], y[2]}))));
+    for (int py = y0; py <= y1; ++py) {
+      for (int px = x0; px <= x1; ++px) {
+        const double cx = px + 0.5, cy = py + 0.5;
+        const double d0 = (x[1] - x[0]) * (cy - y[0]) - (y[1] - y[0]) * (cx - x[0]);
+        const double d1 = (x[2] - x[1]) * (cy - y[1]) - (y[2] - y[1]) * (cx - x[1]);
+        const double d2 = (x[0] - x[2]) * (cy - y[2]) - (y[0] - y[2]) * (cx - x[2]);
+        if (!(d0 >= 0 && d1 >= 0 && d2 >= 0)) continue;
+        uint32_t& o = owner[size_t(py) * size + px];
+        if (o != std::numeric_limits<uint32_t>::max() && o != chart[f]) ++shared;
+        o = chart[f];
+      }
+    }
+  }
+  return shared;
 }
 
 Mesh RoomWalls() { return SynthTruthMesh(*MakeSynthScene("room", 1), 0.05); }
@@ -319,6 +405,185 @@ TEST(UvAtlasTest, DeterministicWhateverTheThreads) {
     EXPECT_EQ(one->uvs, other->uvs);
     EXPECT_EQ(one->colors, other->colors);
   }
+}
+
+TEST(UvConformalTest, LscmUnrollsACylinderWithoutStretch) {
+  // A half cylinder is developable: its conformal map is an isometry.
+  const Mesh cylinder = MakeCylinder(0.5, 1.0, 24, 6);
+  std::vector<uint32_t> corners;
+  for (size_t f = 0; f < cylinder.face_count(); ++f) {
+    const uint32_t* c = &cylinder.indices[3 * f];
+    bool half = true;
+    for (int k = 0; k < 3; ++k) half &= c[k] % 24 <= 12;  // angles 0..180 deg
+    if (half && !(c[0] % 24 == 12 && c[1] % 24 == 0)) corners.insert(corners.end(), c, c + 3);
+  }
+  std::vector<double> positions(cylinder.positions.begin(), cylinder.positions.end());
+  std::vector<double> uv;
+  ASSERT_TRUE(LscmFlatten(positions, corners, &uv));
+  FlatChart chart;
+  Mesh piece = cylinder;
+  piece.indices = corners;
+  for (size_t f = 0; f < corners.size() / 3; ++f) chart.faces.push_back(uint32_t(f));
+  for (size_t v = 0; v < cylinder.vertex_count(); ++v) chart.vertices.push_back(uint32_t(v));
+  chart.corners = corners;
+  chart.uv_m = uv;
+  // Every face counter-clockwise (nothing mirrored), and no stretch.
+  for (size_t f = 0; f < corners.size() / 3; ++f) {
+    const double* a = &uv[2 * corners[3 * f]];
+    const double* b = &uv[2 * corners[3 * f + 1]];
+    const double* c = &uv[2 * corners[3 * f + 2]];
+    EXPECT_GT((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]), 0) << f;
+  }
+  EXPECT_LT(ChartStretchL2(piece, chart), 1.001);
+}
+
+TEST(UvConformalTest, BumpySphereMeetsTheAtlasTargets) {
+  const Mesh sphere = MakeBumpySphere(1.0, 4, 0.08);  // 5,120 faces
+  UnwrapOptions options;
+  options.method = UnwrapMethod::kConformal;
+  options.size_texels = 2048;
+  AtlasReport report;
+  auto out = UnwrapConformal(sphere, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(sphere, *out, options);
+  if (const char* png = std::getenv("PB_UV_TEST_PNG")) {
+    ASSERT_TRUE(WritePng(png, RenderAtlas(*out, 1024)).ok());
+  }
+  EXPECT_LE(report.charts, sphere.face_count() / 25);
+  EXPECT_GE(report.coverage, 0.70);
+  EXPECT_LE(report.stretch_l2, 1.05);
+  EXPECT_EQ(report.faces_not_ccw, 0u);
+  EXPECT_EQ(TexelsWithTwoOwners(*out, options.size_texels), 0u);
+  // The planar method needs many more charts and packs worse on it.
+  AtlasReport planar;
+  options.method = UnwrapMethod::kCharts;
+  ASSERT_TRUE(UnwrapCharts(sphere, options, &planar).ok());
+  EXPECT_LT(report.charts, planar.charts);
+  EXPECT_GT(report.coverage, planar.coverage);
+}
+
+TEST(UvConformalTest, TighterStretchBoundSplitsMore) {
+  const Mesh sphere = MakeBumpySphere(1.0, 3, 0.0);  // 1,280 faces, a plain sphere
+  UnwrapOptions options;
+  options.method = UnwrapMethod::kConformal;
+  options.size_texels = 1024;
+  options.cone_deg = 80;  // large caps, which the bound must split
+  AtlasReport loose, tight;
+  ASSERT_TRUE(UnwrapConformal(sphere, options, &loose).ok());
+  options.max_chart_stretch = 1.005;
+  auto out = UnwrapConformal(sphere, options, &tight);
+  ASSERT_TRUE(out.ok());
+  ExpectValidAtlas(sphere, *out, options);
+  EXPECT_GT(tight.charts, loose.charts) << loose.stretch_l2 << " " << tight.stretch_l2;
+  EXPECT_LE(tight.stretch_l2, 1.005);
+  EXPECT_LE(loose.stretch_l2, 1.03);
+}
+
+TEST(UvConformalTest, RoomIsValidAndFlatWallsStayUndistorted) {
+  const Mesh room = RoomWalls();
+  UnwrapOptions options;
+  options.method = UnwrapMethod::kConformal;
+  options.size_texels = 2048;
+  AtlasReport report;
+  auto out = UnwrapConformal(room, options, &report);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ExpectValidAtlas(room, *out, options);
+  EXPECT_LT(report.stretch_l2, 1.001);
+  EXPECT_GT(report.coverage, 0.75);
+  EXPECT_EQ(TexelsWithTwoOwners(*out, options.size_texels), 0u);
+}
+
+TEST(UvConformalTest, DeterministicWhateverTheThreads) {
+  const Mesh sphere = MakeBumpySphere(1.0, 4, 0.08);
+  UnwrapOptions options;
+  options.method = UnwrapMethod::kConformal;
+  options.size_texels = 1024;
+  options.threads = 1;
+  auto one = UnwrapConformal(sphere, options, nullptr);
+  auto again = UnwrapConformal(sphere, options, nullptr);
+  options.threads = 2;
+  auto two = UnwrapConformal(sphere, options, nullptr);
+  ASSERT_TRUE(one.ok() && again.ok() && two.ok());
+  for (const Mesh* other : {&*again, &*two}) {
+    EXPECT_EQ(one->indices, other->indices);
+    EXPECT_EQ(one->positions, other->positions);
+    EXPECT_EQ(one->uvs, other->uvs);
+  }
+}
+
+TEST(UvRasterPackTest, ManySmallIrregularChartsFillTheSquare) {
+  // 600 small charts: irregular convex polygons (fans of 5-9 triangles) of
+  // varied size, as a curved mesh's atlas has.
+  std::vector<FlatChart> charts;
+  double area = 0;
+  uint32_t seed = 12345;
+  auto random = [&]() {
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  for (int i = 0; i < 600; ++i) {
+    FlatChart chart;
+    const int sides = 5 + i % 5;
+    const double radius = 0.5 + 1.5 * random();
+    chart.vertices.push_back(0);
+    chart.uv_m = {0, 0};
+    for (int k = 0; k < sides; ++k) {
+      const double a = 2 * M_PI * (k + 0.3 * random()) / sides;
+      const double r = radius * (0.6 + 0.4 * random());
+      chart.vertices.push_back(uint32_t(k + 1));
+      chart.uv_m.insert(chart.uv_m.end(), {r * std::cos(a), r * std::sin(a)});
+    }
+    for (int k = 0; k < sides; ++k) {
+      chart.faces.push_back(uint32_t(k));
+      chart.corners.insert(chart.corners.end(),
+                           {0u, uint32_t(k + 1), uint32_t((k + 1) % sides + 1)});
+    }
+    FitRectangle(&chart);
+    for (int k = 0; k < sides; ++k) {
+      const double* a = &chart.uv_m[0];
+      const double* b = &chart.uv_m[2 * (k + 1)];
+      const double* c = &chart.uv_m[2 * ((k + 1) % sides + 1)];
+      area += 0.5 * ((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]));
+    }
+    charts.push_back(std::move(chart));
+  }
+  const int size = 2048, gutter = 2;
+  auto packed = RasterPackCharts(charts, size, gutter);
+  ASSERT_TRUE(packed.ok()) << packed.status().message();
+  const double s = packed->texels_per_meter;
+  EXPECT_GE(area * s * s / (double(size) * size), 0.75);
+  // Every chart inside the border gutter; no two charts closer than the gutter.
+  std::vector<Box2> boxes;
+  std::vector<std::array<double, 6>> triangles;
+  std::vector<uint32_t> owner;
+  for (size_t c = 0; c < charts.size(); ++c) {
+    for (size_t f = 0; f < charts[c].faces.size(); ++f) {
+      std::array<double, 6> t;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = charts[c].corners[3 * f + k];
+        const auto p = PlacedTexel(packed->placements[c], s, charts[c].uv_m[2 * v],
+                                   charts[c].uv_m[2 * v + 1]);
+        t[2 * k] = p[0];
+        t[2 * k + 1] = p[1];
+        EXPECT_GE(std::min(p[0], p[1]), gutter - 1e-9);
+        EXPECT_LE(std::max(p[0], p[1]), size - gutter + 1e-9);
+      }
+      triangles.push_back(t);
+      owner.push_back(uint32_t(c));
+      boxes.push_back({std::min({t[0], t[2], t[4]}) - gutter / 2.0,
+                       std::min({t[1], t[3], t[5]}) - gutter / 2.0,
+                       std::max({t[0], t[2], t[4]}) + gutter / 2.0,
+                       std::max({t[1], t[3], t[5]}) + gutter / 2.0});
+    }
+  }
+  int too_close = 0;
+  ForEachIntersectingBoxPair(boxes, [&](uint32_t i, uint32_t j) {
+    if (owner[i] != owner[j] && TriangleDistance(triangles[i], triangles[j]) < gutter - 1e-6) {
+      ++too_close;
+    }
+    return true;
+  });
+  EXPECT_EQ(too_close, 0);
 }
 
 TEST(UvAtlasTest, PerTriangleBaseline) {

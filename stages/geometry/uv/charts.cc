@@ -39,13 +39,7 @@ V3 Position(const Mesh& mesh, uint32_t v) {
 
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
-// Per face: area-weighted normal (length = 2 * area) and, per edge k (from
-// corner k to k+1), the face across it, or kNone when the edge is a border,
-// non-manifold or joins faces of opposite orientation.
-struct Topology {
-  std::vector<V3> area_normal;
-  std::vector<uint32_t> neighbor;  // 3 per face
-};
+}  // namespace
 
 Topology BuildTopology(const Mesh& mesh) {
   const size_t faces = mesh.face_count(), vertices = mesh.vertex_count();
@@ -94,6 +88,8 @@ Topology BuildTopology(const Mesh& mesh) {
   });
   return topo;
 }
+
+namespace {
 
 V3 Normalized(const V3& v) {
   const double n = Norm(v);
@@ -317,6 +313,8 @@ std::vector<std::vector<uint32_t>> SplitInHalves(const std::vector<uint32_t>& fa
   return parts;
 }
 
+}  // namespace
+
 // Rotates the chart to its minimal-area bounding rectangle, landscape, with
 // its min corner at the origin. Rotations only: no chart is mirrored.
 void FitRectangle(FlatChart* chart) {
@@ -386,8 +384,6 @@ void FitRectangle(FlatChart* chart) {
   chart->height_m = turn ? width : height;
 }
 
-}  // namespace
-
 std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& options,
                                       double* seam_length_m,
                                       const std::function<void(double)>& progress) {
@@ -411,6 +407,10 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
     std::vector<FlatChart> flat(pending.size());
     std::vector<Flatness> ok(pending.size(), Flatness::kOk);
     std::vector<std::vector<std::vector<uint32_t>>> parts(pending.size());
+    // Faces of charts settled in earlier rounds must not keep their old
+    // pending index: Components and SplitInHalves would take them for faces
+    // of the chart now at that index (and write out of its bounds).
+    std::fill(slots.owner.begin(), slots.owner.end(), kNone);
     tbb::parallel_for(tbb::blocked_range<size_t>(0, pending.size(), 16), [&](const auto& r) {
       for (size_t i = r.begin(); i < r.end(); ++i) {
         for (size_t j = 0; j < pending[i].size(); ++j) {

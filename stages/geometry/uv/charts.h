@@ -25,6 +25,21 @@ struct FlatChart {
   bool isolated = false;
 };
 
+// Per face: area-weighted normal (length = 2 * area) and, per edge k (from
+// corner k to k+1), the face across it, or kNoFace when the edge is a
+// border, non-manifold or joins faces of opposite orientation.
+constexpr uint32_t kNoFace = 0xffffffffu;
+struct Topology {
+  std::vector<std::array<double, 3>> area_normal;
+  std::vector<uint32_t> neighbor;  // 3 per face
+};
+Topology BuildTopology(const Mesh& mesh);
+
+// Rotates a flattened chart (uv_m, any placement) to its minimal-area
+// bounding rectangle, landscape, min corner at the origin; sets width_m and
+// height_m. Rotations only: no chart is mirrored.
+void FitRectangle(FlatChart* chart);
+
 struct ChartOptions {
   double max_angle_deg = 66;
   double max_stretch = 1.25;

@@ -1,0 +1,138 @@
+// LSCM (Lévy et al. 2002) of one chart; see conformal.h.
+#include "stages/geometry/uv/conformal.h"
+
+#include <Eigen/Sparse>
+#include <Eigen/SparseCholesky>
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pb {
+namespace {
+
+double Distance2(std::span<const double> p, uint32_t a, uint32_t b) {
+  double d2 = 0;
+  for (int k = 0; k < 3; ++k) {
+    const double d = p[3 * size_t(a) + k] - p[3 * size_t(b) + k];
+    d2 += d * d;
+  }
+  return d2;
+}
+
+// The vertex of `used` farthest from `from` (lowest index on ties).
+uint32_t Farthest(std::span<const double> p, const std::vector<uint32_t>& used, uint32_t from) {
+  uint32_t best = from;
+  double best_d2 = -1;
+  for (uint32_t v : used) {
+    const double d2 = Distance2(p, v, from);
+    if (d2 > best_d2) {
+      best_d2 = d2;
+      best = v;
+    }
+  }
+  return best;
+}
+
+}  // namespace
+
+bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> corners,
+                 std::vector<double>* uv) {
+  const size_t n = positions.size() / 3, faces = corners.size() / 3;
+  uv->assign(2 * n, 0.0);
+  std::vector<uint32_t> used(corners.begin(), corners.end());
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  if (used.size() < 2) return false;
+  // Two far-apart pins fix the similarity and keep the solve well scaled.
+  const uint32_t pin_a = Farthest(positions, used, Farthest(positions, used, used.front()));
+  const uint32_t pin_b = Farthest(positions, used, pin_a);
+  const double pin_distance = std::sqrt(Distance2(positions, pin_a, pin_b));
+  if (!(pin_distance > 0)) return false;
+
+  // Unknowns: u, v of every used vertex but the pins.
+  constexpr int kPinned = -1;
+  std::vector<int> column(n, kPinned);
+  int unknowns = 0;
+  for (uint32_t v : used) {
+    if (v != pin_a && v != pin_b) column[v] = 2 * unknowns++;
+  }
+  const int cols = 2 * unknowns;
+  double pinned_uv[2][2] = {{0, 0}, {pin_distance, 0}};
+  auto pin_index = [&](uint32_t v) { return v == pin_a ? 0 : 1; };
+
+  std::vector<Eigen::Triplet<double>> triplets;
+  triplets.reserve(12 * faces);
+  Eigen::VectorXd rhs_rows = Eigen::VectorXd::Zero(2 * Eigen::Index(faces));
+  Eigen::Index row = 0;
+  for (size_t f = 0; f < faces; ++f) {
+    const uint32_t v[3] = {corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]};
+    double e1[3], e2[3];
+    for (int k = 0; k < 3; ++k) {
+      e1[k] = positions[3 * size_t(v[1]) + k] - positions[3 * size_t(v[0]) + k];
+      e2[k] = positions[3 * size_t(v[2]) + k] - positions[3 * size_t(v[0]) + k];
+    }
+    const double length1 = std::sqrt(e1[0] * e1[0] + e1[1] * e1[1] + e1[2] * e1[2]);
+    const double cross[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2],
+                             e1[0] * e2[1] - e1[1] * e2[0]};
+    const double twice_area =
+        std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+    if (!(length1 > 0) || !(twice_area > 1e-14 * length1 * length1)) continue;
+    // The face's own frame: x along e1, y in the face plane (so that the face
+    // is counter-clockwise in it).
+    const double x2 = (e1[0] * e2[0] + e1[1] * e2[1] + e1[2] * e2[2]) / length1;
+    const double y2 = twice_area / length1;
+    const double x[3] = {0, length1, x2}, y[3] = {0, 0, y2};
+    // dU/dz-bar = sum_j W_j U_j / (4 A) with W_j = (y_{j+1} - y_{j+2}) + i (x_{j+2} - x_{j+1});
+    // the row is scaled by 1/sqrt(A) so that each face weighs by its area.
+    const double scale = 1.0 / std::sqrt(0.5 * twice_area);
+    for (int j = 0; j < 3; ++j) {
+      const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
+      const double a = (y[j1] - y[j2]) * scale, b = (x[j2] - x[j1]) * scale;
+      // Re(W U) = a u - b v, Im(W U) = b u + a v.
+      if (column[v[j]] == kPinned) {
+        const double* p = pinned_uv[pin_index(v[j])];
+        rhs_rows[row] -= a * p[0] - b * p[1];
+        rhs_rows[row + 1] -= b * p[0] + a * p[1];
+      } else {
+        const int c = column[v[j]];
+        triplets.emplace_back(row, c, a);
+        triplets.emplace_back(row, c + 1, -b);
+        triplets.emplace_back(row + 1, c, b);
+        triplets.emplace_back(row + 1, c + 1, a);
+      }
+    }
+    row += 2;
+  }
+  if (cols > 0) {
+    Eigen::SparseMatrix<double> matrix(row, cols);
+    matrix.setFromTriplets(triplets.begin(), triplets.end());
+    Eigen::SparseMatrix<double> normal = matrix.transpose() * matrix;
+    // A whisper of regularization keeps vertices that only degenerate faces
+    // reach from making the system singular (they land near the origin and
+    // the chart's overlap check splits them off).
+    double trace = 0;
+    for (int k = 0; k < cols; ++k) trace += normal.coeff(k, k);
+    const double ridge = 1e-12 * (trace > 0 ? trace / cols : 1.0);
+    for (int k = 0; k < cols; ++k) normal.coeffRef(k, k) += ridge;
+    const Eigen::VectorXd rhs = matrix.transpose() * rhs_rows.head(row);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+    if (solver.info() != Eigen::Success) return false;
+    const Eigen::VectorXd solution = solver.solve(rhs);
+    if (solver.info() != Eigen::Success) return false;
+    for (uint32_t vtx : used) {
+      if (column[vtx] == kPinned) continue;
+      (*uv)[2 * size_t(vtx)] = solution[column[vtx]];
+      (*uv)[2 * size_t(vtx) + 1] = solution[column[vtx] + 1];
+      if (!std::isfinite((*uv)[2 * size_t(vtx)]) || !std::isfinite((*uv)[2 * size_t(vtx) + 1])) {
+        return false;
+      }
+    }
+  }
+  for (uint32_t p : {pin_a, pin_b}) {
+    (*uv)[2 * size_t(p)] = pinned_uv[pin_index(p)][0];
+    (*uv)[2 * size_t(p) + 1] = pinned_uv[pin_index(p)][1];
+  }
+  return true;
+}
+
+}  // namespace pb

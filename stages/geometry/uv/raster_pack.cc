@@ -1,0 +1,604 @@
+// Bitmap bottom-left packing of chart shapes; see raster_pack.h.
+#include "stages/geometry/uv/raster_pack.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <numeric>
+#include <string>
+#include <utility>
+
+#include "stages/geometry/uv/pack.h"
+
+namespace pb {
+namespace {
+
+// A bit mask, `w` x `h` texels, rows of `words` 64-bit words (bit x of a
+// row is bit x % 64 of word x / 64), plus per row its longest run of set
+// bits (used to prune candidate positions).
+struct Mask {
+  int w = 0, h = 0, words = 0;
+  std::vector<uint64_t> bits;
+  std::vector<int> run_lo, run_len;  // per row; run_len 0 for an empty row
+  std::vector<int> first_word, last_word;
+  std::vector<char> contiguous;  // per row: its set bits are one run
+
+  void Reset(int width, int height) {
+    w = width;
+    h = height;
+    words = (w + 63) / 64;
+    bits.assign(size_t(words) * size_t(h), 0);
+  }
+  uint64_t* Row(int y) { return bits.data() + size_t(y) * size_t(words); }
+  const uint64_t* Row(int y) const { return bits.data() + size_t(y) * size_t(words); }
+  bool Get(int x, int y) const { return (Row(y)[x >> 6] >> (x & 63)) & 1u; }
+  void Set(int x, int y) { Row(y)[x >> 6] |= uint64_t(1) << (x & 63); }
+};
+
+int NextBit(const uint64_t* row, int words, int limit, int from, bool set) {
+  if (from >= limit) return limit;
+  int w = from >> 6;
+  uint64_t m = (set ? row[w] : ~row[w]) & (~uint64_t(0) << (from & 63));
+  while (m == 0) {
+    if (++w >= words) return limit;
+    m = set ? row[w] : ~row[w];
+  }
+  return std::min(limit, w * 64 + __builtin_ctzll(m));
+}
+
+void ComputeRuns(Mask* mask) {
+  mask->run_lo.assign(mask->h, 0);
+  mask->run_len.assign(mask->h, 0);
+  mask->first_word.assign(mask->h, 0);
+  mask->last_word.assign(mask->h, -1);
+  mask->contiguous.assign(mask->h, 1);
+  for (int y = 0; y < mask->h; ++y) {
+    const uint64_t* row = mask->Row(y);
+    int runs = 0;
+    for (int x = 0; x < mask->w;) {
+      const int s = NextBit(row, mask->words, mask->w, x, true);
+      if (s >= mask->w) break;
+      const int e = NextBit(row, mask->words, mask->w, s, false);
+      ++runs;
+      if (e - s > mask->run_len[y]) {
+        mask->run_lo[y] = s;
+        mask->run_len[y] = e - s;
+      }
+      x = e;
+    }
+    mask->contiguous[y] = runs <= 1;
+    int first = mask->words, last = -1;
+    for (int i = 0; i < mask->words; ++i) {
+      if (row[i] != 0) {
+        first = std::min(first, i);
+        last = i;
+      }
+    }
+    mask->first_word[y] = first;
+    mask->last_word[y] = last;
+  }
+}
+
+// The chart's integer box at scale s and its conservative raster.
+Mask Rasterize(const FlatChart& chart, double s) {
+  Mask mask;
+  if (chart.isolated) {
+    mask.Reset(1, 1);
+    mask.Set(0, 0);
+    return mask;
+  }
+  const int w = std::max(1, int(std::ceil(chart.width_m * s)));
+  const int h = std::max(1, int(std::ceil(chart.height_m * s)));
+  mask.Reset(w, h);
+  // Texels grown by a hair: float UVs may move a vertex by ~1e-4 texel.
+  constexpr double kEps = 0.01;
+  for (size_t f = 0; f < chart.faces.size(); ++f) {
+    double x[3], y[3];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = chart.corners[3 * f + k];
+      x[k] = chart.uv_m[2 * v] * s;
+      y[k] = chart.uv_m[2 * v + 1] * s;
+    }
+    const int y0 = std::clamp(int(std::floor(std::min({y[0], y[1], y[2]}) - kEps)), 0, h - 1);
+    const int y1 = std::clamp(int(std::floor(std::max({y[0], y[1], y[2]}) + kEps)), 0, h - 1);
+    for (int ty = y0; ty <= y1; ++ty) {
+      // The triangle's x extent within the row's band [ty, ty + 1] (grown
+      // by kEps): from its vertices inside the band and its edges' crossings
+      // of the band's two lines.
+      const double band_lo = ty - kEps, band_hi = ty + 1 + kEps;
+      double min_x = std::numeric_limits<double>::infinity(), max_x = -min_x;
+      for (int k = 0; k < 3; ++k) {
+        if (y[k] >= band_lo && y[k] <= band_hi) {
+          min_x = std::min(min_x, x[k]);
+          max_x = std::max(max_x, x[k]);
+        }
+        const int m = (k + 1) % 3;
+        if (y[k] == y[m]) continue;
+        for (double line : {band_lo, band_hi}) {
+          if ((line - y[k]) * (line - y[m]) > 0) continue;
+          const double t = (line - y[k]) / (y[m] - y[k]);
+          const double xi = x[k] + t * (x[m] - x[k]);
+          min_x = std::min(min_x, xi);
+          max_x = std::max(max_x, xi);
+        }
+      }
+      if (!(min_x <= max_x)) continue;
+      const int tx0 = std::clamp(int(std::floor(min_x - kEps)), 0, w - 1);
+      const int tx1 = std::clamp(int(std::floor(max_x + kEps)), 0, w - 1);
+      uint64_t* row = mask.Row(ty);
+      for (int tx = tx0; tx <= tx1;) {
+        if ((tx & 63) == 0 && tx + 63 <= tx1) {
+          row[tx >> 6] = ~uint64_t(0);
+          tx += 64;
+        } else {
+          row[tx >> 6] |= uint64_t(1) << (tx & 63);
+          ++tx;
+        }
+      }
+    }
+  }
+  return mask;
+}
+
+// The mask turned `quarter_turns` times counter-clockwise (see PlacedTexel).
+Mask Turn(const Mask& in, int quarter_turns) {
+  if (quarter_turns == 0) return in;
+  Mask out;
+  const bool swap = quarter_turns % 2 == 1;
+  out.Reset(swap ? in.h : in.w, swap ? in.w : in.h);
+  for (int j = 0; j < in.h; ++j) {
+    const uint64_t* row = in.Row(j);
+    for (int word = 0; word < in.words; ++word) {
+      for (uint64_t m = row[word]; m != 0; m &= m - 1) {
+        const int i = word * 64 + __builtin_ctzll(m);
+        switch (quarter_turns) {
+          case 1:
+            out.Set(in.h - 1 - j, i);
+            break;
+          case 2:
+            out.Set(in.w - 1 - i, in.h - 1 - j);
+            break;
+          default:
+            out.Set(j, in.w - 1 - i);
+            break;
+        }
+      }
+    }
+  }
+  return out;
+}
+
+// dst |= src shifted left (towards higher x) by `shift` bits.
+void ShiftOr(uint64_t* dst, int dst_words, const uint64_t* src, int src_words, int shift) {
+  const int word_shift = shift >> 6, bit_shift = shift & 63;
+  for (int i = 0; i < src_words; ++i) {
+    const int d = i + word_shift;
+    if (d < dst_words) dst[d] |= src[i] << bit_shift;
+    if (bit_shift != 0 && d + 1 < dst_words) dst[d + 1] |= src[i] >> (64 - bit_shift);
+  }
+}
+
+// The mask grown by g texels in x and y (a square), offset by g.
+Mask Dilate(const Mask& in, int g) {
+  Mask horizontal;
+  horizontal.Reset(in.w + 2 * g, in.h);
+  for (int y = 0; y < in.h; ++y) {
+    for (int d = 0; d <= 2 * g; ++d) {
+      ShiftOr(horizontal.Row(y), horizontal.words, in.Row(y), in.words, d);
+    }
+  }
+  Mask out;
+  out.Reset(in.w + 2 * g, in.h + 2 * g);
+  for (int y = 0; y < out.h; ++y) {
+    uint64_t* row = out.Row(y);
+    for (int r = std::max(0, y - 2 * g); r <= std::min(in.h - 1, y); ++r) {
+      const uint64_t* src = horizontal.Row(r);
+      for (int i = 0; i < out.words; ++i) row[i] |= src[i];
+    }
+  }
+  ComputeRuns(&out);
+  return out;
+}
+
+// One chart's four turned shapes: the mask to stamp and the dilated one to test.
+struct Shapes {
+  Mask stamp[4], probe[4];
+  std::vector<int> check_rows[4];  // probe rows, most discriminating first
+};
+
+Shapes MakeShapes(const FlatChart& chart, double s, int gutter) {
+  Shapes shapes;
+  const Mask base = Rasterize(chart, s);
+  for (int k = 0; k < 4; ++k) {
+    shapes.stamp[k] = Turn(base, k);
+    shapes.probe[k] = Dilate(shapes.stamp[k], gutter);
+    const Mask& p = shapes.probe[k];
+    std::vector<int>& rows = shapes.check_rows[k];
+    // Bottom, top, longest run, then quarters, then every row.
+    int longest = 0;
+    for (int y = 0; y < p.h; ++y) {
+      if (p.run_len[y] > p.run_len[longest]) longest = y;
+    }
+    for (int y : {longest, 0, p.h - 1, p.h / 2, p.h / 4, 3 * p.h / 4}) {
+      if (std::find(rows.begin(), rows.end(), y) == rows.end()) rows.push_back(y);
+    }
+  }
+  return shapes;
+}
+
+constexpr int kPruneRows = 6;  // check_rows used to prune candidate x
+
+// The atlas being filled: `height` rows of `size` texels (twice the square,
+// so that an overfull attempt still tells how tall it would be).
+class Atlas {
+ public:
+  Atlas(int size, int height) : size_(size), height_(height), words_((size + 63) / 64 + 1) {
+    bits_.assign(size_t(words_) * size_t(height_), 0);
+    for (int y = 0; y < height_; ++y) {
+      uint64_t* row = Row(y);
+      // Bits at and beyond `size` are taken, so free runs end at the edge.
+      for (int x = size_; x < words_ * 64; ++x) row[x >> 6] |= uint64_t(1) << (x & 63);
+    }
+    max_free_.assign(height_, size_);
+    runs_.assign(height_, std::vector<std::pair<int, int>>(1, {0, size_}));
+  }
+
+  // The lowest-top, then leftmost position of `probe` (its lower-left
+  // corner), or false. Positions whose top reaches `best_top` are not
+  // searched. `check_rows` starts with the rows used to prune candidates.
+  struct Scratch {
+    std::vector<std::pair<int, int>> candidates, next;
+    int last_fail = 0;
+  };
+
+  bool Find(const Mask& probe, const std::vector<int>& check_rows, int64_t best_top,
+            Scratch* scratch, int* x_out, int* y_out) const {
+    if (probe.w > size_) return false;
+    scratch->last_fail = 0;
+    auto& candidates_ = scratch->candidates;
+    auto& next_ = scratch->next;
+    const int prune = std::min<int>(kPruneRows, int(check_rows.size()));
+    for (int y = 0; y + probe.h <= height_ && y + probe.h < best_top; ++y) {
+      bool possible = true;
+      for (int i = 0; i < prune && possible; ++i) {
+        const int r = check_rows[i];
+        possible = max_free_[y + r] >= probe.run_len[r];
+      }
+      if (!possible) continue;
+      // Candidate x: where each pruning row's longest run lies in a free run.
+      candidates_.clear();
+      {
+        const int r = check_rows[0];
+        const int lo = probe.run_lo[r], len = probe.run_len[r];
+        for (const auto& [s, e] : runs_[y + r]) {
+          if (e - s < len) continue;
+          const int a = std::max(0, s - lo), b = std::min(size_ - probe.w, e - len - lo);
+          if (a <= b) candidates_.push_back({a, b});
+        }
+      }
+      for (int i = 1; i < prune && !candidates_.empty(); ++i) {
+        const int r = check_rows[i];
+        const int lo = probe.run_lo[r], len = probe.run_len[r];
+        if (len == 0) continue;
+        const auto& runs = runs_[y + r];
+        next_.clear();
+        // Both lists are sorted: one merge pass.
+        size_t k = 0;
+        for (const auto& [a, b] : candidates_) {
+          // Skip free runs that end before a + lo + len.
+          while (k < runs.size() && runs[k].second < a + lo + len) ++k;
+          for (size_t m = k; m < runs.size() && runs[m].first <= b + lo; ++m) {
+            const int c = std::max(a, runs[m].first - lo),
+                      d = std::min(b, runs[m].second - len - lo);
+            if (c <= d) next_.push_back({c, d});
+          }
+        }
+        candidates_.swap(next_);
+      }
+      for (const auto& [a, b] : candidates_) {
+        for (int x = a; x <= b;) {
+          const int next = Fits(probe, check_rows, x, y, &scratch->last_fail);
+          if (next < 0) {
+            *x_out = x;
+            *y_out = y;
+            return true;
+          }
+          x = next;
+        }
+      }
+    }
+    return false;
+  }
+
+  void Stamp(const Mask& stamp, int x0, int y0) {
+    for (int y = 0; y < stamp.h; ++y) {
+      uint64_t* row = Row(y0 + y);
+      ShiftOr(row, words_, stamp.Row(y), stamp.words, x0);
+      UpdateRuns(y0 + y);
+    }
+  }
+
+ private:
+  uint64_t* Row(int y) { return bits_.data() + size_t(y) * size_t(words_); }
+  const uint64_t* Row(int y) const { return bits_.data() + size_t(y) * size_t(words_); }
+
+  // 64 atlas bits from x on, in row y.
+  uint64_t Bits(const uint64_t* row, int x) const {
+    const int w = x >> 6, b = x & 63;
+    return b == 0 ? row[w] : (row[w] >> b) | (row[w + 1] << (64 - b));
+  }
+
+  // -1 if the probe fits at (x, y); else the next x worth trying: past the
+  // last taken texel under a one-run row that collides, or x + 1.
+  int Fits(const Mask& probe, const std::vector<int>& check_rows, int x, int y,
+           int* last_fail) const {
+    int& last_fail_ = *last_fail;
+    auto row_fits = [&](int r) {
+      const uint64_t* row = Row(y + r);
+      const uint64_t* p = probe.Row(r);
+      for (int i = probe.first_word[r]; i <= probe.last_word[r]; ++i) {
+        if (p[i] & Bits(row, x + 64 * i)) return false;
+      }
+      return true;
+    };
+    auto skip = [&](int r) {
+      const uint64_t* row = Row(y + r);
+      // The last taken atlas texel under the run [x + lo, x + lo + len).
+      const int begin = x + probe.run_lo[r], end = begin + probe.run_len[r];
+      int last = -1;
+      for (int w = (end - 1) >> 6; w >= (begin >> 6) && last < 0; --w) {
+        uint64_t m = row[w];
+        if (w == ((end - 1) >> 6) && ((end - 1) & 63) != 63)
+          m &= (uint64_t(2) << ((end - 1) & 63)) - 1;
+        if (w == (begin >> 6)) m &= ~uint64_t(0) << (begin & 63);
+        if (m != 0) last = w * 64 + 63 - __builtin_clzll(m);
+      }
+      return std::max(x + 1, last + 1 - probe.run_lo[r]);
+    };
+    // The row that failed last is likely to fail again one step on.
+    if (last_fail_ < probe.h && !row_fits(last_fail_)) return skip(last_fail_);
+    for (int r : check_rows) {
+      if (!row_fits(r)) {
+        last_fail_ = r;
+        return skip(r);
+      }
+    }
+    for (int r = 0; r < probe.h; ++r) {
+      if (!row_fits(r)) {
+        last_fail_ = r;
+        return skip(r);
+      }
+    }
+    return -1;
+  }
+
+  void UpdateRuns(int y) {
+    const uint64_t* row = Row(y);
+    auto& runs = runs_[y];
+    runs.clear();
+    int best = 0;
+    for (int x = 0; x < size_;) {
+      const int s = NextBit(row, words_, size_, x, false);
+      if (s >= size_) break;
+      const int e = NextBit(row, words_, size_, s, true);
+      runs.push_back({s, e});
+      best = std::max(best, e - s);
+      x = e;
+    }
+    max_free_[y] = best;
+  }
+
+  int size_, height_, words_;
+  std::vector<uint64_t> bits_;
+  std::vector<int> max_free_;
+  std::vector<std::vector<std::pair<int, int>>> runs_;  // free runs [s, e) per row
+};
+
+// Packs everything at scale s into a size-wide atlas twice as tall; returns
+// the height used (INT64_MAX if a chart fits nowhere) and the placements.
+int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint32_t>& order,
+                    double s, int size, int gutter, int64_t give_up_height,
+                    std::vector<RasterPlacement>* placements) {
+  Atlas atlas(size, 2 * size);
+  int64_t used = 0;
+  placements->assign(charts.size(), RasterPlacement());
+  // Shapes are made block by block in parallel (an attempt that gives up
+  // early does not rasterize the rest), placed one by one.
+  constexpr size_t kBlock = 64;
+  std::vector<Shapes> block;
+  for (size_t begin = 0; begin < order.size(); begin += kBlock) {
+    const size_t end = std::min(order.size(), begin + kBlock);
+    block.assign(end - begin, Shapes());
+    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4), [&](const auto& r) {
+      for (size_t i = r.begin(); i < r.end(); ++i) {
+        block[i - begin] = MakeShapes(charts[order[i]], s, gutter);
+      }
+    });
+    for (size_t i = begin; i < end; ++i) {
+      const uint32_t c = order[i];
+      const Shapes& shape = block[i - begin];
+      // The four turns are searched side by side (each to its own first
+      // fit) and compared in a fixed order.
+      const int turns = charts[c].isolated ? 1 : 4;
+      int found_x[4], found_y[4];
+      bool found[4] = {false, false, false, false};
+      tbb::parallel_for(0, turns, [&](int k) {
+        thread_local Atlas::Scratch scratch;
+        found[k] =
+            atlas.Find(shape.probe[k], shape.check_rows[k], std::numeric_limits<int64_t>::max(),
+                       &scratch, &found_x[k], &found_y[k]);
+      });
+      int64_t best_top = std::numeric_limits<int64_t>::max();
+      int best_x = 0, best_y = 0, best_k = -1;
+      for (int k = 0; k < turns; ++k) {
+        if (!found[k]) continue;
+        const int64_t top = int64_t(found_y[k]) + shape.probe[k].h;
+        if (top < best_top || (top == best_top && found_x[k] < best_x)) {
+          best_top = top;
+          best_x = found_x[k];
+          best_y = found_y[k];
+          best_k = k;
+        }
+      }
+      if (best_k < 0) return std::numeric_limits<int64_t>::max();
+      atlas.Stamp(shape.stamp[best_k], best_x + gutter, best_y + gutter);
+      used = std::max(used, int64_t(best_y) + shape.probe[best_k].h);
+      if (used > give_up_height) return used;
+      RasterPlacement& p = (*placements)[c];
+      p.x = best_x + gutter;
+      p.y = best_y + gutter;
+      p.box_width = shape.stamp[0].w;
+      p.box_height = shape.stamp[0].h;
+      p.quarter_turns = best_k;
+    }
+  }
+  return used;
+}
+
+}  // namespace
+
+std::array<double, 2> PlacedTexel(const RasterPlacement& p, double s, double u, double v) {
+  const double U = u * s, V = v * s;
+  double x = U, y = V;
+  switch (p.quarter_turns) {
+    case 1:
+      x = p.box_height - V;
+      y = U;
+      break;
+    case 2:
+      x = p.box_width - U;
+      y = p.box_height - V;
+      break;
+    case 3:
+      x = V;
+      y = p.box_width - U;
+      break;
+    default:
+      break;
+  }
+  return {double(p.x) + x, double(p.y) + y};
+}
+
+Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts, int size_texels,
+                                            int gutter_texels) {
+  const int size = size_texels, g = gutter_texels;
+  RasterPackResult result;
+  result.placements.assign(charts.size(), RasterPlacement());
+  if (charts.empty()) return result;
+  auto too_many = [&]() {
+    return Status::Invalid("uv packing: " + std::to_string(charts.size()) +
+                           " charts with a gutter of " + std::to_string(g) +
+                           " texels do not fit in a " + std::to_string(size) +
+                           "-texel atlas; raise `size` or lower `gutter`");
+  };
+  if (double(charts.size()) * (1.0 + g) * (1.0 + g) > double(size - 2 * g) * (size - 2 * g)) {
+    return too_many();
+  }
+  double area_m2 = 0, longest_m = 0;
+  std::vector<double> chart_area(charts.size(), 0.0);
+  for (size_t c = 0; c < charts.size(); ++c) {
+    if (charts[c].isolated) continue;
+    const FlatChart& chart = charts[c];
+    for (size_t f = 0; f < chart.faces.size(); ++f) {
+      const double* a = &chart.uv_m[2 * chart.corners[3 * f]];
+      const double* b = &chart.uv_m[2 * chart.corners[3 * f + 1]];
+      const double* d = &chart.uv_m[2 * chart.corners[3 * f + 2]];
+      chart_area[c] +=
+          0.5 * std::fabs((b[0] - a[0]) * (d[1] - a[1]) - (d[0] - a[0]) * (b[1] - a[1]));
+    }
+    area_m2 += chart_area[c];
+    longest_m = std::max(longest_m, charts[c].width_m);
+  }
+  std::vector<uint32_t> order(charts.size());
+  std::iota(order.begin(), order.end(), 0u);
+  std::stable_sort(order.begin(), order.end(),
+                   [&](uint32_t a, uint32_t b) { return chart_area[a] > chart_area[b]; });
+  const double usable = size - 2.0 * g;
+  // No chart may be wider than the square; nothing beats filling it.
+  const double s_limit = longest_m > 0 ? (usable - 1) / longest_m : usable;
+  const double s_area = area_m2 > 0 ? usable / std::sqrt(area_m2) : usable;
+  // Secant steps on the packed height (area grows with s^2 on a fixed
+  // width), then halving the bracket, to 0.8 %.
+  constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
+  double lo = 0, hi = std::numeric_limits<double>::infinity();
+  double s = std::min(std::sqrt(0.75) * s_area, s_limit);
+  std::vector<RasterPlacement> placements;
+  for (int attempt = 0; attempt < 12; ++attempt) {
+    ++result.attempts;
+    // Once a scale fits, a taller packing cannot win: give up early.
+    const int64_t give_up = lo > 0 ? size : 2 * int64_t(size);
+    const int64_t used = PackAtScale(charts, order, s, size, g, give_up, &placements);
+    const bool fits = used <= size;
+    if (fits) {
+      lo = s;
+      result.texels_per_meter = s;
+      result.placements = placements;
+    } else {
+      hi = s;
+    }
+    if (lo > 0 && (hi <= lo * 1.008 || (fits && s >= s_limit) || attempt >= 7)) break;
+    const bool measured = used != kNever && used <= give_up;
+    double next = measured
+                      ? s * std::sqrt(double(size) / double(std::max<int64_t>(used, 1))) * 0.998
+                      : 0.7 * s;
+    if (lo > 0 && hi < std::numeric_limits<double>::infinity()) {
+      next = measured ? std::clamp(next, lo + 0.2 * (hi - lo), hi - 0.2 * (hi - lo))
+                      : std::sqrt(lo * hi);
+    } else if (lo > 0) {
+      next = std::min(std::max(next, 1.005 * s), s_limit);
+    } else {
+      next = std::min(next, 0.99 * s);
+    }
+    s = next;
+  }
+  // Other orders (longest side first, then shortest side first) often nest
+  // better: each is tried one step above the best scale so far, climbing
+  // while it fits.
+  for (int variant = 1; variant <= 2 && lo > 0; ++variant) {
+    std::vector<uint32_t> other(charts.size());
+    std::iota(other.begin(), other.end(), 0u);
+    std::vector<double> key(charts.size(), 0.0);
+    for (size_t c = 0; c < charts.size(); ++c) {
+      if (!charts[c].isolated) key[c] = variant == 1 ? charts[c].width_m : charts[c].height_m;
+    }
+    std::stable_sort(other.begin(), other.end(),
+                     [&](uint32_t a, uint32_t b) { return key[a] > key[b]; });
+    for (int climb = 0; climb < 8 && lo * 1.012 <= s_limit; ++climb) {
+      const double step = 1.012;
+      ++result.attempts;
+      const double trial = lo * step;
+      if (PackAtScale(charts, other, trial, size, g, size, &placements) > size) break;
+      lo = trial;
+      result.texels_per_meter = trial;
+      result.placements = placements;
+    }
+  }
+  // A few large, nearly rectangular charts (walls) can pack tighter as boxes
+  // on a skyline (pack.h): keep whichever packing has the larger scale.
+  std::vector<ChartExtent> extents(charts.size());
+  for (size_t c = 0; c < charts.size(); ++c) {
+    extents[c] =
+        charts[c].isolated ? ChartExtent{0, 0} : ChartExtent{charts[c].width_m, charts[c].height_m};
+  }
+  auto boxes = PackCharts(extents, size, g);
+  if (boxes.ok() && boxes->texels_per_meter > lo) {
+    lo = boxes->texels_per_meter;
+    result.texels_per_meter = lo;
+    for (size_t c = 0; c < charts.size(); ++c) {
+      RasterPlacement& p = result.placements[c];
+      p.x = boxes->x_texels[c];
+      p.y = boxes->y_texels[c];
+      p.box_width = std::max(1, int(std::ceil(extents[c].width * lo)));
+      p.box_height = std::max(1, int(std::ceil(extents[c].height * lo)));
+      p.quarter_turns = boxes->turned[c] ? 1 : 0;
+    }
+    result.boxes = true;
+  }
+  if (!(lo > 0)) return too_many();
+  return result;
+}
+
+}  // namespace pb
