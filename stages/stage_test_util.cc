@@ -70,6 +70,15 @@ void FakeContext::end_phase(std::string_view name) {
 Status StageTest::Run(const std::string& id, FakeContext& ctx) {
   const StageType* type = registry_.Find(id);
   if (!type) return Status::NotFound(id);
+  // As the engine does: the schema's top-level defaults for parameters not given.
+  if (ctx.mutable_params().is_object() && !type->params_schema.empty()) {
+    const nlohmann::json schema = nlohmann::json::parse(type->params_schema, nullptr, false);
+    if (schema.is_object() && schema.contains("properties")) {
+      for (const auto& [name, property] : schema["properties"].items()) {
+        if (property.contains("default") && !ctx.mutable_params().contains(name)) ctx.mutable_params()[name] = property["default"];
+      }
+    }
+  }
   const Status status = type->run(ctx);
   EXPECT_TRUE(ctx.open_phases_.empty());
   return status;

@@ -46,6 +46,7 @@ class FakeContext : public StageContext {
                 nlohmann::json meta = nlohmann::json::object());
 
   const nlohmann::json& params() const override { return params_; }
+  nlohmann::json& mutable_params() { return params_; }  // StageTest::Run fills defaults
   bool has_input(std::string_view port) const override {
     return inputs_.count(std::string(port)) > 0;
   }
