@@ -34,7 +34,7 @@ window.addEventListener('error', (e) => fail(String(e.message)));
 window.addEventListener('unhandledrejection', (e) => fail(String(e.reason && e.reason.message || e.reason)));
 
 const $ = (id) => document.getElementById(id);
-if (testSize) document.body.classList.add('test');
+if (testSize) { document.documentElement.classList.add('test'); document.body.classList.add('test'); }
 
 // Scene coordinates (z up, absolute meters) to three's (glTF's y up) relative
 // to `ref`, the scene's reference origin: (x, y, z) -> (x, z, -y).
