@@ -22,6 +22,9 @@ TIMEOUT_S = 120.0
 # WebGL in headless Chromium without a GPU: ANGLE on SwiftShader (the
 # software Vulkan/GL of Chromium); --enable-unsafe-swiftshader is needed since
 # Chromium 137 for WebGL to fall back to it.
+# The normal map may lower the screenshot's SSIM by this much (rounding of a
+# nearly flat map) before it counts as moving the view away from the reference.
+NORMAL_MAP_TOLERANCE = 0.002
 GL_FLAGS = ["--use-angle=swiftshader", "--enable-unsafe-swiftshader", "--ignore-gpu-blocklist"]
 
 
@@ -158,43 +161,22 @@ def check(chromium, compare, campaign, out_dir, index, base, textures):
                 if textures == "ktx2" and not model.get("glb_ktx2"):
                     failures.append("%s: no model_ktx2.glb" % model["run"])
                     continue
-                name = model["run"].replace("/", "__") + "__" + view["name"] + "__" + textures
-                query = urllib.parse.urlencode({"run": model["run"], "view": view["name"], "test": width, "textures": textures})
-                browser.errors.clear()
-                browser.call("Emulation.setDeviceMetricsOverride", {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False}, base=base)
-                started = time.monotonic()
-                nav = browser.call("Page.navigate", {"url": base + "report/viewer/index.html?" + query}, base=base)
-                if nav.get("errorText"):
-                    failures.append("%s: navigation failed: %s" % (model["run"], nav["errorText"]))
-                    continue
-                state = None
-                while time.monotonic() - started < TIMEOUT_S:
-                    r = browser.call("Runtime.evaluate", {"expression": "JSON.stringify(window.pbViewer || null)", "returnByValue": True}, base=base)
-                    state = json.loads(r.get("result", {}).get("value") or "null")
-                    if state and (state.get("ready") or state.get("error")):
-                        break
-                    time.sleep(0.25)
-                load_s = time.monotonic() - started
-                if not state or not state.get("ready"):
-                    failures.append("%s: viewer not ready after %.0f s: %s" % (model["run"], load_s, (state or {}).get("error")))
-                    continue
-                shot = base64.b64decode(browser.call("Page.captureScreenshot", {"format": "png", "clip": {
-                    "x": 0, "y": 0, "width": width, "height": height, "scale": 1}}, base=base)["data"])
-                shot_path = os.path.join(out_dir, name + ".png")
-                with open(shot_path, "wb") as f:
-                    f.write(shot)
-                if browser.errors:
-                    failures.append("%s: page errors: %s" % (model["run"], "; ".join(browser.errors)))
                 reference = os.path.join(campaign, "report", "viewer", model["frames"], view["file"])
-                cmp = subprocess.run([compare, reference, shot_path], capture_output=True, text=True)
-                figures = json.loads(cmp.stdout) if cmp.stdout.strip().startswith("{") else {}
-                figures.update({"run": model["run"], "view": view["name"], "textures": textures,
-                                "screenshot": shot_path, "reference": reference, "load_s": round(load_s, 2),
-                                "faces": state["models"][0]["faces"] if state.get("models") else None})
+                figures = shoot(browser, base, compare, out_dir, model, view, width, height, textures, reference, True, failures)
+                if figures is None:
+                    continue
                 results.append(figures)
-                print("%-40s %s" % (model["run"] + " [" + textures + "]", cmp.stdout.strip() or cmp.stderr.strip()))
-                if cmp.returncode != 0:
-                    failures.append("%s: screenshot disagrees with %s: %s" % (model["run"], reference, cmp.stdout.strip() or cmp.stderr.strip()))
+                # The normal map must bring the view closer to the reference
+                # renderer's: applied the wrong way round it moves it away,
+                # further than no normal map at all.
+                if figures.get("normal_map"):
+                    flat = shoot(browser, base, compare, out_dir, model, view, width, height, textures, reference, False, failures)
+                    if flat is not None:
+                        figures["ssim_covered_without_normal_map"] = flat.get("ssim_covered")
+                        if flat.get("ssim_covered", 0) > figures.get("ssim_covered", 0) + NORMAL_MAP_TOLERANCE:
+                            failures.append("%s: the normal map moves the view away from the reference (SSIM %.4f with it, %.4f without): wrong direction?" % (
+                                model["run"], figures["ssim_covered"], flat["ssim_covered"]))
+                            figures["pass"] = False
     except RuntimeError as e:
         failures.append(str(e))
     finally:
@@ -207,8 +189,51 @@ def check(chromium, compare, campaign, out_dir, index, base, textures):
         failures.append("models.json lists no model")
     for failure in failures:
         sys.stderr.write("check_viewer: %s\n" % failure)
-    print("%d passed, %d failed" % (len(results) - sum(1 for r in results if not r.get("pass")), len(failures)))
+    print("%d passed, %d failed" % (sum(1 for r in results if r.get("pass")), len(failures)))
     return 1 if failures else 0
+
+
+def shoot(browser, base, compare, out_dir, model, view, width, height, textures, reference, normal_map, failures):
+    """Screenshot of one model from one viewpoint, compared with `reference`; None on failure."""
+    name = model["run"].replace("/", "__") + "__" + view["name"] + "__" + textures + ("" if normal_map else "__no_normal_map")
+    query = urllib.parse.urlencode({"run": model["run"], "view": view["name"], "test": width, "textures": textures,
+                                    "normal": 1 if normal_map else 0})
+    browser.errors.clear()
+    browser.call("Emulation.setDeviceMetricsOverride", {"width": width, "height": height, "deviceScaleFactor": 1, "mobile": False}, base=base)
+    started = time.monotonic()
+    nav = browser.call("Page.navigate", {"url": base + "report/viewer/index.html?" + query}, base=base)
+    if nav.get("errorText"):
+        failures.append("%s: navigation failed: %s" % (model["run"], nav["errorText"]))
+        return None
+    state = None
+    while time.monotonic() - started < TIMEOUT_S:
+        r = browser.call("Runtime.evaluate", {"expression": "JSON.stringify(window.pbViewer || null)", "returnByValue": True}, base=base)
+        state = json.loads(r.get("result", {}).get("value") or "null")
+        if state and (state.get("ready") or state.get("error")):
+            break
+        time.sleep(0.25)
+    load_s = time.monotonic() - started
+    if not state or not state.get("ready"):
+        failures.append("%s: viewer not ready after %.0f s: %s" % (model["run"], load_s, (state or {}).get("error")))
+        return None
+    shot = base64.b64decode(browser.call("Page.captureScreenshot", {"format": "png", "clip": {
+        "x": 0, "y": 0, "width": width, "height": height, "scale": 1}}, base=base)["data"])
+    shot_path = os.path.join(out_dir, name + ".png")
+    with open(shot_path, "wb") as f:
+        f.write(shot)
+    if browser.errors:
+        failures.append("%s: page errors: %s" % (model["run"], "; ".join(browser.errors)))
+    cmp = subprocess.run([compare, reference, shot_path], capture_output=True, text=True)
+    figures = json.loads(cmp.stdout) if cmp.stdout.strip().startswith("{") else {}
+    shown = state["models"][0] if state.get("models") else {}
+    figures.update({"run": model["run"], "view": view["name"], "textures": textures,
+                    "screenshot": shot_path, "reference": reference, "load_s": round(load_s, 2),
+                    "faces": shown.get("faces"), "normal_map": shown.get("normal_map")})
+    label = model["run"] + " [" + textures + ("" if normal_map else ", no normal map") + "]"
+    print("%-50s %s" % (label, cmp.stdout.strip() or cmp.stderr.strip()))
+    if normal_map and cmp.returncode != 0:
+        failures.append("%s: screenshot disagrees with %s: %s" % (model["run"], reference, cmp.stdout.strip() or cmp.stderr.strip()))
+    return figures
 
 
 if __name__ == "__main__":

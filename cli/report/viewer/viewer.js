@@ -9,7 +9,8 @@
 // so that a view shows what render.frames drew from the same viewpoint.
 //
 // URL parameters: scene=NAME, run=NAME (only that run), view=NAME (start at
-// that viewpoint), textures=png|ktx2, test=SIZE (for the browser test: only
+// that viewpoint), textures=png|ktx2, color=0|1, normal=0|1, wire=0|1 (the
+// toggles' first state), test=SIZE (for the browser test: only
 // the canvas, SIZE x SIZE pixels, transparent background, no UI).
 // window.pbViewer.ready turns true once every shown model is loaded and
 // drawn; window.pbViewer.error holds the first error (also console.error).
@@ -183,7 +184,8 @@ async function showScene(name) {
     root.position.copy(toThree(originOf(cell.gltf), reference));
     cell.world.add(cell.gltf.scene);
     cell.element.querySelector('.figures').innerHTML = figuresHtml(cell.model, cell.loaded);
-    state.models.push({ run: cell.model.run, file: cell.loaded.file, faces: cell.loaded.faces, texture: cell.loaded.texture });
+    state.models.push({ run: cell.model.run, file: cell.loaded.file, faces: cell.loaded.faces, texture: cell.loaded.texture,
+                        normal_map: cell.meshes.some((m) => !!m.userData.normalMap) });
   }
   applyToggles();
   const vp = sceneInfo.viewpoints.find((v) => v.name === views.value) || sceneInfo.viewpoints[0];
@@ -303,6 +305,9 @@ async function main() {
   const runScene = run && index.scenes.find((s) => s.models.some((m) => m.run === run));
   scenes.value = params.get('scene') || (runScene ? runScene.name : index.scenes[0] && index.scenes[0].name);
   if (params.get('textures') === 'ktx2') $('textures').value = 'ktx2';
+  for (const id of ['color', 'normal', 'wire']) {
+    if (params.has(id)) $(id).checked = params.get(id) === '1';
+  }
   scenes.addEventListener('change', () => showScene(scenes.value));
   $('textures').addEventListener('change', () => showScene(scenes.value));
   $('view').addEventListener('change', () => {
