@@ -69,7 +69,8 @@ function figuresHtml(model, loaded) {
               f.texture_width ? `${f.texture_width}×${f.texture_height}` : 'none';
   return `<b>${model.title}</b><br>` +
     `${loaded ? loaded.faces.toLocaleString('en') : (f.faces || 0).toLocaleString('en')} faces · maps ${tex}` +
-    ` · GPU ${fmtBytes(f.texture_bytes)}<br>` +
+    (loaded && loaded.gpu_bytes != null ? ` · GPU ${fmtBytes(loaded.gpu_bytes)} (RGBA8)` :
+     ` · GPU ${fmtBytes(f.texture_bytes)}${loaded && loaded.ktx2 ? ' (KTX2)' : ''}`) + '<br>' +
     `est. ${fmt(f.fps, 0)} FPS (${f.device || '?'})` +
     (f.flip_truth != null ? ` · FLIP ${fmt(f.flip_truth, 3)} · MS-SSIM ${fmt(f.ms_ssim_truth, 3)} vs truth` :
      f.flip_hpm != null ? ` · FLIP ${fmt(f.flip_hpm, 3)} vs HPM` : '') +
@@ -103,7 +104,7 @@ function setViewpoint(vp) {
 
 // Replaces the glTF material by a Lambert one lit as the reference renderer.
 function prepare(gltf, file) {
-  const meshes = [];
+  const meshes = [], maps = [];
   let faces = 0, texture = null;
   gltf.scene.traverse((o) => {
     if (!o.isMesh) return;
@@ -118,8 +119,13 @@ function prepare(gltf, file) {
     const index = o.geometry.index;
     faces += (index ? index.count : o.geometry.attributes.position.count) / 3;
     if (m.map && m.map.image) texture = { width: m.map.image.width, height: m.map.image.height };
+    for (const t of [m.map, m.normalMap]) if (t && t.image && !maps.includes(t)) maps.push(t);
   });
-  return { meshes, faces, texture, file };
+  // PNG maps take RGBA8 with a full mip chain (4/3) on the GPU; KTX2 maps
+  // count with the figure estimate.fps computed from their blocks.
+  const ktx2 = maps.some((t) => t.isCompressedTexture);
+  const gpu_bytes = ktx2 ? null : maps.reduce((sum, t) => sum + Math.round(4 * t.image.width * t.image.height * 4 / 3), 0);
+  return { meshes, faces, texture, file, ktx2, gpu_bytes };
 }
 
 function originOf(gltf) {
@@ -139,7 +145,7 @@ async function showScene(name) {
   const models = sceneInfo.models.filter((m) => !runFilter || m.run === runFilter);
   if (!models.length) { fail(`no model to show (scene '${name}'${runFilter ? `, run '${runFilter}'` : ''})`); return; }
   const grid = $('grid');
-  const columns = Math.ceil(Math.sqrt(models.length * 1.5));
+  const columns = Math.ceil(Math.sqrt(models.length));
   grid.style.gridTemplateColumns = `repeat(${columns}, 1fr)`;
   grid.style.gridTemplateRows = `repeat(${Math.ceil(models.length / columns)}, 1fr)`;
   const views = $('view');
