@@ -259,7 +259,7 @@ int RunServe(const std::vector<std::string>& args) {
 }  // namespace
 
 CliCommand ServeCommand() {
-  return {"serve", "serve a campaign folder on 127.0.0.1 for the 3-D viewer (report/viewer/)",
+  return {"serve", "Serve a campaign folder on 127.0.0.1 for the 3-D viewer (report/viewer/)",
           &RunServe};
 }
 
