@@ -193,7 +193,7 @@ def check(chromium, compare, campaign, out_dir, index, base, textures):
     return 1 if failures else 0
 
 
-def shoot(browser, base, compare, out_dir, model, view, width, height, textures, reference, normal_map, failures):
+def shoot(browser, base, compare, out_dir, model, view, width, height, textures, reference, normal_map, failures, retried=False):
     """Screenshot of one model from one viewpoint, compared with `reference`; None on failure."""
     name = model["run"].replace("/", "__") + "__" + view["name"] + "__" + textures + ("" if normal_map else "__no_normal_map")
     query = urllib.parse.urlencode({"run": model["run"], "view": view["name"], "test": width, "textures": textures,
@@ -214,7 +214,14 @@ def shoot(browser, base, compare, out_dir, model, view, width, height, textures,
         time.sleep(0.25)
     load_s = time.monotonic() - started
     if not state or not state.get("ready"):
-        failures.append("%s: viewer not ready after %.0f s: %s" % (model["run"], load_s, (state or {}).get("error")))
+        message = "%s: viewer not ready after %.0f s: %s" % (model["run"], load_s, (state or {}).get("error"))
+        # Once in a run of the demo room on the loaded 2-core machine a page
+        # never became ready (no error; the same model loaded in 1.5 s when
+        # tried again): one more try before failing, and the first is said.
+        if not retried and not (state or {}).get("error"):
+            sys.stderr.write("check_viewer: %s; trying once more\n" % message)
+            return shoot(browser, base, compare, out_dir, model, view, width, height, textures, reference, normal_map, failures, True)
+        failures.append(message)
         return None
     shot = base64.b64decode(browser.call("Page.captureScreenshot", {"format": "png", "clip": {
         "x": 0, "y": 0, "width": width, "height": height, "scale": 1}}, base=base)["data"])
