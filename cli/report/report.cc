@@ -41,7 +41,8 @@ Status WriteCampaignReport(const std::string& campaign_dir, const std::string& r
   PB_RETURN_IF_ERROR(
       env->WriteFileAtomic(JoinPath(report_dir, "results.csv"), ri::ResultsCsv(campaign)));
   PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(report_dir, "report.md"), texts.markdown));
-  return env->WriteFileAtomic(JoinPath(report_dir, "report.html"), texts.html);
+  PB_RETURN_IF_ERROR(env->WriteFileAtomic(JoinPath(report_dir, "report.html"), texts.html));
+  return ri::WriteViewer(campaign, report_dir);
 }
 
 }  // namespace pb

@@ -111,6 +111,9 @@
 //                 frames side by side (ground truth, the scan's splats, each
 //                 workflow) with zoomed crops and FLIP maps
 //   images/       the thumbnails, crops and FLIP maps report.md links to
+//   viewer/       the 3-D viewer both reports link (index.html, viewer.js,
+//                 models.json, three.js in lib/; report_viewer.cc,
+//                 docs/viewer.md), served by `pointbake serve CAMPAIGN_DIR`
 #pragma once
 
 #include <string>
@@ -135,6 +138,8 @@ struct ReportOptions {
 // malformed run.json or table) name the file; options out of range
 // (thumbnail_px < 16, crop_px < 4, max_viewpoints < 0) are Status::Invalid.
 // Deterministic: the same campaign folder gives byte-identical files.
+// Without three.js in tools/node_modules the report files are written and the
+// result is Status::NotFound naming what to install.
 Status WriteCampaignReport(const std::string& campaign_dir, const std::string& report_dir,
                            const ReportOptions& options = {});
 

@@ -1,6 +1,7 @@
 // Campaign report, presentation: the tables (shared by Markdown and HTML),
 // the SVG bar charts, report.md and report.html (self-contained: inline CSS
 // and SVG, images as data: URIs, no scripts).
+#include <cctype>
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -364,6 +365,49 @@ bool AnyWarnings(const Campaign& c) {
 }
 constexpr const char* kNoWarnings = "No stage of any run reported a warning.";
 
+// The links to the 3-D viewer (viewer/index.html, report_viewer.cc): every
+// model, each scene, each run. The page loads the models over HTTP, so the
+// text says how to serve the campaign folder.
+constexpr const char* kViewerNote =
+    "Open them through `pointbake serve CAMPAIGN_DIR` (it prints the address; a browser cannot "
+    "load the models from a file: page).";
+
+std::string ViewerUrl(const std::string& key, const std::string& value) {
+  std::string url = "viewer/index.html?" + key + "=";
+  for (unsigned char ch : value) {
+    if (std::isalnum(ch) || ch == '-' || ch == '_' || ch == '.') {
+      url.push_back(char(ch));
+    } else {
+      char escaped[4];
+      std::snprintf(escaped, sizeof(escaped), "%%%02X", ch);
+      url += escaped;
+    }
+  }
+  return url;
+}
+
+std::string ViewerHtml(const Campaign& c) {
+  std::string h = "<h2>3-D viewer</h2><p><a href=\"viewer/index.html\">All models in 3-D</a> (linked "
+                  "cameras, orbit and walk, color/normal/wireframe toggles, PNG or KTX2 textures, "
+                  "Enter VR). " + EscapeHtml(kViewerNote) + "</p><p>";
+  for (const std::string& scene : c.scenes) {
+    h += "<b>" + EscapeHtml(scene) + "</b>: <a href=\"" + EscapeHtml(ViewerUrl("scene", scene)) + "\">all</a>";
+    for (const Row& r : c.rows) {
+      if (r.scene == scene && r.ok()) {
+        h += " · <a href=\"" + EscapeHtml(ViewerUrl("run", r.name)) + "\">" + EscapeHtml(DisplayName(r)) + "</a>";
+      }
+    }
+    h += "<br>";
+  }
+  return h + "</p>\n";
+}
+
+std::string ViewerMarkdown(const Campaign& c) {
+  std::string md = "3-D viewer: [all models](viewer/index.html)";
+  for (const std::string& scene : c.scenes) md += ", [" + EscapeMd(scene) + "](" + ViewerUrl("scene", scene) + ")";
+  return md + ". " + kViewerNote + "\n\n";
+}
+
 std::string ReportMarkdown(const Campaign& c, const TextTable& times, const TextTable& vs_hpm,
                            const TextTable& vs_truth, const TextTable& vs_scan, const TextTable& fps, const TextTable& speed,
                            const std::string& speed_sentence,
@@ -372,6 +416,7 @@ std::string ReportMarkdown(const Campaign& c, const TextTable& times, const Text
   md += "- Started: " + (c.started.empty() ? std::string(kDash) : c.started) + "\n";
   md += "- Machine: " + EscapeMd(HostLine(c)) + "\n";
   md += "- Campaign file: " + (c.file.empty() ? std::string(kDash) : "`" + c.file + "`") + "\n\n";
+  md += ViewerMarkdown(c);
   md +=
       kTimesNote + std::string("\n\n## Construction time and peak RAM\n\n") + MarkdownTable(times);
   md += "\n## Speed-ups of point transfer\n\n" + speed_sentence + "\n\n" + MarkdownTable(speed);
@@ -436,6 +481,7 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
        (c.total_wall_s ? ", campaign wall time " + FmtSeconds(c.total_wall_s) + " s" : "") +
        ". Machine: " + EscapeHtml(HostLine(c)) + ".</p><p>" + EscapeHtml(kTimesNote) +
        "</p></div>\n";
+  h += ViewerHtml(c);
   h += "<h2>Construction time</h2>" + Legend();
   for (const std::string& scene : c.scenes)
     h += "<h3>" + EscapeHtml(scene) + "</h3>" + TimeChart(c, scene);

@@ -167,4 +167,9 @@ ReportTexts RenderReport(const Campaign& c, const std::vector<SpeedUp>& speedups
                          const std::vector<SpeedUpMean>& means,
                          const std::vector<SceneImages>& images, const ReportOptions& options);
 
+// Writes <report_dir>/viewer/ (report_viewer.cc): the 3-D viewer page, its
+// models.json and three.js. Status::NotFound naming what to install when
+// three.js (tools/node_modules) is missing.
+Status WriteViewer(const Campaign& c, const std::string& report_dir);
+
 }  // namespace pb::report_internal

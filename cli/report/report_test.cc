@@ -95,6 +95,7 @@ class ReportTest : public testing::TempDirTest {
     Frame frame;
     frame.entry.name = "front";
     frame.entry.file = "front.png";
+    frame.entry.viewpoint = FrameViewpoint{{1.0, 2.0, 1.6}, {3.0, 2.0, 1.5}, std::nullopt, 70.0};
     frame.image = image;
     set.frames.push_back(std::move(frame));
     ASSERT_TRUE(WriteFrames(dir, set).ok());
@@ -330,7 +331,14 @@ TEST_F(ReportTest, HtmlIsSelfContainedWithChartsAndFrames) {
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
   const std::string html = ReadText(Path("report/report.html"));
   EXPECT_THAT(html, Not(HasSubstr("src=\"http")));
-  EXPECT_THAT(html, Not(HasSubstr("href=")));
+  // The only links are to the 3-D viewer written beside it.
+  size_t links = 0;
+  for (size_t at = html.find("href=\""); at != std::string::npos; at = html.find("href=\"", at + 1), ++links) {
+    EXPECT_EQ(html.compare(at + 6, 17, "viewer/index.html"), 0) << html.substr(at, 60);
+  }
+  EXPECT_GE(links, 3u);  // all models, the scene, each run that is ok
+  EXPECT_THAT(html, HasSubstr("href=\"viewer/index.html?run=room%2Fpoint_transfer\""));
+  EXPECT_THAT(html, HasSubstr("pointbake serve"));
   EXPECT_THAT(html, Not(HasSubstr("<script")));
   EXPECT_THAT(html, Not(HasSubstr("url(")));
   EXPECT_THAT(html, Not(HasSubstr("HDR-VDP")));
@@ -464,6 +472,50 @@ TEST_F(ReportTest, ExampleReportForTheBrowserCheck) {
   const std::string html = ReadText(report + "/report.html");
   EXPECT_THAT(html, HasSubstr("<svg"));
   EXPECT_THAT(html, Not(HasSubstr("run failed")));
+}
+
+TEST_F(ReportTest, ViewerListsTheModelsWithViewpointsFiguresAndThreeJs) {
+  WriteCampaign(/*lpm_ok=*/true);
+  std::ofstream(RunDir("hpm") + "/model.glb") << "glb";
+  std::ofstream(RunDir("point_transfer") + "/model.glb") << "glb";
+  std::ofstream(RunDir("point_transfer") + "/model_ktx2.glb") << "glb";
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("campaign/report")).ok());
+  const Json index = Json::parse(ReadText(Path("campaign/report/viewer/models.json")));
+  EXPECT_EQ(index["format"], "pointbake-viewer");
+  ASSERT_EQ(index["scenes"].size(), 1u);
+  const Json& scene = index["scenes"][0];
+  EXPECT_EQ(scene["name"], "room");
+  ASSERT_EQ(scene["viewpoints"].size(), 1u);
+  EXPECT_EQ(scene["viewpoints"][0]["name"], "front");
+  EXPECT_EQ(scene["viewpoints"][0]["eye"], Json::parse("[1.0, 2.0, 1.6]"));
+  EXPECT_EQ(scene["viewpoints"][0]["fov_deg"], 70.0);
+  EXPECT_EQ(scene["frame_size"], Json::parse("[" + std::to_string(kW) + "," + std::to_string(kH) + "]"));
+  ASSERT_EQ(scene["models"].size(), 2u);  // the LPM run has no model.glb
+  const Json& hpm = scene["models"][0];
+  const Json& pt = scene["models"][1];
+  EXPECT_EQ(hpm["run"], "room/hpm");
+  EXPECT_EQ(hpm["glb"], "../../runs/room/hpm/model.glb");
+  EXPECT_TRUE(hpm["glb_ktx2"].is_null());
+  EXPECT_EQ(pt["glb_ktx2"], "../../runs/room/point_transfer/model_ktx2.glb");
+  EXPECT_EQ(pt["frames"], "../../runs/room/point_transfer/frames");
+  EXPECT_EQ(pt["title"], "Point transfer");
+  EXPECT_EQ(pt["figures"]["faces"], 240000);
+  EXPECT_EQ(pt["figures"]["fps"], 72.0);
+  EXPECT_EQ(pt["figures"]["flip_hpm"], 0.05);
+  for (const char* file : {"index.html", "viewer.js", "lib/three.module.js",
+                           "lib/addons/loaders/GLTFLoader.js", "lib/addons/libs/basis/basis_transcoder.wasm"}) {
+    EXPECT_TRUE(std::filesystem::exists(Path("campaign/report/viewer/") + file)) << file;
+  }
+  // Every module the page imports is there (relative imports of the addons).
+  EXPECT_THAT(ReadText(Path("campaign/report/viewer/index.html")), HasSubstr("./lib/three.module.js"));
+
+  // Without three.js the report is written and the error says what to install.
+  setenv("POINTBAKE_TOOLS_DIR", Path("no_tools").c_str(), 1);
+  const Status missing = WriteCampaignReport(Campaign(), Path("other"));
+  unsetenv("POINTBAKE_TOOLS_DIR");
+  EXPECT_EQ(missing.code(), Status::Code::kNotFound);
+  EXPECT_THAT(missing.message(), HasSubstr("npm ci --prefix tools"));
+  EXPECT_TRUE(std::filesystem::exists(Path("other/report.html")));
 }
 
 TEST_F(ReportTest, ErrorsNameTheFile) {

@@ -115,7 +115,8 @@ double EstimateFps(const DeviceProfile& device, uint64_t triangles) {
 }
 
 FpsEstimate EstimateFrameRate(const DeviceProfile& device, uint64_t triangles,
-                              std::span<const TextureSize> maps) {
+                              std::span<const TextureSize> maps,
+                              std::span<const CompressedMap> compressed) {
   FpsEstimate estimate;
   estimate.triangles = triangles;
   for (const TextureSize& map : maps) {
@@ -123,6 +124,11 @@ FpsEstimate EstimateFrameRate(const DeviceProfile& device, uint64_t triangles,
     estimate.texture_height = std::max(estimate.texture_height, map.height);
   }
   estimate.texture_bytes = TextureBytes(device, maps);
+  for (const CompressedMap& map : compressed) {
+    estimate.texture_width = std::max(estimate.texture_width, map.size.width);
+    estimate.texture_height = std::max(estimate.texture_height, map.size.height);
+    estimate.texture_bytes += map.gpu_bytes;
+  }
   estimate.fits_texture_budget =
       estimate.texture_bytes <= static_cast<uint64_t>(std::max<int64_t>(device.texture_budget_bytes, 0));
   estimate.fps = EstimateFps(device, triangles);

@@ -77,7 +77,18 @@ struct FpsEstimate {
   double fps = 0;
 };
 
+// A map already in a GPU block format (a KTX2 map of the exported model):
+// its GPU bytes are known from the file (all its stored mip levels,
+// stages/geometry/io/ktx2.h), not from the profile's bytes per texel.
+struct CompressedMap {
+  TextureSize size;
+  uint64_t gpu_bytes = 0;
+};
+
+// texture_bytes = TextureBytes(device, maps) + the compressed maps' gpu_bytes;
+// the largest width and height over both.
 FpsEstimate EstimateFrameRate(const DeviceProfile& device, uint64_t triangles,
-                              std::span<const TextureSize> maps);
+                              std::span<const TextureSize> maps,
+                              std::span<const CompressedMap> compressed = {});
 
 }  // namespace pb

@@ -12,6 +12,8 @@
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/core/table.h"
 #include "stages/estimate/fps_model.h"
+#include "stages/geometry/io/gltf.h"
+#include "stages/geometry/testing/ktx2_sample.h"
 #include "stages/builtin.h"
 #include "stages/stage_test_util.h"
 
@@ -228,6 +230,56 @@ TEST_F(FpsStageTest, WritesOneRowWithTheReportColumns) {
   EXPECT_EQ(ctx.meta_.at("table").at("device"), "tiny");
   EXPECT_TRUE(ctx.phases_.count("io") && ctx.phases_.count("compute"));
   EXPECT_EQ(ctx.last_progress_, 1.0);
+}
+
+TEST_F(FpsStageTest, Ktx2MapsOfTheModelCountWithTheirBlockSizes) {
+  // The model's color map is ETC1S 64x32 with 7 levels (ETC2: 8 bytes a 4x4
+  // block), its normal map UASTC 16x16 with 5 levels (ASTC 4x4: 16 bytes).
+  Mesh quad;
+  quad.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+  quad.uvs = {0, 0, 1, 0, 1, 1, 0, 1};
+  quad.indices = {0, 1, 2, 0, 2, 3};
+  GltfWriteOptions options;
+  options.base_color_ktx2 = testing::Ktx2Sample(163, 64, 32, 7, true);
+  options.normal_ktx2 = testing::Ktx2Sample(166, 16, 16, 5, false);
+  ASSERT_TRUE(WriteGlb(Path("model.glb"), quad, options).ok());
+  // Color blocks: 16x8, 8x4, 4x2, 2x1, 1x1, 1x1, 1x1 = 128+32+8+2+3; normal: 16+4+1+1+1.
+  constexpr int64_t kKtx2Bytes = 8 * (128 + 32 + 8 + 2 + 3) + 16 * (16 + 4 + 1 + 1 + 1);
+  FakeContext ctx(dir_, {{"device", Device("tiny.yaml", kQuadTextureBytes)}});
+  ctx.AddInput("mesh", "mesh", QuadMesh());
+  ctx.AddInput("color", "image", Png("color.png", 64, 32));
+  ctx.AddInput("normal", "image", Png("normal.png", 16, 16));
+  ctx.AddInput("model", "model", Path("model.glb"));
+  const Status status = Run("estimate.fps", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  Expected<Table> table = ReadTable(ctx.outputs_.at("table"));
+  ASSERT_TRUE(table.ok());
+  EXPECT_EQ(TableNumber(table->get(0, "texture_bytes")), kKtx2Bytes);
+  EXPECT_LT(kKtx2Bytes * 3, kQuadTextureBytes);
+  EXPECT_EQ(TableNumber(table->get(0, "texture_width")), 64);
+  EXPECT_EQ(ctx.meta_.at("table").at("texture_format"), "ktx2");
+
+  // A PNG model changes nothing: the image inputs count with the profile.
+  ASSERT_TRUE(WriteGlb(Path("png.glb"), quad, GltfWriteOptions{}).ok());
+  FakeContext png(dir_ / "png", {{"device", Device("tiny.yaml", kQuadTextureBytes)}});
+  png.AddInput("mesh", "mesh", QuadMesh());
+  png.AddInput("color", "image", Png("color.png", 64, 32));
+  png.AddInput("normal", "image", Png("normal.png", 16, 16));
+  png.AddInput("model", "model", Path("png.glb"));
+  ASSERT_TRUE(Run("estimate.fps", png).ok());
+  Expected<Table> png_table = ReadTable(png.outputs_.at("table"));
+  ASSERT_TRUE(png_table.ok());
+  EXPECT_EQ(TableNumber(png_table->get(0, "texture_bytes")), kQuadTextureBytes);
+  EXPECT_EQ(png.meta_.at("table").at("texture_format"), "profile");
+
+  // A model that is not a glb is an error naming the input and file.
+  FakeContext bad(dir_ / "bad", {{"device", Device("tiny.yaml", 0)}});
+  bad.AddInput("mesh", "mesh", QuadMesh());
+  bad.AddInput("model", "model", Png("not_a_model.png", 4, 4));
+  const Status bad_status = Run("estimate.fps", bad);
+  EXPECT_EQ(bad_status.code(), Status::Code::kCorrupt);
+  EXPECT_THAT(bad_status.message(), HasSubstr("estimate.fps: input 'model'"));
+  EXPECT_THAT(bad_status.message(), HasSubstr("not_a_model.png"));
 }
 
 TEST_F(FpsStageTest, OneByteOverBudgetDoesNotFit) {

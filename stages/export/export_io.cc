@@ -73,6 +73,21 @@ Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_v
                              ": expected a .png or .exr image");
 }
 
+Expected<Image> TextureImage8(const StageContext& ctx, std::string_view stage_id, std::string_view port,
+                              bool normal_map) {
+  PB_ASSIGN_OR_RETURN(const std::string path, InputFilePath(ctx, stage_id, port));
+  const std::string context = std::string(stage_id) + ": input '" + std::string(port) + "'";
+  const std::string extension = LowerExtension(InputFileName(ctx, port, path));
+  Expected<Image> image = extension == ".png"   ? ReadPng(path)
+                          : extension == ".exr" ? ReadExr(path)
+                                                : Expected<Image>(Status::Unsupported(
+                                                      InputFileName(ctx, port, path) +
+                                                      ": expected a .png or .exr image"));
+  if (!image.ok()) return image.status().WithContext(context);
+  if (image->type == Image::PixelType::kU8) return std::move(*image);
+  return ToEightBit(*image, normal_map);
+}
+
 std::vector<PortSpec> ExportInputPorts() {
   return {
       {"mesh", "mesh", "The mesh to export (mesh.ply), with uvs when textures are given.", false},

@@ -10,6 +10,7 @@
 
 #include "base/status.h"
 #include "engine/stage.h"
+#include "stages/geometry/core/image.h"
 #include "stages/geometry/core/mesh.h"
 
 namespace pb {
@@ -21,6 +22,12 @@ namespace pb {
 // (n + 1) / 2 * 255. Status naming the stage, port and file otherwise.
 Expected<std::vector<uint8_t>> TexturePng(const StageContext& ctx, std::string_view stage_id,
                                           std::string_view port, bool normal_map);
+
+// The image of texture input `port` as 8 bits per sample (converted as for
+// TexturePng), e.g. to encode it as KTX2. Status naming the stage, port and
+// file for anything but a PNG or EXR file.
+Expected<Image> TextureImage8(const StageContext& ctx, std::string_view stage_id, std::string_view port,
+                              bool normal_map);
 
 // The input ports both export stages declare: mesh, and optional color and
 // normal maps.

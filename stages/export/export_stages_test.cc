@@ -3,7 +3,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iterator>
@@ -12,7 +15,9 @@
 
 #include "stages/builtin.h"
 #include "stages/export/export_io.h"
+#include "stages/export/ktx2_encode.h"
 #include "stages/geometry/io/gltf.h"
+#include "stages/geometry/io/ktx2.h"
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/io/obj.h"
 #include "stages/geometry/io/ply.h"
@@ -132,6 +137,119 @@ TEST_F(ExportStagesTest, GltfEmbedsTexturesAndComputesTangents) {
   ASSERT_EQ(model->mesh.tangents.size(), 4u * 121);
   EXPECT_NEAR(model->mesh.tangents[0], 1, 1e-6);
   EXPECT_EQ(model->mesh.tangents[3], 1.0f);
+}
+
+// Where export.gltf finds its KTX2 encoder (ktx2_encode.h); empty when the
+// npm packages are not installed (a visible skip locally, a failure in CI).
+bool Ktx2EncoderInstalled() {
+  if (!Ktx2EncoderVersion().empty()) return true;
+  if (std::getenv("CI")) ADD_FAILURE() << "CI: tools/node_modules/ktx2-encoder is not installed";
+  return false;
+}
+
+TEST_F(ExportStagesTest, GltfKtx2EmbedsBasisUniversalMapsAndDefaultIsUnchanged) {
+  if (!Ktx2EncoderInstalled()) GTEST_SKIP() << "npm ci --prefix tools";
+  const std::string mesh = WriteMesh(true);
+  const std::string color = WriteImage("color.png", Image::PixelType::kU8);
+  const std::string normal = WriteImage("normal.exr", Image::PixelType::kF32);
+  FakeContext png(dir_ / "png", nlohmann::json::object());
+  FakeContext ktx2(dir_ / "ktx2", {{"textures", "ktx2"}});
+  for (FakeContext* ctx : {&png, &ktx2}) {
+    ctx->AddInput("mesh", "mesh", mesh);
+    ctx->AddInput("color", "image", color);
+    ctx->AddInput("normal", "image", normal);
+    const Status status = Run("export.gltf", *ctx);
+    ASSERT_TRUE(status.ok()) << status.message();
+  }
+  // The default is the PNG model, its meta without the new keys.
+  EXPECT_FALSE(png.meta_["model"].contains("textures"));
+  EXPECT_FALSE(png.meta_["model"].contains("vertex_order"));
+  EXPECT_EQ(ktx2.meta_["model"]["textures"], "ktx2");
+  EXPECT_THAT(ktx2.meta_["model"]["ktx2_encoder"].get<std::string>(), HasSubstr("ktx2-encoder "));
+  EXPECT_TRUE(ktx2.phases_.count("encode"));
+
+  auto model = ReadGlb(ktx2.outputs_["model"]);
+  ASSERT_TRUE(model.ok()) << model.status().message();
+  EXPECT_TRUE(model->base_color_png.empty());
+  EXPECT_TRUE(model->normal_png.empty());
+  auto color_info = ReadKtx2Info(model->base_color_ktx2, "color");
+  auto normal_info = ReadKtx2Info(model->normal_ktx2, "normal");
+  ASSERT_TRUE(color_info.ok()) << color_info.status().message();
+  ASSERT_TRUE(normal_info.ok()) << normal_info.status().message();
+  EXPECT_EQ(color_info->codec, Ktx2Codec::kEtc1s);
+  EXPECT_TRUE(color_info->srgb);
+  EXPECT_EQ(normal_info->codec, Ktx2Codec::kUastc);
+  EXPECT_FALSE(normal_info->srgb);
+  EXPECT_EQ(color_info->width, 32);
+  EXPECT_EQ(color_info->height, 16);
+  EXPECT_EQ(color_info->levels, 6);  // 32x16 .. 1x1
+  // Same geometry as the PNG model.
+  auto png_model = ReadGlb(png.outputs_["model"]);
+  ASSERT_TRUE(png_model.ok());
+  EXPECT_EQ(model->mesh.positions, png_model->mesh.positions);
+  EXPECT_EQ(model->mesh.indices, png_model->mesh.indices);
+
+  // Deterministic: the same inputs give the same bytes (cache early cutoff).
+  FakeContext again(dir_ / "again", {{"textures", "ktx2"}});
+  again.AddInput("mesh", "mesh", mesh);
+  again.AddInput("color", "image", color);
+  again.AddInput("normal", "image", normal);
+  ASSERT_TRUE(Run("export.gltf", again).ok());
+  EXPECT_EQ(FileBytes(again.outputs_["model"]), FileBytes(ktx2.outputs_["model"]));
+
+  // For the Khronos validator (ctest gltf_validator.ktx2).
+  if (const char* out = std::getenv("PB_KTX2_SAMPLE")) {
+    std::filesystem::copy_file(ktx2.outputs_["model"], out,
+                               std::filesystem::copy_options::overwrite_existing);
+  }
+}
+
+TEST_F(ExportStagesTest, GltfKtx2WithoutEncoderNamesWhatToInstall) {
+  const char* previous = std::getenv("POINTBAKE_TOOLS_DIR");
+  const std::string saved = previous ? previous : "";
+  setenv("POINTBAKE_TOOLS_DIR", (dir_ / "no_tools").c_str(), 1);
+  FakeContext ctx(dir_ / "run", {{"textures", "ktx2"}});
+  ctx.AddInput("mesh", "mesh", WriteMesh(true));
+  ctx.AddInput("color", "image", WriteImage("color.png", Image::PixelType::kU8));
+  const Status status = Run("export.gltf", ctx);
+  if (previous) setenv("POINTBAKE_TOOLS_DIR", saved.c_str(), 1); else unsetenv("POINTBAKE_TOOLS_DIR");
+  EXPECT_EQ(status.code(), Status::Code::kNotFound);
+  EXPECT_THAT(status.message(), HasSubstr("export.gltf: the color map: KTX2 encoding needs"));
+  EXPECT_THAT(status.message(), HasSubstr("npm ci --prefix tools"));
+  EXPECT_FALSE(std::filesystem::exists(dir_ / "run" / "model" / "model.glb"));
+}
+
+TEST_F(ExportStagesTest, GltfOptimizedVertexOrderKeepsTheTriangles) {
+  FakeContext plain(dir_ / "plain", nlohmann::json::object());
+  FakeContext optimized(dir_ / "optimized", {{"vertex_order", "optimized"}});
+  const std::string mesh = WriteMesh(true);
+  for (FakeContext* ctx : {&plain, &optimized}) {
+    ctx->AddInput("mesh", "mesh", mesh);
+    ASSERT_TRUE(Run("export.gltf", *ctx).ok());
+  }
+  const nlohmann::json& order = optimized.meta_["model"]["vertex_order"];
+  EXPECT_LE(order["acmr_after"].get<double>(), order["acmr_before"].get<double>());
+  EXPECT_EQ(optimized.counters_["acmr"], order["acmr_after"].get<double>());
+  auto a = ReadGlb(plain.outputs_["model"]), b = ReadGlb(optimized.outputs_["model"]);
+  ASSERT_TRUE(a.ok() && b.ok());
+  // The same triangles as corner positions (rotated to start at the
+  // smallest), in any order.
+  auto triangles = [](const Mesh& m) {
+    std::multiset<std::array<std::array<float, 5>, 3>> out;
+    for (size_t f = 0; f < m.face_count(); ++f) {
+      std::array<std::array<float, 5>, 3> t;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = m.indices[3 * f + k];
+        t[k] = {m.positions[3 * v], m.positions[3 * v + 1], m.positions[3 * v + 2], m.uvs[2 * v],
+                m.uvs[2 * v + 1]};
+      }
+      std::rotate(t.begin(), std::min_element(t.begin(), t.end()), t.end());
+      out.insert(t);
+    }
+    return out;
+  };
+  EXPECT_EQ(triangles(a->mesh), triangles(b->mesh));
+  EXPECT_NE(a->mesh.indices, b->mesh.indices);  // the order did change
 }
 
 TEST_F(ExportStagesTest, GltfWithoutTexturesKeepsVertexColors) {

@@ -13,6 +13,8 @@
 #include <memory>
 #include <nlohmann/json.hpp>
 
+#include "stages/geometry/io/ktx2.h"
+
 namespace pb {
 namespace {
 
@@ -136,16 +138,26 @@ Status WriteGlb(const std::string& path, const Mesh& mesh, const GltfWriteOption
   const std::string context = "writing " + path;
   PB_RETURN_IF_ERROR(Validate(mesh).WithContext(context));
   if (mesh.face_count() == 0) return Status::Invalid(context + ": the mesh has no triangles");
-  const bool has_color_texture = !options.base_color_png.empty();
-  const bool has_normal_texture = !options.normal_png.empty();
+  const bool has_color_texture = !options.base_color_png.empty() || !options.base_color_ktx2.empty();
+  const bool has_normal_texture = !options.normal_png.empty() || !options.normal_ktx2.empty();
+  if ((!options.base_color_png.empty() && !options.base_color_ktx2.empty()) ||
+      (!options.normal_png.empty() && !options.normal_ktx2.empty())) {
+    return Status::Invalid(context + ": a map is given both as PNG and as KTX2");
+  }
   if ((has_color_texture || has_normal_texture) && !mesh.has_uvs()) {
     return Status::Invalid(context + ": textures need uvs, and the mesh has none (unwrap it first)");
   }
-  if (has_color_texture && !IsPng(options.base_color_png)) {
+  if (!options.base_color_png.empty() && !IsPng(options.base_color_png)) {
     return Status::Invalid(context + ": the base color texture is not a PNG");
   }
-  if (has_normal_texture && !IsPng(options.normal_png)) {
+  if (!options.normal_png.empty() && !IsPng(options.normal_png)) {
     return Status::Invalid(context + ": the normal texture is not a PNG");
+  }
+  if (!options.base_color_ktx2.empty() && !IsKtx2(options.base_color_ktx2)) {
+    return Status::Invalid(context + ": the base color texture is not a KTX2 file");
+  }
+  if (!options.normal_ktx2.empty() && !IsKtx2(options.normal_ktx2)) {
+    return Status::Invalid(context + ": the normal texture is not a KTX2 file");
   }
   const size_t n = mesh.vertex_count();
   // Normals are made unit length and tangents computed against the same
@@ -224,16 +236,32 @@ Status WriteGlb(const std::string& path, const Mesh& mesh, const GltfWriteOption
   nlohmann::json material = {{"name", options.name},
                              {"pbrMetallicRoughness", {{"metallicFactor", 0}, {"roughnessFactor", 1}}}};
   nlohmann::json images = nlohmann::json::array(), textures = nlohmann::json::array();
-  auto add_texture = [&](const std::vector<uint8_t>& png) {
+  bool basisu = false;
+  auto add_texture = [&](const std::vector<uint8_t>& png, const std::vector<uint8_t>& ktx2) {
+    if (!ktx2.empty()) {
+      const int view = bin.AddView(ktx2.data(), ktx2.size(), 0);
+      images.push_back({{"bufferView", view}, {"mimeType", "image/ktx2"}});
+      textures.push_back({{"sampler", 0},
+                          {"extensions", {{"KHR_texture_basisu", {{"source", images.size() - 1}}}}}});
+      basisu = true;
+      return static_cast<int>(textures.size() - 1);
+    }
     const int view = bin.AddView(png.data(), png.size(), 0);
     images.push_back({{"bufferView", view}, {"mimeType", "image/png"}});
     textures.push_back({{"sampler", 0}, {"source", images.size() - 1}});
     return static_cast<int>(textures.size() - 1);
   };
   if (has_color_texture) {
-    material["pbrMetallicRoughness"]["baseColorTexture"] = {{"index", add_texture(options.base_color_png)}};
+    material["pbrMetallicRoughness"]["baseColorTexture"] = {
+        {"index", add_texture(options.base_color_png, options.base_color_ktx2)}};
   }
-  if (has_normal_texture) material["normalTexture"] = {{"index", add_texture(options.normal_png)}};
+  if (has_normal_texture) {
+    material["normalTexture"] = {{"index", add_texture(options.normal_png, options.normal_ktx2)}};
+  }
+  if (basisu) {
+    gltf["extensionsUsed"] = {"KHR_texture_basisu"};
+    gltf["extensionsRequired"] = {"KHR_texture_basisu"};
+  }
   if (!textures.empty()) {
     gltf["images"] = images;
     gltf["textures"] = textures;
@@ -472,11 +500,11 @@ class GlbParser {
       const nlohmann::json& material = gltf_.at("materials").at(primitive["material"].get<size_t>());
       if (material.contains("pbrMetallicRoughness") &&
           material["pbrMetallicRoughness"].contains("baseColorTexture")) {
-        PB_ASSIGN_OR_RETURN(model.base_color_png,
-                            Image(material["pbrMetallicRoughness"]["baseColorTexture"]));
+        PB_RETURN_IF_ERROR(Texture(material["pbrMetallicRoughness"]["baseColorTexture"],
+                                   &model.base_color_png, &model.base_color_ktx2));
       }
       if (material.contains("normalTexture")) {
-        PB_ASSIGN_OR_RETURN(model.normal_png, Image(material["normalTexture"]));
+        PB_RETURN_IF_ERROR(Texture(material["normalTexture"], &model.normal_png, &model.normal_ktx2));
       }
     }
     return model;
@@ -541,13 +569,19 @@ class GlbParser {
     return out;
   }
 
-  Expected<std::vector<uint8_t>> Image(const nlohmann::json& texture_ref) {
+  // The image of a texture: its KHR_texture_basisu source into `ktx2` when
+  // it has one, else its source into `png`.
+  Status Texture(const nlohmann::json& texture_ref, std::vector<uint8_t>* png, std::vector<uint8_t>* ktx2) {
     const nlohmann::json& texture = gltf_.at("textures").at(texture_ref.at("index").get<size_t>());
-    const nlohmann::json& image = gltf_.at("images").at(texture.at("source").get<size_t>());
+    const bool basisu = texture.contains("extensions") && texture["extensions"].contains("KHR_texture_basisu");
+    const size_t source = basisu ? texture["extensions"]["KHR_texture_basisu"].at("source").get<size_t>()
+                                 : texture.at("source").get<size_t>();
+    const nlohmann::json& image = gltf_.at("images").at(source);
     if (!image.contains("bufferView")) return Corrupt("an image is not embedded in a bufferView");
     size_t length = 0;
     PB_ASSIGN_OR_RETURN(auto view, View(image["bufferView"].get<size_t>(), &length));
-    return std::vector<uint8_t>(view.first, view.first + length);
+    (basisu ? ktx2 : png)->assign(view.first, view.first + length);
+    return Status::Ok();
   }
 
   std::string path_;

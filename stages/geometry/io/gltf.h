@@ -41,6 +41,10 @@
 //          tangent-space, +Y up); each texture is an image in its own
 //          bufferView with mimeType image/png, sampler linear/mipmapped,
 //          clamp to edge. A mesh without textures gets the factors only.
+//          A map given as KTX2 (Basis Universal) instead is an image with
+//          mimeType image/ktx2 that its texture names through
+//          extensions.KHR_texture_basisu.source (no PNG fallback: the
+//          extension is in extensionsUsed and extensionsRequired).
 // The file is written durably (env->NewAtomicFile: a temporary, fsync,
 // rename): on failure `path` keeps what it held and no partial file is left.
 #pragma once
@@ -62,6 +66,10 @@ struct GltfWriteOptions {
   std::string name = "model";           // node, mesh and material name
   std::vector<uint8_t> base_color_png;   // PNG file bytes (sRGB); empty: none
   std::vector<uint8_t> normal_png;       // PNG file bytes (tangent space); empty: none
+  // KTX2 file bytes (KHR_texture_basisu) in place of the PNG of the same
+  // map; a map may be given one way only.
+  std::vector<uint8_t> base_color_ktx2;
+  std::vector<uint8_t> normal_ktx2;
   bool vertex_colors = true;             // COLOR_0 (see above)
   bool z_up_to_y_up = true;              // the root rotation node
 };
@@ -89,6 +97,8 @@ struct GlbModel {
   std::string generator;                // asset.generator
   std::vector<uint8_t> base_color_png;  // embedded image bytes, empty if none
   std::vector<uint8_t> normal_png;
+  std::vector<uint8_t> base_color_ktx2;  // KHR_texture_basisu images, empty if none
+  std::vector<uint8_t> normal_ktx2;
 };
 
 // Reads what WriteGlb writes (one mesh, one triangle primitive, the
