@@ -28,47 +28,6 @@ int Fail(const Status& status) {
   return 1;
 }
 
-// Each chart a flat color on white, `pixels` square.
-Image RenderAtlas(const Mesh& mesh, int pixels) {
-  Image image = Image::Make(pixels, pixels, 3, Image::PixelType::kU8);
-  std::fill(image.data.begin(), image.data.end(), uint8_t(255));
-  uint32_t charts = 0;
-  const std::vector<uint32_t> chart = ChartOfFaces(mesh, &charts);
-  for (size_t f = 0; f < mesh.face_count(); ++f) {
-    uint32_t h = chart[f] * 2654435761u;
-    h ^= h >> 15;
-    const uint8_t color[3] = {uint8_t(40 + (h & 0x9f)), uint8_t(40 + ((h >> 8) & 0x9f)),
-                              uint8_t(40 + ((h >> 16) & 0x9f))};
-    double x[3], y[3];
-    for (int k = 0; k < 3; ++k) {
-      x[k] = mesh.uvs[2 * size_t(mesh.indices[3 * f + k])] * pixels;
-      y[k] = (1.0 - mesh.uvs[2 * size_t(mesh.indices[3 * f + k]) + 1]) * pixels;  // v up
-    }
-    const int x0 = std::max(0, int(std::floor(std::min({x[0], x[1], x[2]}))));
-    const int x1 = std::min(pixels - 1, int(std::ceil(std::max({x[0], x[1], x[2]}))));
-    const int y0 = std::max(0, int(std::floor(std::min({y[0], y[1], y[2]}))));
-    const int y1 = std::min(pixels - 1, int(std::ceil(std::max({y[0], y[1], y[2]}))));
-    for (int py = y0; py <= y1; ++py) {
-      for (int px = x0; px <= x1; ++px) {
-        // Conservative: any pixel the triangle touches (tiny faces stay visible).
-        bool inside = false;
-        for (double oy : {0.0, 0.5, 1.0}) {
-          for (double ox : {0.0, 0.5, 1.0}) {
-            const double cx = px + ox, cy = py + oy;
-            const double d0 = (x[1] - x[0]) * (cy - y[0]) - (y[1] - y[0]) * (cx - x[0]);
-            const double d1 = (x[2] - x[1]) * (cy - y[1]) - (y[2] - y[1]) * (cx - x[1]);
-            const double d2 = (x[0] - x[2]) * (cy - y[2]) - (y[0] - y[2]) * (cx - x[2]);
-            inside |= (d0 <= 0 && d1 <= 0 && d2 <= 0) || (d0 >= 0 && d1 >= 0 && d2 >= 0);
-          }
-        }
-        if (!inside) continue;
-        for (int c = 0; c < 3; ++c) image.at_u8(px, py, c) = color[c];
-      }
-    }
-  }
-  return image;
-}
-
 }  // namespace
 }  // namespace pb
 
@@ -129,7 +88,7 @@ int main() {
                 r.min_border_gap_texels);
   }
   if (const char* png = std::getenv("PB_UV_PNG")) {
-    if (Status st = WritePng(png, RenderAtlas(*out, 1024)); !st.ok()) return Fail(st);
+    if (Status st = WritePng(png, DrawAtlas(*out, 1024)); !st.ok()) return Fail(st);
   }
   if (const char* ply_out = std::getenv("PB_UV_OUT")) {
     if (Status st = WritePlyMesh(ply_out, *out); !st.ok()) return Fail(st);

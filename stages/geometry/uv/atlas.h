@@ -57,6 +57,7 @@
 #include <functional>
 
 #include "base/status.h"
+#include "stages/geometry/core/image.h"
 #include "stages/geometry/core/mesh.h"
 
 namespace pb {
@@ -125,5 +126,10 @@ AtlasReport MeasureAtlas(const Mesh& mesh, int size_texels, const MeasureOptions
 // The chart of each face (0-based, numbered by first face), as MeasureAtlas
 // counts them: faces sharing a vertex are in one chart.
 std::vector<uint32_t> ChartOfFaces(const Mesh& mesh, uint32_t* chart_count);
+
+// A picture of the atlas for a look: each chart a flat color on white,
+// `pixels` square (v up); any pixel a face touches is painted, so tiny faces
+// stay visible.
+Image DrawAtlas(const Mesh& mesh, int pixels);
 
 }  // namespace pb

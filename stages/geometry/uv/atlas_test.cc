@@ -100,8 +100,6 @@ Mesh MakeBrickPanel() {
   return mesh;
 }
 
-Image RenderAtlas(const Mesh& mesh, int pixels);
-
 // A sphere of `radius` (an icosahedron subdivided `levels` times) with
 // radial bumps of relative height `bump`: curved everywhere, like a scanned
 // statue, with no plane to project on.
@@ -447,7 +445,7 @@ TEST(UvConformalTest, BumpySphereMeetsTheAtlasTargets) {
   ASSERT_TRUE(out.ok()) << out.status().message();
   ExpectValidAtlas(sphere, *out, options);
   if (const char* png = std::getenv("PB_UV_TEST_PNG")) {
-    ASSERT_TRUE(WritePng(png, RenderAtlas(*out, 1024)).ok());
+    ASSERT_TRUE(WritePng(png, DrawAtlas(*out, 1024)).ok());
   }
   EXPECT_LE(report.charts, sphere.face_count() / 25);
   EXPECT_GE(report.coverage, 0.70);
