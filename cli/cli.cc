@@ -485,7 +485,7 @@ int CliMain(int argc, char** argv, Registry& registry, const std::vector<CliComm
   // After the sub-commands: they would inherit it.
   app.footer(kHelpFooter);
 
-  // CLI11 takes an unknown first word for a stray argument: `pointbake serve
+  // CLI11 takes an unknown first word for a stray argument: `pointbake nosuch
   // --help` would print the main help and succeed. Say what is wrong instead.
   if (argc >= 2 && argv[1][0] != '-') {
     std::vector<std::string> names;

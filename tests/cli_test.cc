@@ -682,7 +682,7 @@ TEST_F(Cli, HelpNamesTheProgramEnvironmentExitCodesAndUnknownCommands) {
                                                                 << explain_help.out;
 
   for (const std::vector<std::string>& args :
-       {std::vector<std::string>{"serve", "--help"}, {"nosuchcmd"}, {"rnu", "x.yaml"}}) {
+       {std::vector<std::string>{"publish", "--help"}, {"nosuchcmd"}, {"rnu", "x.yaml"}}) {
     const RunResult r = pbtest::Run(args);
     EXPECT_EQ(r.exit_code, 2) << r.Describe();
     EXPECT_NE(r.err.find("pointbake: unknown command '" + args[0] + "'"), std::string::npos)
@@ -691,6 +691,10 @@ TEST_F(Cli, HelpNamesTheProgramEnvironmentExitCodesAndUnknownCommands) {
     EXPECT_TRUE(r.out.empty()) << r.Describe();
   }
   EXPECT_NE(pbtest::Run({"rnu"}).err.find("(did you mean 'run'?)"), std::string::npos);
+  // serve is a command (cli/serve_command.cc): its own help, exit 0.
+  const RunResult serve_help = pbtest::Run({"serve", "--help"});
+  EXPECT_EQ(serve_help.exit_code, 0) << serve_help.Describe();
+  EXPECT_NE(serve_help.out.find("Usage: pointbake serve [DIR]"), std::string::npos) << serve_help.Describe();
   // `help COMMAND` is `COMMAND --help`.
   const RunResult help_run = pbtest::Run({"help", "run"});
   EXPECT_EQ(help_run.exit_code, 0) << help_run.Describe();
