@@ -590,49 +590,5 @@ TEST(SynthOpenScene, ScansAreDeterministicForAnyThreadCount) {
   }
 }
 
-// Renders docs/images/synthetic-room-points.png: an oblique orthographic
-// cut-away view of a 10^6-point room scan, colored by the points' colors.
-// Run by hand:
-//   PB_SOURCE_DIR=/work/main build/stages/geometry/geometry_test
-//     --gtest_also_run_disabled_tests --gtest_filter='SynthScan.DISABLED_RenderRoomPng'
-TEST(SynthScan, DISABLED_RenderRoomPng) {
-  const char* source = std::getenv("PB_SOURCE_DIR");
-  if (!source) GTEST_SKIP() << "PB_SOURCE_DIR not set";
-  const SynthScene room = Preset("room");
-  const SynthScanResult result = Scan(room, 1000000);
-  const double azimuth = -2.2, elevation = 0.75;  // camera direction, radians
-  const Vec3 forward = {-std::cos(elevation) * std::cos(azimuth), -std::cos(elevation) * std::sin(azimuth),
-                        -std::sin(elevation)};
-  const Vec3 right = {-std::sin(azimuth), std::cos(azimuth), 0};
-  const Vec3 up = {right[1] * forward[2] - right[2] * forward[1], right[2] * forward[0] - right[0] * forward[2],
-                   right[0] * forward[1] - right[1] * forward[0]};
-  const int width = 600, height = 440;
-  const double scale = 72;  // pixels per meter
-  Image image = Image::Make(width, height, 3, Image::PixelType::kU8);
-  std::fill(image.data.begin(), image.data.end(), uint8_t{40});
-  std::vector<double> depth(size_t(width) * height, 1e9);
-  const PointCloud& cloud = result.cloud;
-  for (size_t i = 0; i < cloud.size(); ++i) {
-    const Vec3 p = PointAt(cloud, i);
-    const SurfaceSample truth = SampleSurface(room, p);
-    if (truth.surface == SynthSurface::kCeiling) continue;
-    // Cut away the walls between the camera and the room.
-    if (truth.surface == SynthSurface::kWall &&
-        truth.normal[0] * forward[0] + truth.normal[1] * forward[1] > 0) {
-      continue;
-    }
-    const double d = p[0] * forward[0] + p[1] * forward[1] + (p[2] - 1.6) * forward[2];
-    const int x = static_cast<int>(width / 2 + scale * (p[0] * right[0] + p[1] * right[1]));
-    const int y = static_cast<int>(height / 2 - scale * (p[0] * up[0] + p[1] * up[1] + (p[2] - 1.6) * up[2]));
-    if (x < 0 || y < 0 || x >= width || y >= height || d >= depth[size_t(y) * width + x]) continue;
-    depth[size_t(y) * width + x] = d;
-    // 5 bits per channel keep the PNG small (< 300 KB) for the docs.
-    for (int c = 0; c < 3; ++c) image.at_u8(x, y, c) = cloud.colors[3 * i + c] & 0xF8;
-  }
-  const std::filesystem::path dir = std::filesystem::path(source) / "docs" / "images";
-  std::filesystem::create_directories(dir);
-  ASSERT_TRUE(WritePng((dir / "synthetic-room-points.png").string(), image).ok());
-}
-
 }  // namespace
 }  // namespace pb
