@@ -213,22 +213,16 @@ JobResult LocalProcessExecutor::Run(const JobSpec& job, const ProgressFn& progre
   return result;
 }
 
-int RunStageSubcommand(const std::string& job_path, Registry& registry) {
-  Expected<std::string> text = Env::Default()->ReadFile(job_path);
-  if (!text.ok()) {
-    std::fprintf(stderr, "pointbake __stage: %s\n", text.status().message().c_str());
-    return 2;
-  }
-  nlohmann::json j = nlohmann::json::parse(*text, nullptr, false);
-  if (j.is_discarded()) {
-    std::fprintf(stderr, "pointbake __stage: %s: not JSON\n", job_path.c_str());
-    return 2;
-  }
-  JobSpec job;
-  JobResult result;
-  for (const auto& plugin : j.value("plugins", std::vector<std::string>{})) {
+Expected<LoadedJob> LoadJobFile(const std::string& job_path, Registry& registry) {
+  PB_ASSIGN_OR_RETURN(const std::string text, Env::Default()->ReadFile(job_path));
+  const nlohmann::json j = nlohmann::json::parse(text, nullptr, false);
+  if (j.is_discarded() || !j.is_object()) return Status::Invalid(job_path + ": not JSON");
+  LoadedJob loaded;
+  JobSpec& job = loaded.job;
+  job.plugins = j.value("plugins", std::vector<std::string>{});
+  for (const auto& plugin : job.plugins) {
     Status st = registry.LoadPlugin(plugin);
-    if (!st.ok()) result.status = st;
+    if (!st.ok()) loaded.status = st;
   }
   job.stage_id = j.value("stage_id", "");
   job.type = registry.Find(j.value("type", ""));
@@ -243,8 +237,20 @@ int RunStageSubcommand(const std::string& job_path, Registry& registry) {
     view.meta = in.value("meta", nlohmann::json::object());
     job.inputs[port] = std::move(view);
   }
-  if (result.status.ok() && !job.type)
-    result.status = Status::NotFound("unknown stage type '" + j.value("type", "") + "'");
+  if (loaded.status.ok() && !job.type)
+    loaded.status = Status::NotFound("unknown stage type '" + j.value("type", "") + "'");
+  return loaded;
+}
+
+int RunStageSubcommand(const std::string& job_path, Registry& registry) {
+  Expected<LoadedJob> loaded = LoadJobFile(job_path, registry);
+  if (!loaded.ok()) {
+    std::fprintf(stderr, "pointbake __stage: %s\n", loaded.status().message().c_str());
+    return 2;
+  }
+  const JobSpec& job = loaded->job;
+  JobResult result;
+  result.status = loaded->status;
   if (result.status.ok()) {
     // Progress to fd 3, at most every 100 ms or 1 %.
     const char* fd_text = std::getenv("PB_PROGRESS_FD");

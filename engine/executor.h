@@ -72,6 +72,16 @@ class InProcessExecutor : public Executor {
   JobResult Run(const JobSpec& job, const ProgressFn& progress) override;
 };
 
+// A job file (JobSpec::ToJson) read back, with its plugins loaded into
+// `registry`: `status` says why the job cannot run (a plugin that does not
+// load, an unknown stage type); an unreadable or non-JSON file is an error.
+// Shared by `pointbake __stage` and `pointbake __job` (Slurm).
+struct LoadedJob {
+  JobSpec job;
+  Status status;
+};
+Expected<LoadedJob> LoadJobFile(const std::string& job_path, Registry& registry);
+
 // Body of the hidden `pointbake __stage JOB.json` sub-command: runs the job
 // with `registry`, writes <staging>/_result.json, returns the exit status.
 int RunStageSubcommand(const std::string& job_path, Registry& registry);

@@ -399,42 +399,18 @@ JobResult SlurmExecutor::RunAttempt(const JobSpec& job, int attempt, bool* kille
 }
 
 int RunSlurmJobSubcommand(const std::string& job_path, Registry& registry) {
-  Expected<std::string> text = Env::Default()->ReadFile(job_path);
-  if (!text.ok()) {
-    std::fprintf(stderr, "pointbake __job: %s\n", text.status().message().c_str());
+  Expected<LoadedJob> loaded = LoadJobFile(job_path, registry);
+  if (!loaded.ok()) {
+    std::fprintf(stderr, "pointbake __job: %s\n", loaded.status().message().c_str());
     return 2;
   }
-  nlohmann::json j = nlohmann::json::parse(*text, nullptr, false);
-  if (j.is_discarded() || !j.is_object()) {
-    std::fprintf(stderr, "pointbake __job: %s: not JSON\n", job_path.c_str());
-    return 2;
-  }
-  JobSpec job;
+  JobSpec& job = loaded->job;
   JobResult result;
-  for (const auto& plugin : j.value("plugins", std::vector<std::string>{})) {
-    Status st = registry.LoadPlugin(plugin);
-    if (!st.ok()) result.status = st;
-  }
-  job.stage_id = j.value("stage_id", "");
-  job.type = registry.Find(j.value("type", ""));
-  job.params = j.value("params", nlohmann::json::object());
-  job.staging_dir = j.value("staging_dir", "");
-  job.plugins = j.value("plugins", std::vector<std::string>{});
-  job.threads = j.value("threads", 0);
-  const nlohmann::json inputs = j.value("inputs", nlohmann::json::object());
-  for (const auto& [port, in] : inputs.items()) {
-    ArtifactView view;
-    view.type = in.value("type", "");
-    view.files = in.value("files", std::map<std::string, std::string>{});
-    view.meta = in.value("meta", nlohmann::json::object());
-    job.inputs[port] = std::move(view);
-  }
+  result.status = loaded->status;
   if (job.staging_dir.empty()) {
     std::fprintf(stderr, "pointbake __job: %s: no staging_dir\n", job_path.c_str());
     return 2;
   }
-  if (result.status.ok() && !job.type)
-    result.status = Status::NotFound("unknown stage type '" + j.value("type", "") + "'");
   if (result.status.ok()) {
     // The stage runs as our child, measured exactly as by the local executor.
     job.log_path = JoinPath(job.staging_dir, "_log.txt");
