@@ -41,6 +41,44 @@ constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
 }  // namespace
 
+FlatChart ChartSkeleton(const Mesh& mesh, std::vector<uint32_t> faces) {
+  FlatChart chart;
+  chart.faces = std::move(faces);
+  chart.vertices.reserve(3 * chart.faces.size());
+  for (uint32_t f : chart.faces) {
+    for (int k = 0; k < 3; ++k) chart.vertices.push_back(mesh.indices[3 * size_t(f) + k]);
+  }
+  std::sort(chart.vertices.begin(), chart.vertices.end());
+  chart.vertices.erase(std::unique(chart.vertices.begin(), chart.vertices.end()),
+                       chart.vertices.end());
+  chart.corners.resize(3 * chart.faces.size());
+  for (size_t i = 0; i < chart.faces.size(); ++i) {
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t v = mesh.indices[3 * size_t(chart.faces[i]) + k];
+      chart.corners[3 * i + k] =
+          uint32_t(std::lower_bound(chart.vertices.begin(), chart.vertices.end(), v) -
+                   chart.vertices.begin());
+    }
+  }
+  return chart;
+}
+
+void PlaneBasis(const V3& normal, V3* t1, V3* t2) {
+  const int least = std::fabs(normal[0]) <= std::fabs(normal[1])
+                        ? (std::fabs(normal[0]) <= std::fabs(normal[2]) ? 0 : 2)
+                        : (std::fabs(normal[1]) <= std::fabs(normal[2]) ? 1 : 2);
+  V3 helper{0, 0, 0};
+  helper[least] = 1;
+  const V3 c = Cross(helper, normal);
+  const double n = Norm(c);
+  *t1 = n > 0 ? V3{c[0] / n, c[1] / n, c[2] / n} : V3{0, 0, 0};
+  *t2 = Cross(normal, *t1);
+}
+
+double SignedArea(const std::array<double, 6>& t) {
+  return 0.5 * ((t[2] - t[0]) * (t[5] - t[1]) - (t[4] - t[0]) * (t[3] - t[1]));
+}
+
 Topology BuildTopology(const Mesh& mesh) {
   const size_t faces = mesh.face_count(), vertices = mesh.vertex_count();
   Topology topo;
@@ -147,44 +185,18 @@ Tri2 ChartTriangle(const FlatChart& chart, size_t i) {
   return t;
 }
 
-double SignedArea(const Tri2& t) {
-  return 0.5 * ((t[2] - t[0]) * (t[5] - t[1]) - (t[4] - t[0]) * (t[3] - t[1]));
-}
-
 // Projects `faces` on the plane of their mean normal (right-handed basis, so
 // front faces stay counter-clockwise).
 FlatChart Project(const Mesh& mesh, const Topology& topo, std::vector<uint32_t> faces) {
-  FlatChart chart;
-  chart.faces = std::move(faces);
   V3 sum{0, 0, 0};
-  for (uint32_t f : chart.faces) {
+  for (uint32_t f : faces) {
     const V3& n = topo.area_normal[f];
     sum = {sum[0] + n[0], sum[1] + n[1], sum[2] + n[2]};
   }
   const V3 normal = Normalized(sum);
-  const int least = std::fabs(normal[0]) <= std::fabs(normal[1])
-                        ? (std::fabs(normal[0]) <= std::fabs(normal[2]) ? 0 : 2)
-                        : (std::fabs(normal[1]) <= std::fabs(normal[2]) ? 1 : 2);
-  V3 helper{0, 0, 0};
-  helper[least] = 1;
-  const V3 t1 = Normalized(Cross(helper, normal));
-  const V3 t2 = Cross(normal, t1);
-  chart.vertices.reserve(3 * chart.faces.size());
-  for (uint32_t f : chart.faces) {
-    for (int k = 0; k < 3; ++k) chart.vertices.push_back(mesh.indices[3 * size_t(f) + k]);
-  }
-  std::sort(chart.vertices.begin(), chart.vertices.end());
-  chart.vertices.erase(std::unique(chart.vertices.begin(), chart.vertices.end()),
-                       chart.vertices.end());
-  chart.corners.resize(3 * chart.faces.size());
-  for (size_t i = 0; i < chart.faces.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = mesh.indices[3 * size_t(chart.faces[i]) + k];
-      chart.corners[3 * i + k] =
-          uint32_t(std::lower_bound(chart.vertices.begin(), chart.vertices.end(), v) -
-                   chart.vertices.begin());
-    }
-  }
+  V3 t1, t2;
+  PlaneBasis(normal, &t1, &t2);
+  FlatChart chart = ChartSkeleton(mesh, std::move(faces));
   chart.uv_m.resize(2 * chart.vertices.size());
   for (size_t i = 0; i < chart.vertices.size(); ++i) {
     const V3 p = Position(mesh, chart.vertices[i]);

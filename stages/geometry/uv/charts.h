@@ -35,6 +35,20 @@ struct Topology {
 };
 Topology BuildTopology(const Mesh& mesh);
 
+// A chart of `faces` (increasing) with its vertices (increasing) and
+// corners; uv_m unset. Shared by both chart makers.
+FlatChart ChartSkeleton(const Mesh& mesh, std::vector<uint32_t> faces);
+
+// An orthonormal basis (t1, t2) of the plane with unit normal `normal`,
+// right-handed (t1 x t2 = normal), so front faces projected on it stay
+// counter-clockwise.
+void PlaneBasis(const std::array<double, 3>& normal, std::array<double, 3>* t1,
+                std::array<double, 3>* t2);
+
+// The signed area of a 2-D triangle {x0 y0 x1 y1 x2 y2},
+// positive when counter-clockwise.
+double SignedArea(const std::array<double, 6>& t);
+
 // Rotates a flattened chart (uv_m, any placement) to its minimal-area
 // bounding rectangle, landscape, min corner at the origin; sets width_m and
 // height_m. Rotations only: no chart is mirrored.

@@ -286,43 +286,11 @@ Tri2 ChartTriangle(const FlatChart& chart, size_t i) {
   return t;
 }
 
-double SignedArea(const Tri2& t) {
-  return 0.5 * ((t[2] - t[0]) * (t[5] - t[1]) - (t[4] - t[0]) * (t[3] - t[1]));
-}
-
-// The chart's vertices (increasing) and corners, uv_m unset.
-FlatChart ChartSkeleton(const Mesh& mesh, std::vector<uint32_t> faces) {
-  FlatChart chart;
-  chart.faces = std::move(faces);
-  chart.vertices.reserve(3 * chart.faces.size());
-  for (uint32_t f : chart.faces) {
-    for (int k = 0; k < 3; ++k) chart.vertices.push_back(mesh.indices[3 * size_t(f) + k]);
-  }
-  std::sort(chart.vertices.begin(), chart.vertices.end());
-  chart.vertices.erase(std::unique(chart.vertices.begin(), chart.vertices.end()),
-                       chart.vertices.end());
-  chart.corners.resize(3 * chart.faces.size());
-  for (size_t i = 0; i < chart.faces.size(); ++i) {
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t v = mesh.indices[3 * size_t(chart.faces[i]) + k];
-      chart.corners[3 * i + k] =
-          uint32_t(std::lower_bound(chart.vertices.begin(), chart.vertices.end(), v) -
-                   chart.vertices.begin());
-    }
-  }
-  return chart;
-}
-
 // Projects the chart on the plane through its first vertex with unit
 // normal `normal` (right-handed basis: front faces stay counter-clockwise).
 void ProjectOnPlane(const Mesh& mesh, const V3& normal, FlatChart* chart) {
-  const int least = std::fabs(normal[0]) <= std::fabs(normal[1])
-                        ? (std::fabs(normal[0]) <= std::fabs(normal[2]) ? 0 : 2)
-                        : (std::fabs(normal[1]) <= std::fabs(normal[2]) ? 1 : 2);
-  V3 helper{0, 0, 0};
-  helper[least] = 1;
-  const V3 t1 = Normalized(Cross(helper, normal));
-  const V3 t2 = Cross(normal, t1);
+  V3 t1, t2;
+  PlaneBasis(normal, &t1, &t2);
   const V3 origin = Position(mesh, chart->vertices.front());
   chart->uv_m.assign(2 * chart->vertices.size(), 0.0);
   for (size_t i = 0; i < chart->vertices.size(); ++i) {
