@@ -109,16 +109,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
                            lighting + "'");
   if (!(options.render.ambient >= 0) || !(options.render.diffuse >= 0))
     return Status::Invalid(std::string(kId) + ": 'ambient' and 'diffuse' must be >= 0");
-  if (ctx.params().contains("background")) {
-    const nlohmann::json& bg = ctx.params()["background"];
-    if (!bg.is_array() || bg.size() != 3)
-      return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
-    for (size_t c = 0; c < 3; ++c) {
-      if (!bg[c].is_number_integer() || bg[c].get<int64_t>() < 0 || bg[c].get<int64_t>() > 255)
-        return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
-      options.render.background[c] = uint8_t(bg[c].get<int64_t>());
-    }
-  }
+  PB_RETURN_IF_ERROR(ReadBackground(ctx, kId, &options.render.background));
   options.size = int(size);
   options.render.supersample = int(supersample);
   options.truth_supersample = int(truth_supersample);
@@ -210,12 +201,7 @@ Status Run(StageContext& ctx) {
       ctx.progress(0.1 + 0.8 * double(i + 1) / double(views.size()));
     }
   }
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WriteFrames(frames, [&ctx](const std::string& file) {
-      return ctx.output_path("frames", file);
-    }));
-  }
+  PB_RETURN_IF_ERROR(WriteFramesOutput(ctx, frames));
   const char* source = has_mesh ? "mesh" : scene ? "truth_analytic" : "truth_mesh";
   const double pixels = double(views.size()) * options.size * options.size;
   nlohmann::json meta = ctx.input(has_mesh ? "mesh" : "truth").meta;

@@ -115,16 +115,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   if (!(options.splat.depth_tolerance >= 0))
     return Status::Invalid(std::string(kId) + ": 'depth_tolerance' must be >= 0");
   if (!(options.splat.max_radius_px > 0)) return Status::Invalid(std::string(kId) + ": 'max_radius_px' must be > 0");
-  if (ctx.params().contains("background")) {
-    const nlohmann::json& bg = ctx.params()["background"];
-    if (!bg.is_array() || bg.size() != 3)
-      return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
-    for (size_t c = 0; c < 3; ++c) {
-      if (!bg[c].is_number_integer() || bg[c].get<int64_t>() < 0 || bg[c].get<int64_t>() > 255)
-        return Status::Invalid(std::string(kId) + ": 'background' must be 3 integers in [0, 255]");
-      options.splat.background[c] = uint8_t(bg[c].get<int64_t>());
-    }
-  }
+  PB_RETURN_IF_ERROR(ReadBackground(ctx, kId, &options.splat.background));
   options.size = int(size);
   options.splat.supersample = int(supersample);
   options.k = int(k);
@@ -181,12 +172,7 @@ Status Run(StageContext& ctx) {
       ctx.progress(0.35 + 0.55 * double(i + 1) / double(views.size()));
     }
   }
-  {
-    PB_PHASE(ctx, "io");
-    PB_RETURN_IF_ERROR(WriteFrames(frames, [&ctx](const std::string& file) {
-      return ctx.output_path("frames", file);
-    }));
-  }
+  PB_RETURN_IF_ERROR(WriteFramesOutput(ctx, frames));
   std::vector<float> sorted = radius;
   std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
   const double median_radius_m = sorted[sorted.size() / 2];

@@ -99,4 +99,22 @@ Expected<std::vector<View>> ReadViewpoints(const StageContext& ctx, std::string_
 }
 
 
+Status ReadBackground(const StageContext& ctx, std::string_view stage_id, std::array<uint8_t, 3>* rgb) {
+  if (!ctx.params().contains("background")) return Status::Ok();
+  const nlohmann::json& bg = ctx.params()["background"];
+  const Status bad =
+      Status::Invalid(std::string(stage_id) + ": 'background' must be 3 integers in [0, 255]");
+  if (!bg.is_array() || bg.size() != 3) return bad;
+  for (size_t c = 0; c < 3; ++c) {
+    if (!bg[c].is_number_integer() || bg[c].get<int64_t>() < 0 || bg[c].get<int64_t>() > 255) return bad;
+  }
+  for (size_t c = 0; c < 3; ++c) (*rgb)[c] = uint8_t(bg[c].get<int64_t>());
+  return Status::Ok();
+}
+
+Status WriteFramesOutput(StageContext& ctx, const FrameSet& frames) {
+  PB_PHASE(ctx, "io");
+  return WriteFrames(frames, [&ctx](const std::string& file) { return ctx.output_path("frames", file); });
+}
+
 }  // namespace pb

@@ -4,6 +4,8 @@
 // cameras.
 #pragma once
 
+#include <array>
+#include <cstdint>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -52,5 +54,13 @@ std::string DepthFileName(const std::string& png_file);
 // Reads parameter `viewpoints` of the stage `stage_id` (errors name it and
 // the item: "render.frames: viewpoints[1].eye: must be finite").
 Expected<std::vector<View>> ReadViewpoints(const StageContext& ctx, std::string_view stage_id, int size);
+
+// Reads the optional parameter `background` (3 integers in [0, 255]) into
+// `rgb`, which keeps its value when the parameter is absent.
+Status ReadBackground(const StageContext& ctx, std::string_view stage_id, std::array<uint8_t, 3>* rgb);
+
+// Writes `frames` as the stage's output port "frames" (frames.json, PNGs and
+// depth maps, one durable set).
+Status WriteFramesOutput(StageContext& ctx, const FrameSet& frames);
 
 }  // namespace pb
