@@ -264,48 +264,32 @@ nlohmann::json ToJson(const SynthScene& s) {
                         {"width_m", o.width_m},
                         {"height_m", o.height_m}});
   }
+  nlohmann::json j = {{"format", "pointbake synthetic scene"},
+                      {"version", kSynthSceneVersion},
+                      {"preset", s.preset},
+                      {"seed", s.seed},
+                      {"shape", ShapeName(s.shape)},
+                      {"size_m", {s.width_m, s.depth_m, s.height_m}},
+                      {"brick",
+                       {{"length_m", s.brick.length_m},
+                        {"height_m", s.brick.height_m},
+                        {"joint_m", s.brick.joint_m},
+                        {"joint_depth_m", s.brick.joint_depth_m},
+                        {"bevel_m", s.brick.bevel_m}}},
+                      {"floor",
+                       {{"stone_length_m", s.floor.stone_length_m},
+                        {"stone_width_m", s.floor.stone_width_m},
+                        {"joint_m", s.floor.joint_m},
+                        {"joint_depth_m", s.floor.joint_depth_m},
+                        {"unevenness_m", s.floor.unevenness_m},
+                        {"stone_offset_m", s.floor.stone_offset_m}}}};
+  // An open scene carries its elements, a room its openings.
   if (s.objects) {
-    return {{"format", "pointbake synthetic scene"},
-            {"version", kSynthSceneVersion},
-            {"preset", s.preset},
-            {"seed", s.seed},
-            {"shape", ShapeName(s.shape)},
-            {"size_m", {s.width_m, s.depth_m, s.height_m}},
-            {"brick",
-             {{"length_m", s.brick.length_m},
-              {"height_m", s.brick.height_m},
-              {"joint_m", s.brick.joint_m},
-              {"joint_depth_m", s.brick.joint_depth_m},
-              {"bevel_m", s.brick.bevel_m}}},
-            {"floor",
-             {{"stone_length_m", s.floor.stone_length_m},
-              {"stone_width_m", s.floor.stone_width_m},
-              {"joint_m", s.floor.joint_m},
-              {"joint_depth_m", s.floor.joint_depth_m},
-              {"unevenness_m", s.floor.unevenness_m},
-              {"stone_offset_m", s.floor.stone_offset_m}}},
-            {"objects", ObjectsToJson(*s.objects)}};
+    j["objects"] = ObjectsToJson(*s.objects);
+  } else {
+    j["openings"] = openings;
   }
-  return {{"format", "pointbake synthetic scene"},
-          {"version", kSynthSceneVersion},
-          {"preset", s.preset},
-          {"seed", s.seed},
-          {"shape", ShapeName(s.shape)},
-          {"size_m", {s.width_m, s.depth_m, s.height_m}},
-          {"brick",
-           {{"length_m", s.brick.length_m},
-            {"height_m", s.brick.height_m},
-            {"joint_m", s.brick.joint_m},
-            {"joint_depth_m", s.brick.joint_depth_m},
-            {"bevel_m", s.brick.bevel_m}}},
-          {"floor",
-           {{"stone_length_m", s.floor.stone_length_m},
-            {"stone_width_m", s.floor.stone_width_m},
-            {"joint_m", s.floor.joint_m},
-            {"joint_depth_m", s.floor.joint_depth_m},
-            {"unevenness_m", s.floor.unevenness_m},
-            {"stone_offset_m", s.floor.stone_offset_m}}},
-          {"openings", openings}};
+  return j;
 }
 
 Expected<SynthScene> SynthSceneFromJson(const nlohmann::json& j) {
