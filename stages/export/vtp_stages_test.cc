@@ -121,8 +121,15 @@ TEST_F(VtpStagesTest, GeometryErrorMapsOpenInVtkAndAgreeWithThePly) {
   PointCloud scan;
   for (int j = 0; j <= 100; ++j)
     for (int i = 0; i <= 30; ++i) scan.positions.insert(scan.positions.end(), {i * 0.01f, j * 0.01f, 0.0f});
+  // uvs and tangents stay out of the maps (CloudCompare drops the scalar
+  // fields of a PLY with tangents).
+  Mesh square = Square();
+  for (size_t v = 0; v < square.vertex_count(); ++v) {
+    square.uvs.insert(square.uvs.end(), {square.positions[3 * v], square.positions[3 * v + 1]});
+    square.tangents.insert(square.tangents.end(), {1, 0, 0, 1});
+  }
   FakeContext ctx(dir_, {{"samples", 20000}, {"k", 4}});
-  ctx.AddInput("mesh", "mesh", WriteInputMesh("square", Square()));
+  ctx.AddInput("mesh", "mesh", WriteInputMesh("square", square));
   ctx.AddInput("truth", "mesh", WriteInputMesh("truth", truth));
   ctx.AddInput("points", "points", WriteInputPoints("scan", scan));
   const Status status = Run("metrics.geometry", ctx);
@@ -150,14 +157,17 @@ TEST_F(VtpStagesTest, GeometryErrorMapsOpenInVtkAndAgreeWithThePly) {
   }
   EXPECT_EQ(ctx.counters_.at("invented_vertices"), 6 * 11);
 
+  EXPECT_EQ(pd->GetArray("Tangents"), nullptr);
+  EXPECT_EQ(pd->GetTCoords(), nullptr);
   const auto ply = PlyFloatProperties(ctx.files_.at("errors/errors.ply"));
+  EXPECT_EQ(ply.count("tx") + ply.count("s"), 0u);
   ASSERT_EQ(ply.count("quality"), 1u);
   ASSERT_EQ(ply.at("quality").size(), 121u);
   for (vtkIdType v = 0; v < 121; ++v) {
     EXPECT_EQ(ply.at("quality")[v], float(to_truth->GetComponent(v, 0)));
-    EXPECT_EQ(ply.at("distance_to_truth_m")[v], float(to_truth->GetComponent(v, 0)));
-    EXPECT_EQ(ply.at("distance_to_scan_m")[v], float(to_scan->GetComponent(v, 0)));
-    EXPECT_EQ(ply.at("invented")[v], float(invented->GetComponent(v, 0)));
+    EXPECT_EQ(ply.at("scalar_distance_to_truth_m")[v], float(to_truth->GetComponent(v, 0)));
+    EXPECT_EQ(ply.at("scalar_distance_to_scan_m")[v], float(to_scan->GetComponent(v, 0)));
+    EXPECT_EQ(ply.at("scalar_invented")[v], float(invented->GetComponent(v, 0)));
   }
   EXPECT_EQ(ctx.meta_.at("errors").at("quality"), "distance_to_truth_m");
 }

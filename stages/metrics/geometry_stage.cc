@@ -82,9 +82,20 @@ struct ErrorFields {
 };
 
 // Output `errors`: errors.vtp (every field; active scalars the first) and
-// errors.ply (the same fields as float properties, `quality` a copy of the
-// first: MeshLab shows one quality per vertex).
-Status WriteErrorMaps(StageContext& ctx, const Mesh& mesh, const ErrorFields& fields) {
+// errors.ply: `quality`, a copy of the first field (MeshLab keeps one
+// quality per vertex), then every field as `scalar_NAME`, the prefix
+// CloudCompare loads as a scalar field NAME without asking (checked with
+// CloudCompare 2.11.3: unprefixed extra properties are not loaded). Both
+// files hold the mesh's positions, normals and colors, not its uvs and
+// tangents: a map is looked at, not textured, and CloudCompare 2.11.3 drops
+// every scalar field of a PLY with tangent properties (checked).
+Status WriteErrorMaps(StageContext& ctx, const Mesh& evaluated, const ErrorFields& fields) {
+  Mesh mesh;
+  mesh.origin = evaluated.origin;
+  mesh.positions = evaluated.positions;
+  mesh.normals = evaluated.normals;
+  mesh.colors = evaluated.colors;
+  mesh.indices = evaluated.indices;
   std::vector<float> invented_float(fields.invented.begin(), fields.invented.end());
   VtpWriteOptions vtp;
   std::vector<PlyVertexScalar> ply;
@@ -102,7 +113,7 @@ Status WriteErrorMaps(StageContext& ctx, const Mesh& mesh, const ErrorFields& fi
   vtp.field_data.push_back({"units", "meters (distances); invented: 1 = no scan point explains the vertex"});
   ply.push_back({"quality", first.float32});
   for (const VtpPointArray& a : vtp.point_arrays)
-    ply.push_back({a.name, a.float32.empty() ? std::span<const float>(invented_float) : a.float32});
+    ply.push_back({"scalar_" + a.name, a.float32.empty() ? std::span<const float>(invented_float) : a.float32});
   const std::string vtp_path = ctx.output_path("errors", "errors.vtp");
   const std::string ply_path = ctx.output_path("errors", "errors.ply");
   if (Status s = WriteVtp(vtp_path, mesh, vtp); !s.ok()) return s.WithContext(kId);
@@ -261,11 +272,11 @@ StageType GeometryMetricsStage() {
       "nearest scan point.\n\n"
       "Output `errors`: the same comparisons at the mesh's vertices, as error maps to look at "
       "(docs/metrics.md, \"Error maps\"): errors.vtp (VTK XML PolyData for ParaView: absolute "
-      "double coordinates, the mesh's own attributes, and per-vertex arrays `distance_to_truth_m` "
+      "double coordinates, the mesh's normals and colors, and per-vertex arrays `distance_to_truth_m` "
       "with `truth`, `distance_to_scan_m` (to the nearest scan point) and `invented` (1 where the "
-      "invented-area rule fires at the vertex) with `points`) and errors.ply (the mesh with the "
-      "same arrays as float vertex properties, and `quality` = the first of them, which MeshLab "
-      "colors by; CloudCompare shows each property as a scalar field).\n\n"
+      "invented-area rule fires at the vertex) with `points`) and errors.ply (the mesh with "
+      "`quality` = the first of those arrays, which MeshLab colors by, and each array as a float "
+      "vertex property `scalar_NAME`, which CloudCompare loads as scalar field NAME).\n\n"
       "Counters: `mesh_faces`, `samples`, `boundary_edges_per_1000_faces`; with truth `truth_faces`, "
       "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `invented_area_fraction`, "
       "`missing_fraction`, `invented_vertices`. Phases: `io`, `compute` (truth), `scan` (points).";
