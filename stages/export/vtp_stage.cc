@@ -54,7 +54,8 @@ StageType VtpExportStage() {
   StageType type;
   type.id = kId;
   type.version = 1;
-  type.summary = "Export a mesh and its color and normal maps as VTK XML PolyData (.vtp) + PNG, for ParaView";
+  type.summary =
+      "Export a mesh and its color and normal maps as VTK XML PolyData (.vtp) + PNG, for ParaView";
   type.doc =
       "Writes model.vtp (stages/geometry/io/vtp.h: absolute coordinates in double precision, "
       "triangles, and the mesh's per-vertex attributes: `Normals` and `TCoords` (uvs, v up) as "

@@ -94,7 +94,8 @@ std::map<std::string, std::vector<float>> PlyFloatProperties(const std::string& 
 Mesh Square() {
   Mesh mesh;
   for (int j = 0; j <= 10; ++j)
-    for (int i = 0; i <= 10; ++i) mesh.positions.insert(mesh.positions.end(), {i / 10.0f, j / 10.0f, 0.0f});
+    for (int i = 0; i <= 10; ++i)
+      mesh.positions.insert(mesh.positions.end(), {i / 10.0f, j / 10.0f, 0.0f});
   for (uint32_t j = 0; j < 10; ++j)
     for (uint32_t i = 0; i < 10; ++i) {
       const uint32_t a = j * 11 + i;
@@ -120,7 +121,8 @@ TEST_F(VtpStagesTest, GeometryErrorMapsOpenInVtkAndAgreeWithThePly) {
   for (size_t v = 0; v < truth.vertex_count(); ++v) truth.positions[3 * v + 2] = 0.02f;
   PointCloud scan;
   for (int j = 0; j <= 100; ++j)
-    for (int i = 0; i <= 30; ++i) scan.positions.insert(scan.positions.end(), {i * 0.01f, j * 0.01f, 0.0f});
+    for (int i = 0; i <= 30; ++i)
+      scan.positions.insert(scan.positions.end(), {i * 0.01f, j * 0.01f, 0.0f});
   // uvs and tangents stay out of the maps (CloudCompare drops the scalar
   // fields of a PLY with tangents).
   Mesh square = Square();
@@ -176,7 +178,8 @@ TEST_F(VtpStagesTest, GeometryErrorMapsOpenInVtkAndAgreeWithThePly) {
 TEST_F(VtpStagesTest, GeometryErrorMapsWithTheScanOnly) {
   PointCloud scan;
   for (int j = 0; j <= 100; ++j)
-    for (int i = 0; i <= 100; ++i) scan.positions.insert(scan.positions.end(), {i * 0.01f, j * 0.01f, 0.03f});
+    for (int i = 0; i <= 100; ++i)
+      scan.positions.insert(scan.positions.end(), {i * 0.01f, j * 0.01f, 0.03f});
   FakeContext ctx(dir_, {{"samples", 5000}});
   ctx.AddInput("mesh", "mesh", WriteInputMesh("square", Square()));
   ctx.AddInput("points", "points", WriteInputPoints("scan", scan));
@@ -198,9 +201,11 @@ TEST_F(VtpStagesTest, ExportVtpWritesTheMeshItsAttributesAndItsMaps) {
     mesh.normals.insert(mesh.normals.end(), {0, 0, 1});
     mesh.colors.insert(mesh.colors.end(), {uint8_t(v), 9, 200});
   }
-  Image color = Image::Make(8, 4, 3, Image::PixelType::kU8), normal = Image::Make(4, 4, 3, Image::PixelType::kU8);
+  Image color = Image::Make(8, 4, 3, Image::PixelType::kU8),
+        normal = Image::Make(4, 4, 3, Image::PixelType::kU8);
   for (int c = 0; c < 3; ++c) normal.at_u8(1, 1, c) = 128;
-  const std::string color_path = (dir_ / "color_in.png").string(), normal_path = (dir_ / "normal_in.png").string();
+  const std::string color_path = (dir_ / "color_in.png").string(),
+                    normal_path = (dir_ / "normal_in.png").string();
   ASSERT_TRUE(WriteImage(color_path, color).ok());
   ASSERT_TRUE(WriteImage(normal_path, normal).ok());
   FakeContext ctx(dir_, nlohmann::json::object());
@@ -227,9 +232,10 @@ TEST_F(VtpStagesTest, ExportVtpWritesTheMeshItsAttributesAndItsMaps) {
   EXPECT_EQ(FileBytes(ctx.files_.at("model/color.png")), FileBytes(color_path));
   EXPECT_EQ(FileBytes(ctx.files_.at("model/normal.png")), FileBytes(normal_path));
   EXPECT_EQ(ctx.meta_.at("model").at("format"), "vtp");
-  EXPECT_EQ(ctx.counters_.at("bytes"), double(std::filesystem::file_size(ctx.files_.at("model/model.vtp")) +
-                                               std::filesystem::file_size(color_path) +
-                                               std::filesystem::file_size(normal_path)));
+  EXPECT_EQ(
+      ctx.counters_.at("bytes"),
+      double(std::filesystem::file_size(ctx.files_.at("model/model.vtp")) +
+             std::filesystem::file_size(color_path) + std::filesystem::file_size(normal_path)));
 
   // Maps need uvs.
   mesh.uvs.clear();

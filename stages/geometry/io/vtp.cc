@@ -19,20 +19,30 @@ namespace {
 struct Block {
   std::string element;  // the XML line, without offset
   uint64_t bytes = 0;   // values only, without the count
-  std::function<void(std::string&, size_t first, size_t count)> append;  // values [first, first+count) of `units`
-  size_t units = 0;        // what `append` counts: vertices or faces
-  size_t unit_bytes = 0;   // bytes per unit
+  std::function<void(std::string&, size_t first, size_t count)>
+      append;             // values [first, first+count) of `units`
+  size_t units = 0;       // what `append` counts: vertices or faces
+  size_t unit_bytes = 0;  // bytes per unit
 };
 
 std::string XmlEscaped(std::string_view text) {
   std::string out;
   for (char c : text) {
     switch (c) {
-      case '&': out += "&amp;"; break;
-      case '<': out += "&lt;"; break;
-      case '>': out += "&gt;"; break;
-      case '"': out += "&quot;"; break;
-      default: out += c;
+      case '&':
+        out += "&amp;";
+        break;
+      case '<':
+        out += "&lt;";
+        break;
+      case '>':
+        out += "&gt;";
+        break;
+      case '"':
+        out += "&quot;";
+        break;
+      default:
+        out += c;
     }
   }
   return out;
@@ -78,14 +88,17 @@ Status CheckArrays(const Mesh& mesh, const VtpWriteOptions& options) {
   const size_t n = mesh.vertex_count();
   for (const VtpPointArray& a : options.point_arrays) {
     if (a.name.empty()) return Status::Invalid("a point array has no name");
-    if (!names.insert(a.name).second) return Status::Invalid("two point arrays are named '" + a.name + "'");
-    if (a.components < 1) return Status::Invalid("point array '" + a.name + "': components must be >= 1");
+    if (!names.insert(a.name).second)
+      return Status::Invalid("two point arrays are named '" + a.name + "'");
+    if (a.components < 1)
+      return Status::Invalid("point array '" + a.name + "': components must be >= 1");
     if (a.float32.empty() == a.uint8.empty() && n > 0)
       return Status::Invalid("point array '" + a.name + "': set exactly one of float32 and uint8");
     const size_t size = a.float32.empty() ? a.uint8.size() : a.float32.size();
     if (size != size_t(a.components) * n)
-      return Status::Invalid("point array '" + a.name + "': " + std::to_string(size) + " values for " +
-                             std::to_string(n) + " vertices x " + std::to_string(a.components) + " components");
+      return Status::Invalid("point array '" + a.name + "': " + std::to_string(size) +
+                             " values for " + std::to_string(n) + " vertices x " +
+                             std::to_string(a.components) + " components");
   }
   if (!options.active_scalars.empty() && names.count(options.active_scalars) == 0)
     return Status::Invalid("active_scalars '" + options.active_scalars + "' names no point array");
@@ -97,7 +110,8 @@ Status CheckArrays(const Mesh& mesh, const VtpWriteOptions& options) {
 
 // A point array of `components` values of T per vertex.
 template <typename T>
-Block PointBlock(std::string_view type, std::string_view name, int components, std::span<const T> values) {
+Block PointBlock(std::string_view type, std::string_view name, int components,
+                 std::span<const T> values) {
   Block block;
   block.element = DataArrayLine(type, name, components);
   block.units = values.size() / size_t(components);
@@ -111,20 +125,24 @@ Block PointBlock(std::string_view type, std::string_view name, int components, s
 
 }  // namespace
 
-Status WriteVtp(const std::string& path, const Mesh& mesh, const VtpWriteOptions& options, uint64_t* bytes,
-                Env* env) {
+Status WriteVtp(const std::string& path, const Mesh& mesh, const VtpWriteOptions& options,
+                uint64_t* bytes, Env* env) {
   PB_RETURN_IF_ERROR(Validate(mesh).WithContext("writing " + path));
   if (Status s = CheckArrays(mesh, options); !s.ok()) return s.WithContext("writing " + path);
   const size_t n = mesh.vertex_count(), faces = mesh.face_count();
 
   std::vector<Block> point_data;
-  if (mesh.has_normals()) point_data.push_back(PointBlock<float>("Float32", "Normals", 3, mesh.normals));
+  if (mesh.has_normals())
+    point_data.push_back(PointBlock<float>("Float32", "Normals", 3, mesh.normals));
   if (mesh.has_uvs()) point_data.push_back(PointBlock<float>("Float32", "TCoords", 2, mesh.uvs));
-  if (mesh.has_colors()) point_data.push_back(PointBlock<uint8_t>("UInt8", "Colors", 3, mesh.colors));
-  if (mesh.has_tangents()) point_data.push_back(PointBlock<float>("Float32", "Tangents", 4, mesh.tangents));
+  if (mesh.has_colors())
+    point_data.push_back(PointBlock<uint8_t>("UInt8", "Colors", 3, mesh.colors));
+  if (mesh.has_tangents())
+    point_data.push_back(PointBlock<float>("Float32", "Tangents", 4, mesh.tangents));
   for (const VtpPointArray& a : options.point_arrays) {
-    point_data.push_back(a.float32.empty() ? PointBlock<uint8_t>("UInt8", a.name, a.components, a.uint8)
-                                           : PointBlock<float>("Float32", a.name, a.components, a.float32));
+    point_data.push_back(a.float32.empty()
+                             ? PointBlock<uint8_t>("UInt8", a.name, a.components, a.uint8)
+                             : PointBlock<float>("Float32", a.name, a.components, a.float32));
   }
   Block points;
   points.element = DataArrayLine("Float64", "Points", 3);
@@ -141,7 +159,8 @@ Status WriteVtp(const std::string& path, const Mesh& mesh, const VtpWriteOptions
   connectivity.unit_bytes = 3 * sizeof(int64_t);
   connectivity.bytes = uint64_t{faces} * connectivity.unit_bytes;
   connectivity.append = [&mesh](std::string& out, size_t first, size_t count) {
-    for (size_t i = first * 3; i < (first + count) * 3; ++i) AppendLittleEndian(out, int64_t{mesh.indices[i]});
+    for (size_t i = first * 3; i < (first + count) * 3; ++i)
+      AppendLittleEndian(out, int64_t{mesh.indices[i]});
   };
   Block offsets;
   offsets.element = DataArrayLine("Int64", "offsets", 1);
@@ -170,7 +189,8 @@ Status WriteVtp(const std::string& path, const Mesh& mesh, const VtpWriteOptions
   xml += "    <Piece NumberOfPoints=\"" + std::to_string(n) +
          "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" +
          std::to_string(faces) + "\">\n      <PointData";
-  if (!options.active_scalars.empty()) xml += " Scalars=\"" + XmlEscaped(options.active_scalars) + "\"";
+  if (!options.active_scalars.empty())
+    xml += " Scalars=\"" + XmlEscaped(options.active_scalars) + "\"";
   if (mesh.has_normals()) xml += " Normals=\"Normals\"";
   if (mesh.has_uvs()) xml += " TCoords=\"TCoords\"";
   xml += ">\n";
@@ -186,7 +206,8 @@ Status WriteVtp(const std::string& path, const Mesh& mesh, const VtpWriteOptions
   std::vector<std::unique_ptr<AtomicFile>> companions;
   for (const VtpCompanionFile& c : options.companions) {
     PB_ASSIGN_OR_RETURN(std::unique_ptr<AtomicFile> file, env->NewAtomicFile(c.path));
-    PB_RETURN_IF_ERROR(file->Append({reinterpret_cast<const char*>(c.bytes.data()), c.bytes.size()}));
+    PB_RETURN_IF_ERROR(
+        file->Append({reinterpret_cast<const char*>(c.bytes.data()), c.bytes.size()}));
     PB_RETURN_IF_ERROR(file->Sync());
     companions.push_back(std::move(file));
   }

@@ -64,7 +64,8 @@ Mesh Grid(int n) {
   mesh.origin = {456789.125, 5432109.5, 312.75};
   for (int j = 0; j <= n; ++j) {
     for (int i = 0; i <= n; ++i) {
-      mesh.positions.insert(mesh.positions.end(), {float(i) / n, float(j) / n, 0.001f * float(i * j)});
+      mesh.positions.insert(mesh.positions.end(),
+                            {float(i) / n, float(j) / n, 0.001f * float(i * j)});
       mesh.normals.insert(mesh.normals.end(), {0.f, 0.f, 1.f});
       mesh.uvs.insert(mesh.uvs.end(), {float(i) / n, 1.f - float(j) / n});
       mesh.colors.insert(mesh.colors.end(), {uint8_t(i * 255 / n), uint8_t(j * 255 / n), 7});
@@ -117,7 +118,8 @@ TEST_F(VtpTest, VtkReadsPointsCellsAndEveryArray) {
   for (size_t v = 0; v < n; ++v) {
     double p[3];
     poly->GetPoint(vtkIdType(v), p);
-    for (int k = 0; k < 3; ++k) ASSERT_EQ(p[k], mesh.origin[k] + double(mesh.positions[3 * v + k])) << v;
+    for (int k = 0; k < 3; ++k)
+      ASSERT_EQ(p[k], mesh.origin[k] + double(mesh.positions[3 * v + k])) << v;
   }
   vtkNew<vtkIdList> ids;
   vtkCellArray* polys = poly->GetPolys();
@@ -148,8 +150,10 @@ TEST_F(VtpTest, VtkReadsPointsCellsAndEveryArray) {
       ASSERT_EQ(pd->GetNormals()->GetComponent(vtkIdType(v), k), mesh.normals[3 * v + k]);
       ASSERT_EQ(colors->GetComponent(vtkIdType(v), k), mesh.colors[3 * v + k]);
     }
-    for (int k = 0; k < 2; ++k) ASSERT_EQ(pd->GetTCoords()->GetComponent(vtkIdType(v), k), mesh.uvs[2 * v + k]);
-    for (int k = 0; k < 4; ++k) ASSERT_EQ(tangents->GetComponent(vtkIdType(v), k), mesh.tangents[4 * v + k]);
+    for (int k = 0; k < 2; ++k)
+      ASSERT_EQ(pd->GetTCoords()->GetComponent(vtkIdType(v), k), mesh.uvs[2 * v + k]);
+    for (int k = 0; k < 4; ++k)
+      ASSERT_EQ(tangents->GetComponent(vtkIdType(v), k), mesh.tangents[4 * v + k]);
     ASSERT_EQ(pd->GetScalars()->GetComponent(vtkIdType(v), 0), distance[v]) << v;
     ASSERT_EQ(invented->GetComponent(vtkIdType(v), 0), flag[v]) << v;
   }
@@ -207,10 +211,12 @@ TEST_F(VtpTest, RefusesArraysThatDoNotFit) {
     o.active_scalars = std::move(active);
     return error(o);
   };
-  EXPECT_NE(message({{"d", 1, eight, {}}}).find("'d': 8 values for 9 vertices x 1 components"), std::string::npos)
+  EXPECT_NE(message({{"d", 1, eight, {}}}).find("'d': 8 values for 9 vertices x 1 components"),
+            std::string::npos)
       << message({{"d", 1, eight, {}}});
   EXPECT_NE(message({{"d", 1, nine, nine_bytes}}).find("exactly one of"), std::string::npos);
-  EXPECT_NE(message({{"d", 1, nine, {}}, {"d", 1, {}, nine_bytes}}).find("two point arrays are named 'd'"),
+  EXPECT_NE(message({{"d", 1, nine, {}}, {"d", 1, {}, nine_bytes}})
+                .find("two point arrays are named 'd'"),
             std::string::npos);
   EXPECT_NE(message({{"Normals", 1, nine, {}}}).find("named 'Normals'"), std::string::npos);
   EXPECT_NE(message({{"d", 1, nine, {}}}, "e").find("active_scalars 'e'"), std::string::npos);
@@ -221,7 +227,8 @@ TEST_F(VtpTest, RefusesArraysThatDoNotFit) {
 // The .vtp and its textures are one durable set: a failure at any of them
 // keeps the earlier set whole.
 TEST_F(VtpTest, FailedWritesKeepTheEarlierFiles) {
-  const std::vector<uint8_t> png_a = {0x89, 'P', 'N', 'G', 1, 2, 3}, png_b = {0x89, 'P', 'N', 'G', 4, 5};
+  const std::vector<uint8_t> png_a = {0x89, 'P', 'N', 'G', 1, 2, 3},
+                             png_b = {0x89, 'P', 'N', 'G', 4, 5};
   const auto options = [&](const std::vector<uint8_t>& color, const std::vector<uint8_t>& normal) {
     VtpWriteOptions o;
     o.companions = {{Path("color.png"), color}, {Path("normal.png"), normal}};
@@ -230,7 +237,10 @@ TEST_F(VtpTest, FailedWritesKeepTheEarlierFiles) {
   };
   ASSERT_TRUE(WriteVtp(Path("model.vtp"), Grid(2), options(png_a, png_b)).ok());
   EXPECT_EQ(testing::ExpectFailedWritesKeepEarlierFiles(
-                dir_, [&](Env* env) { return WriteVtp(Path("model.vtp"), Grid(3), options(png_b, png_a), nullptr, env); }),
+                dir_,
+                [&](Env* env) {
+                  return WriteVtp(Path("model.vtp"), Grid(3), options(png_b, png_a), nullptr, env);
+                }),
             3);
 }
 
