@@ -35,8 +35,10 @@
 //   property float NAME                 <- optional (meshes), per-vertex
 //                                          scalars (WritePlyMeshWithScalars),
 //                                          e.g. `quality`, MeshLab's vertex
-//                                          quality; CloudCompare shows each
-//                                          as a scalar field. The reader
+//                                          quality; CloudCompare 2.11 loads
+//                                          `scalar_X` as scalar field X (not
+//                                          other names, and none when the
+//                                          file has tangents). The reader
 //                                          skips them, so the version stays.
 //   element face M                      <- meshes only
 //   property list uchar uint vertex_indices
