@@ -29,7 +29,8 @@ namespace pb {
 //   image  -> image.png (8/16-bit) or image.exr (float)
 //   frames -> frames.json + one PNG per viewpoint (stages/geometry/io/frames.h)
 //   table  -> table.json
-//   model  -> an exported model: model.glb, or model.obj + model.mtl + PNGs
+//   model  -> an exported model: model.glb, model.obj + model.mtl + PNGs, or
+//             model.vtp + PNGs; error maps (errors.vtp + errors.ply)
 //   any    -> accepted by inputs that take every type (tests, exports)
 inline constexpr const char* kArtifactTypes[] = {"points", "mesh",  "image", "frames",
                                                  "table",  "model", "any"};

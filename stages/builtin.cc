@@ -13,6 +13,7 @@ constexpr StageType (*kBuiltinStages[])() = {
     TrimStage,
     DecimateStage,     CleanStage,        UnwrapStage,           VertexColorsBakeStage,
     FromMeshBakeStage, FromPointsBakeStage, GltfExportStage,     ObjExportStage,
+    VtpExportStage,
     FramesStage,       SplatsStage,       GeometryMetricsStage, ImageMetricsStage,
     FpsStage,
 };

@@ -47,6 +47,8 @@ StageType FromPointsBakeStage();
 // export.gltf (model.glb) and export.obj (model.obj + .mtl + maps).
 StageType GltfExportStage();
 StageType ObjExportStage();
+// export.vtp (model.vtp + maps, VTK XML PolyData for ParaView).
+StageType VtpExportStage();
 
 // render.frames: the deterministic CPU reference renderer (docs/render.md).
 StageType FramesStage();

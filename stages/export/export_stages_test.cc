@@ -86,7 +86,7 @@ class ExportStagesTest : public StageTest {
 };
 
 TEST_F(ExportStagesTest, StagesAreWellFormed) {
-  for (const char* id : {"export.gltf", "export.obj"}) {
+  for (const char* id : {"export.gltf", "export.obj", "export.vtp"}) {
     const StageType* type = registry_.Find(id);
     ASSERT_NE(type, nullptr) << id;
     CheckedSchema(*type, /*defaults=*/true);
@@ -317,7 +317,7 @@ TEST_F(ExportStagesTest, MapThatIsNotAPngIsAClearError) {
 }
 
 TEST_F(ExportStagesTest, TextureWithoutUvsIsAClearError) {
-  for (const char* id : {"export.gltf", "export.obj"}) {
+  for (const char* id : {"export.gltf", "export.obj", "export.vtp"}) {
     FakeContext ctx(dir_ / id, nlohmann::json::object());
     ctx.AddInput("mesh", "mesh", WriteMesh(false));
     ctx.AddInput("normal", "image", WriteImage("normal.png", Image::PixelType::kU8));

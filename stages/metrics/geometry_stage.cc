@@ -1,5 +1,7 @@
 // metrics.geometry: distance between a mesh and the ground truth, sampled both
-// ways (stages/geometry/mesh/distance.h), written as a table.
+// ways (stages/geometry/mesh/distance.h), written as a table; the same
+// comparisons at the mesh's vertices written as error maps (errors.vtp for
+// ParaView, errors.ply with a `quality` property for MeshLab/CloudCompare).
 #include "stages/builtin.h"
 
 #include <tbb/task_arena.h>
@@ -12,6 +14,7 @@
 #include "stages/geometry/points/spacing.h"
 #include "stages/points_io.h"
 #include "stages/geometry/io/ply.h"
+#include "stages/geometry/io/vtp.h"
 #include "stages/geometry/synth/scene.h"
 #include "stages/geometry/core/table.h"
 #include "stages/params.h"
@@ -70,6 +73,61 @@ std::vector<TableValue> Row(const char* direction, const DistanceStats& s, const
           std::string(method), beyond_fraction, boundary_edges_per_1000_faces};
 }
 
+// The comparisons at the mesh's vertices (empty: not measured).
+struct ErrorFields {
+  std::vector<float> distance_to_truth_m;
+  std::string truth;  // "analytic" or "mesh"
+  std::vector<float> distance_to_scan_m;
+  std::vector<uint8_t> invented;
+};
+
+// Output `errors`: errors.vtp (every field; active scalars the first) and
+// errors.ply: `quality`, a copy of the first field (MeshLab keeps one
+// quality per vertex), then every field as `scalar_NAME`, the prefix
+// CloudCompare loads as a scalar field NAME without asking (checked with
+// CloudCompare 2.11.3: unprefixed extra properties are not loaded). Both
+// files hold the mesh's positions, normals and colors, not its uvs and
+// tangents: a map is looked at, not textured, and CloudCompare 2.11.3 drops
+// every scalar field of a PLY with tangent properties (checked).
+Status WriteErrorMaps(StageContext& ctx, const Mesh& evaluated, const ErrorFields& fields) {
+  Mesh mesh;
+  mesh.origin = evaluated.origin;
+  mesh.positions = evaluated.positions;
+  mesh.normals = evaluated.normals;
+  mesh.colors = evaluated.colors;
+  mesh.indices = evaluated.indices;
+  std::vector<float> invented_float(fields.invented.begin(), fields.invented.end());
+  VtpWriteOptions vtp;
+  std::vector<PlyVertexScalar> ply;
+  if (!fields.distance_to_truth_m.empty()) {
+    vtp.point_arrays.push_back({"distance_to_truth_m", 1, fields.distance_to_truth_m, {}});
+    vtp.field_data.push_back({"truth", fields.truth});
+  }
+  if (!fields.distance_to_scan_m.empty()) {
+    vtp.point_arrays.push_back({"distance_to_scan_m", 1, fields.distance_to_scan_m, {}});
+    vtp.point_arrays.push_back({"invented", 1, {}, fields.invented});
+  }
+  const VtpPointArray& first = vtp.point_arrays.front();
+  vtp.active_scalars = first.name;
+  vtp.field_data.push_back({"quality", first.name});
+  vtp.field_data.push_back({"units", "meters (distances); invented: 1 = no scan point explains the vertex"});
+  ply.push_back({"quality", first.float32});
+  for (const VtpPointArray& a : vtp.point_arrays)
+    ply.push_back({"scalar_" + a.name, a.float32.empty() ? std::span<const float>(invented_float) : a.float32});
+  const std::string vtp_path = ctx.output_path("errors", "errors.vtp");
+  const std::string ply_path = ctx.output_path("errors", "errors.ply");
+  if (Status s = WriteVtp(vtp_path, mesh, vtp); !s.ok()) return s.WithContext(kId);
+  if (Status s = WritePlyMeshWithScalars(ply_path, mesh, ply); !s.ok()) return s.WithContext(kId);
+  ctx.set_output_meta("errors", {{"kind", "error_maps"},
+                                 {"quality", first.name},
+                                 {"arrays", [&] {
+                                    nlohmann::json names = nlohmann::json::array();
+                                    for (const VtpPointArray& a : vtp.point_arrays) names.push_back(a.name);
+                                    return names;
+                                  }()}});
+  return Status::Ok();
+}
+
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t samples, IntegerParam(ctx, kId, "samples", {1}));
   PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", {0}));
@@ -81,6 +139,7 @@ Status Run(StageContext& ctx) {
     return Status::Invalid(std::string(kId) + ": connect 'truth' (ground truth) or 'points' (the scan), or both");
   Mesh mesh, truth;
   std::optional<SynthScene> scene;
+  ErrorFields fields;
   std::optional<InputPoints> scan;
   {
     PB_PHASE(ctx, "io");
@@ -120,6 +179,11 @@ Status Run(StageContext& ctx) {
     table.rows.push_back(Row("mesh_to_truth", result.mesh_to_truth, forward_method, {}, boundary_per_kface));
     table.rows.push_back(Row("truth_to_mesh", result.truth_to_mesh, "mesh", {}, boundary_per_kface));
     table.rows.push_back(Row("symmetric", result.symmetric, forward_method, {}, boundary_per_kface));
+    Expected<std::vector<float>> at_vertices = Status::Internal("not run");
+    arena.execute([&] { at_vertices = VertexDistanceToTruth(mesh, truth, scene ? &*scene : nullptr); });
+    if (!at_vertices.ok()) return at_vertices.status().WithContext(kId);
+    fields.distance_to_truth_m = std::move(*at_vertices);
+    fields.truth = forward_method;
     ctx.counter("truth_faces", static_cast<double>(truth.face_count()));
     ctx.counter("mean_m", result.symmetric.mean_m);
     ctx.counter("hausdorff_m", result.symmetric.max_m);
@@ -128,6 +192,7 @@ Status Run(StageContext& ctx) {
   if (has_points) {
     PB_PHASE(ctx, "scan");
     Expected<ScanAgreement> agreement = Status::Internal("not run");
+    Expected<VertexScanAgreement> at_vertices = Status::Internal("not run");
     arena.execute([&] {
       Expected<std::vector<float>> spacing = LocalSpacing(scan->cloud, int(k));
       if (!spacing.ok()) {
@@ -139,9 +204,16 @@ Status Run(StageContext& ctx) {
       options.samples = static_cast<size_t>(samples);
       options.seed = static_cast<uint64_t>(seed);
       agreement = MeasureScanAgreement(mesh, scan->cloud, *spacing, options);
+      if (agreement.ok()) at_vertices = MeasureVertexScanAgreement(mesh, scan->cloud, *spacing, options);
     });
     if (!agreement.ok())
       return agreement.status().WithContext(std::string(kId) + ": input 'points' (" + scan->path + ")");
+    if (!at_vertices.ok())
+      return at_vertices.status().WithContext(std::string(kId) + ": input 'points' (" + scan->path + ")");
+    fields.distance_to_scan_m = std::move(at_vertices->distance_to_scan_m);
+    fields.invented = std::move(at_vertices->invented);
+    ctx.counter("invented_vertices",
+                static_cast<double>(std::count(fields.invented.begin(), fields.invented.end(), uint8_t{1})));
     table.rows.push_back(Row("mesh_to_scan", agreement->mesh_to_scan, "scan", agreement->invented_area_fraction,
                              boundary_per_kface));
     table.rows.push_back(Row("scan_to_mesh", agreement->scan_to_mesh, "scan", agreement->missing_fraction,
@@ -158,6 +230,7 @@ Status Run(StageContext& ctx) {
   {
     PB_PHASE(ctx, "io");
     PB_RETURN_IF_ERROR(WriteTable(ctx.output_path("table", "table.json"), table));
+    PB_RETURN_IF_ERROR(WriteErrorMaps(ctx, mesh, fields));
   }
   ctx.set_output_meta("table", std::move(meta));
   ctx.progress(1.0);
@@ -169,7 +242,7 @@ Status Run(StageContext& ctx) {
 StageType GeometryMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;
+  type.version = 3;
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
@@ -197,9 +270,16 @@ StageType GeometryMetricsStage() {
       "The symmetric row has the larger Hausdorff distance, the mean of the two means, and RMS / "
       "95th percentile over both directions' samples pooled. mesh_to_scan distances go to the "
       "nearest scan point.\n\n"
+      "Output `errors`: the same comparisons at the mesh's vertices, as error maps to look at "
+      "(docs/metrics.md, \"Error maps\"): errors.vtp (VTK XML PolyData for ParaView: absolute "
+      "double coordinates, the mesh's normals and colors, and per-vertex arrays `distance_to_truth_m` "
+      "with `truth`, `distance_to_scan_m` (to the nearest scan point) and `invented` (1 where the "
+      "invented-area rule fires at the vertex) with `points`) and errors.ply (the mesh with "
+      "`quality` = the first of those arrays, which MeshLab colors by, and each array as a float "
+      "vertex property `scalar_NAME`, which CloudCompare loads as scalar field NAME).\n\n"
       "Counters: `mesh_faces`, `samples`, `boundary_edges_per_1000_faces`; with truth `truth_faces`, "
       "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `invented_area_fraction`, "
-      "`missing_fraction`. Phases: `io`, `compute` (truth), `scan` (points).";
+      "`missing_fraction`, `invented_vertices`. Phases: `io`, `compute` (truth), `scan` (points).";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to evaluate (mesh.ply).", false},
                  {"truth", "mesh",
@@ -208,7 +288,11 @@ StageType GeometryMetricsStage() {
                   true},
                  {"points", "points", "The scan the mesh was built from (points.ply), for the truth-free figures.",
                   true}};
-  type.outputs = {{"table", "table", "Distance statistics and fractions, one row per direction.", false}};
+  type.outputs = {{"table", "table", "Distance statistics and fractions, one row per direction.", false},
+                  {"errors", "model",
+                   "Per-vertex error maps: errors.vtp (ParaView) and errors.ply with `quality` (MeshLab, "
+                   "CloudCompare).",
+                   false}};
   type.run = &Run;
   return type;
 }

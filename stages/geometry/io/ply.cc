@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <bit>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -11,6 +12,7 @@
 #include <limits>
 #include <memory>
 #include <optional>
+#include <set>
 #include <span>
 #include <type_traits>
 #include <string_view>
@@ -1077,6 +1079,7 @@ struct PlyArrays {
   std::span<const uint16_t> station_ids;
   std::span<const std::array<double, 3>> stations;
   std::span<const uint32_t> indices;
+  std::span<const PlyVertexScalar> scalars;
   bool has_normals() const { return !normals.empty(); }
   bool has_colors() const { return !colors.empty(); }
   bool has_uvs() const { return !uvs.empty(); }
@@ -1105,6 +1108,7 @@ Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh, En
   }
   if (!mesh.intensities.empty()) header += "property float intensity\n";
   if (!mesh.station_ids.empty()) header += "property ushort station\n";
+  for (const PlyVertexScalar& scalar : mesh.scalars) header += "property float " + scalar.name + "\n";
   if (is_mesh) {
     header += "element face " + std::to_string(mesh.face_count()) + "\n";
     header += "property list uchar uint vertex_indices\n";
@@ -1128,6 +1132,7 @@ Status WritePly(const std::string& path, const PlyArrays& mesh, bool is_mesh, En
     }
     if (!mesh.intensities.empty()) out.AppendLittleEndian(mesh.intensities[i]);
     if (!mesh.station_ids.empty()) out.AppendLittleEndian(mesh.station_ids[i]);
+    for (const PlyVertexScalar& scalar : mesh.scalars) out.AppendLittleEndian(scalar.values[i]);
     PB_RETURN_IF_ERROR(out.MaybeFlush());
   }
   if (is_mesh) {
@@ -1179,8 +1184,28 @@ Status WritePlyPoints(const std::string& path, const PointCloud& cloud, Env* env
 }
 
 Status WritePlyMesh(const std::string& path, const Mesh& mesh, Env* env) {
+  return WritePlyMeshWithScalars(path, mesh, {}, env);
+}
+
+Status WritePlyMeshWithScalars(const std::string& path, const Mesh& mesh, std::span<const PlyVertexScalar> scalars,
+                               Env* env) {
   PB_RETURN_IF_ERROR(Validate(mesh).WithContext("writing " + path));
+  std::set<std::string> names = {"x", "y", "z", "nx", "ny", "nz", "red", "green", "blue", "s", "t",
+                                 "tx", "ty", "tz", "tw", "intensity", "station"};
+  for (const PlyVertexScalar& scalar : scalars) {
+    const bool identifier = !scalar.name.empty() && std::all_of(scalar.name.begin(), scalar.name.end(), [](char c) {
+      return std::isalnum(static_cast<unsigned char>(c)) || c == '_';
+    });
+    if (!identifier || !names.insert(scalar.name).second)
+      return Status::Invalid("writing " + path + ": vertex property name '" + scalar.name +
+                             "' is not a new identifier (letters, digits, '_')");
+    if (scalar.values.size() != mesh.vertex_count())
+      return Status::Invalid("writing " + path + ": vertex property '" + scalar.name + "' has " +
+                             std::to_string(scalar.values.size()) + " values for " +
+                             std::to_string(mesh.vertex_count()) + " vertices");
+  }
   PlyArrays arrays;
+  arrays.scalars = scalars;
   arrays.origin = mesh.origin;
   arrays.positions = mesh.positions;
   arrays.normals = mesh.normals;

@@ -32,6 +32,14 @@
 //   property float intensity            <- optional (points), [0, 1]
 //   property ushort station             <- optional (points), index of the
 //                                          station that saw the point
+//   property float NAME                 <- optional (meshes), per-vertex
+//                                          scalars (WritePlyMeshWithScalars),
+//                                          e.g. `quality`, MeshLab's vertex
+//                                          quality; CloudCompare 2.11 loads
+//                                          `scalar_X` as scalar field X (not
+//                                          other names, and none when the
+//                                          file has tangents). The reader
+//                                          skips them, so the version stays.
 //   element face M                      <- meshes only
 //   property list uchar uint vertex_indices
 //   end_header
@@ -60,6 +68,7 @@
 
 #include <cstdint>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -115,5 +124,16 @@ Expected<PlyMesh> ReadPlyMesh(const std::string& path, const PlyReadOptions& opt
 // count.
 Status WritePlyPoints(const std::string& path, const PointCloud& cloud, Env* env = Env::Default());
 Status WritePlyMesh(const std::string& path, const Mesh& mesh, Env* env = Env::Default());
+
+// One float per vertex, written as `property float NAME` after the mesh's
+// attributes. NAME: letters, digits and '_', not a name the layout above uses.
+struct PlyVertexScalar {
+  std::string name;
+  std::span<const float> values;
+};
+// WritePlyMesh plus `scalars` in order. Status::Invalid for a bad or
+// repeated name or a size other than the vertex count.
+Status WritePlyMeshWithScalars(const std::string& path, const Mesh& mesh, std::span<const PlyVertexScalar> scalars,
+                               Env* env = Env::Default());
 
 }  // namespace pb

@@ -14,6 +14,7 @@
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <limits>
 #include <string>
 #include <vector>
@@ -114,6 +115,48 @@ TEST_F(PlyTest, MeshRoundTripWithAllAttributes) {
   ASSERT_TRUE(points.ok()) << points.status().message();
   EXPECT_EQ(points->points.size(), 4u);
   EXPECT_EQ(points->points.colors, mesh.colors);
+}
+
+// Per-vertex scalars (MeshLab's `quality`): declared after the mesh's
+// attributes, one float each at the end of every vertex record; our reader
+// skips them and reads the mesh as without.
+TEST_F(PlyTest, MeshWithVertexScalars) {
+  Mesh mesh;
+  mesh.origin = {1.0, -2.0, 1e6};
+  mesh.positions = {0, 0, 0, 1, 0, 0, 1, 1, 0};
+  mesh.colors = {255, 0, 0, 0, 255, 0, 0, 0, 255};
+  mesh.indices = {0, 1, 2};
+  const std::vector<float> quality = {0.5f, 1.5f, -2.25f}, invented = {0, 1, 0};
+  const PlyVertexScalar scalars[] = {{"quality", quality}, {"invented", invented}};
+  ASSERT_TRUE(WritePlyMeshWithScalars(Path("q.ply"), mesh, scalars).ok());
+  std::ifstream in(Path("q.ply"), std::ios::binary);
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  EXPECT_THAT(bytes, HasSubstr("property uchar blue\nproperty float quality\nproperty float invented\nelement face 1\n"));
+  const size_t body = bytes.find("end_header\n") + 11;
+  constexpr size_t kRecord = 3 * 4 + 3 + 2 * 4;
+  ASSERT_EQ(bytes.size(), body + 3 * kRecord + 1 + 3 * 4);
+  for (size_t v = 0; v < 3; ++v) {
+    float q, flag;
+    std::memcpy(&q, &bytes[body + v * kRecord + 15], 4);
+    std::memcpy(&flag, &bytes[body + v * kRecord + 19], 4);
+    EXPECT_EQ(q, quality[v]);
+    EXPECT_EQ(flag, invented[v]);
+  }
+  auto read = ReadPlyMesh(Path("q.ply"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->mesh.positions, mesh.positions);
+  EXPECT_EQ(read->mesh.colors, mesh.colors);
+  EXPECT_EQ(read->mesh.indices, mesh.indices);
+
+  const std::vector<float> two = {1, 2};
+  const PlyVertexScalar short_one[] = {{"quality", two}};
+  EXPECT_THAT(WritePlyMeshWithScalars(Path("bad.ply"), mesh, short_one).message(),
+              HasSubstr("'quality' has 2 values for 3 vertices"));
+  const PlyVertexScalar clash[] = {{"red", quality}};
+  EXPECT_THAT(WritePlyMeshWithScalars(Path("bad.ply"), mesh, clash).message(), HasSubstr("name 'red'"));
+  const PlyVertexScalar spaced[] = {{"a b", quality}};
+  EXPECT_THAT(WritePlyMeshWithScalars(Path("bad.ply"), mesh, spaced).message(), HasSubstr("name 'a b'"));
+  EXPECT_FALSE(std::filesystem::exists(Path("bad.ply")));
 }
 
 TEST_F(PlyTest, WriterRejectsMismatchedAttributes) {

@@ -311,4 +311,23 @@ Expected<MeshDistanceResult> MeasureMeshDistance(const Mesh& mesh, const Mesh& t
   return result;
 }
 
+Expected<std::vector<float>> VertexDistanceToTruth(const Mesh& mesh, const Mesh& truth_mesh,
+                                                   const SynthScene* scene) {
+  if (Status s = Validate(mesh); !s.ok()) return s.WithContext("evaluated mesh");
+  if (Status s = Validate(truth_mesh); !s.ok()) return s.WithContext("truth mesh");
+  if (scene == nullptr && truth_mesh.face_count() == 0) return Status::Invalid("truth mesh: no faces");
+  std::vector<Vec3> vertices(mesh.vertex_count());
+  for (size_t v = 0; v < vertices.size(); ++v) vertices[v] = Corner(mesh, uint32_t(v), mesh.origin);
+  const MeshDistanceOptions no_progress;
+  std::vector<double> d;
+  if (scene != nullptr) {
+    d = Distances(
+        vertices, [scene](const Vec3& p) { return std::abs(SampleSurface(*scene, p).distance_m); }, no_progress, 0, 1);
+  } else {
+    const TriangleBvh truth_bvh(truth_mesh);
+    d = Distances(vertices, [&truth_bvh](const Vec3& p) { return truth_bvh.Distance(p); }, no_progress, 0, 1);
+  }
+  return std::vector<float>(d.begin(), d.end());
+}
+
 }  // namespace pb

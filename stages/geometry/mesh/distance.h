@@ -93,4 +93,14 @@ Expected<MeshDistanceResult> MeasureMeshDistance(const Mesh& mesh, const Mesh& t
                                                  const SynthScene* scene,
                                                  const MeshDistanceOptions& options);
 
+// Per vertex of `mesh` (absolute coordinates), its distance to the truth in
+// meters, for error maps: with `scene`, |SampleSurface(scene, p).distance_m|
+// (the analytic surface, as mesh -> truth above); otherwise the distance to
+// `truth_mesh`'s triangles. At the vertices, not at area samples: a map a
+// person reads, not the statistic (the vertices crowd where the mesh is
+// fine). Runs with TBB. Status::Invalid if either mesh fails Validate or the
+// truth mesh has no faces and there is no scene.
+Expected<std::vector<float>> VertexDistanceToTruth(const Mesh& mesh, const Mesh& truth_mesh,
+                                                   const SynthScene* scene);
+
 }  // namespace pb

@@ -194,6 +194,42 @@ TEST(MeshDistanceTest, SynthRoomAgainstItselfWithAnalyticTruth) {
   EXPECT_LT(r->mesh_to_truth.max_m, 0.02);
 }
 
+TEST(MeshDistanceTest, VertexDistanceToTruthMatchesBruteForce) {
+  Mesh inner = Sphere(1.0, 2);
+  inner.origin = {0.001, -0.002, 0.003};  // absolute coordinates, both sides
+  const Mesh outer = Sphere(1.05, 2);
+  Expected<std::vector<float>> d = VertexDistanceToTruth(inner, outer, nullptr);
+  ASSERT_TRUE(d.ok()) << d.status().message();
+  ASSERT_EQ(d->size(), inner.vertex_count());
+  const auto corner = [&](size_t f, int k) {
+    const uint32_t v = outer.indices[3 * f + k];
+    return Vec3{outer.positions[3 * v], outer.positions[3 * v + 1], outer.positions[3 * v + 2]};
+  };
+  for (size_t v = 0; v < inner.vertex_count(); ++v) {
+    const Vec3 p = {inner.origin[0] + inner.positions[3 * v], inner.origin[1] + inner.positions[3 * v + 1],
+                    inner.origin[2] + inner.positions[3 * v + 2]};
+    double best = 1e9;
+    for (size_t f = 0; f < outer.face_count(); ++f)
+      best = std::min(best, BruteForceDistance(p, corner(f, 0), corner(f, 1), corner(f, 2)));
+    ASSERT_NEAR((*d)[v], best, 1e-6) << v;
+  }
+}
+
+TEST(MeshDistanceTest, VertexDistanceToTheAnalyticTruth) {
+  Expected<SynthScene> scene = MakeSynthScene("room", 1, {});
+  ASSERT_TRUE(scene.ok()) << scene.status().message();
+  Mesh moved = SynthTruthMesh(*scene, 0.1);
+  ASSERT_TRUE(moved.has_normals());
+  for (size_t i = 0; i < moved.positions.size(); ++i) moved.positions[i] += 0.05f * moved.normals[i];
+  // No truth triangles: only the scene can answer.
+  Expected<std::vector<float>> d = VertexDistanceToTruth(moved, Mesh{}, &*scene);
+  ASSERT_TRUE(d.ok()) << d.status().message();
+  std::vector<float> sorted = *d;
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  EXPECT_NEAR(sorted[sorted.size() / 2], 0.05, 0.005);
+  EXPECT_FALSE(VertexDistanceToTruth(moved, Mesh{}, nullptr).ok());
+}
+
 TEST(MeshDistanceTest, RejectsMeshWithoutArea) {
   Mesh empty;
   MeshDistanceOptions options;

@@ -16,10 +16,10 @@
 #include "stages/geometry/points/knn.h"
 
 namespace pb {
+namespace {
 
-Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan,
-                                             std::span<const float> local_spacing_m,
-                                             const ScanAgreementOptions& options) {
+Status CheckInputs(const Mesh& mesh, const PointCloud& scan, std::span<const float> local_spacing_m,
+                   const ScanAgreementOptions& options) {
   PB_RETURN_IF_ERROR(Validate(mesh));
   PB_RETURN_IF_ERROR(Validate(scan));
   if (scan.empty()) return Status::Invalid("scan agreement: the scan has no points");
@@ -28,6 +28,31 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
                            std::to_string(scan.size()) + " points");
   if (!(options.spacing_factor > 0) || options.samples == 0 || options.neighbors < 1)
     return Status::Invalid("scan agreement: spacing_factor, samples and neighbors must be positive");
+  return Status::Ok();
+}
+
+// Whether the scan explains the mesh point `p` (absolute): one of its
+// `neighbors` nearest scan points within max(spacing_factor x that point's
+// local spacing, floor_m). Sets *nearest_m to the nearest point's distance.
+// `near` is the caller's buffer of options.neighbors entries.
+bool Invented(const Vec3& p, const PointCloud& scan, const KnnIndex& index, std::span<const float> local_spacing_m,
+              double floor_m, const ScanAgreementOptions& options, std::vector<Neighbor>& near, double* nearest_m) {
+  const float local[3] = {float(p[0] - scan.origin[0]), float(p[1] - scan.origin[1]), float(p[2] - scan.origin[2])};
+  const int found = index.Query(local, options.neighbors, near);
+  *nearest_m = std::sqrt(near[0].squared_distance_m2);
+  for (int k = 0; k < found; ++k) {
+    const double threshold = std::max(options.spacing_factor * double(local_spacing_m[near[k].index]), floor_m);
+    if (near[k].squared_distance_m2 <= threshold * threshold) return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan,
+                                             std::span<const float> local_spacing_m,
+                                             const ScanAgreementOptions& options) {
+  PB_RETURN_IF_ERROR(CheckInputs(mesh, scan, local_spacing_m, options));
 
   ScanAgreement result;
   result.mean_edge_m = MeanEdgeLength(mesh);
@@ -47,17 +72,7 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<Neighbor> near(static_cast<size_t>(options.neighbors));
     for (size_t i = range.begin(); i < range.end(); ++i) {
-      const float local[3] = {float(samples[i][0] - scan.origin[0]), float(samples[i][1] - scan.origin[1]),
-                              float(samples[i][2] - scan.origin[2])};
-      const int found = index.Query(local, options.neighbors, near);
-      nearest_m[i] = std::sqrt(near[0].squared_distance_m2);
-      bool explained = false;
-      for (int k = 0; k < found && !explained; ++k) {
-        const double threshold =
-            std::max(options.spacing_factor * double(local_spacing_m[near[k].index]), result.mean_edge_m);
-        explained = near[k].squared_distance_m2 <= threshold * threshold;
-      }
-      invented[i] = !explained;
+      invented[i] = Invented(samples[i], scan, index, local_spacing_m, result.mean_edge_m, options, near, &nearest_m[i]);
     }
   });
   size_t invented_count = 0;
@@ -86,6 +101,29 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
   result.missing_fraction = double(missing_count) / double(count);
   result.mesh_to_scan = ComputeDistanceStats(std::move(nearest_m));
   result.scan_to_mesh = ComputeDistanceStats(std::move(to_mesh_m));
+  return result;
+}
+
+Expected<VertexScanAgreement> MeasureVertexScanAgreement(const Mesh& mesh, const PointCloud& scan,
+                                                         std::span<const float> local_spacing_m,
+                                                         const ScanAgreementOptions& options) {
+  PB_RETURN_IF_ERROR(CheckInputs(mesh, scan, local_spacing_m, options));
+  const double mean_edge_m = MeanEdgeLength(mesh);
+  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(scan.positions));
+  const size_t n = mesh.vertex_count();
+  VertexScanAgreement result;
+  result.distance_to_scan_m.resize(n);
+  result.invented.resize(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    std::vector<Neighbor> near(static_cast<size_t>(options.neighbors));
+    for (size_t v = range.begin(); v < range.end(); ++v) {
+      const Vec3 p = {mesh.origin[0] + mesh.positions[3 * v], mesh.origin[1] + mesh.positions[3 * v + 1],
+                      mesh.origin[2] + mesh.positions[3 * v + 2]};
+      double nearest_m = 0;
+      result.invented[v] = Invented(p, scan, index, local_spacing_m, mean_edge_m, options, near, &nearest_m);
+      result.distance_to_scan_m[v] = float(nearest_m);
+    }
+  });
   return result;
 }
 

@@ -26,6 +26,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <vector>
 
 #include "base/status.h"
 #include "stages/geometry/core/mesh.h"
@@ -62,5 +63,18 @@ struct ScanAgreement {
 Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan,
                                              std::span<const float> local_spacing_m,
                                              const ScanAgreementOptions& options = {});
+
+// The same tests at the mesh's vertices, for error maps (a .vtp or a PLY
+// `quality` a person looks at): per vertex, the distance to the nearest scan
+// point (meters) and 1 where the vertex is invented by the rule above (0
+// otherwise). options.samples is not used. Same errors as
+// MeasureScanAgreement.
+struct VertexScanAgreement {
+  std::vector<float> distance_to_scan_m;
+  std::vector<uint8_t> invented;
+};
+Expected<VertexScanAgreement> MeasureVertexScanAgreement(const Mesh& mesh, const PointCloud& scan,
+                                                         std::span<const float> local_spacing_m,
+                                                         const ScanAgreementOptions& options = {});
 
 }  // namespace pb

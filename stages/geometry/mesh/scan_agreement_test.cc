@@ -75,6 +75,31 @@ TEST(ScanAgreementTest, InventedAreaMissingPointsAndBoundary) {
   EXPECT_EQ(one->missing_fraction, r->missing_fraction);
 }
 
+// The invented-area rule at the vertices: the scan covers x <= 0.5 of the
+// unit square 1 cm above it, so vertices up to x = 0.52 are seen
+// (sqrt(0.02^2 + 0.01^2) < 3 cm) and from x = 0.53 on invented.
+TEST(ScanAgreementTest, PerVertexDistanceAndInventedFlag) {
+  const Mesh mesh = GridMesh(100, {1000.0, 2000.0, 10.0});
+  PointCloud scan;
+  scan.origin = {1000.5, 2000.0, 10.0};
+  for (int j = 0; j <= 100; ++j)
+    for (int i = 0; i <= 50; ++i) scan.positions.insert(scan.positions.end(), {float(i * 0.01 - 0.5), float(j * 0.01), 0.01f});
+  const std::vector<float> spacing(scan.size(), 0.01f);
+  Expected<VertexScanAgreement> r = Status::Internal("not run");
+  tbb::task_arena(2).execute([&] { r = MeasureVertexScanAgreement(mesh, scan, spacing); });
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  ASSERT_EQ(r->distance_to_scan_m.size(), mesh.vertex_count());
+  ASSERT_EQ(r->invented.size(), mesh.vertex_count());
+  for (int j = 0; j <= 100; ++j)
+    for (int i = 0; i <= 100; ++i) {
+      const size_t v = size_t(j * 101 + i);
+      const double dx = std::max(0.0, i * 0.01 - 0.5);
+      EXPECT_NEAR(r->distance_to_scan_m[v], std::sqrt(dx * dx + 0.0001), 2e-5) << i << " " << j;
+      EXPECT_EQ(r->invented[v], i >= 53 ? 1 : 0) << i << " " << j;
+    }
+  EXPECT_FALSE(MeasureVertexScanAgreement(mesh, scan, std::vector<float>(3, 0.01f)).ok());
+}
+
 TEST(ScanAgreementTest, ACoarseMeshIsNotInventionWithinItsOwnEdge) {
   // Two triangles (edges of 1 m) and a scan of the left half, 1 cm apart: the
   // threshold becomes the mean edge (1.14 m), so nothing counts as invented.
