@@ -244,6 +244,10 @@ TEST_F(MeshStagesTest, PoissonExplainsWhatItNeeds) {
   both.AddInput("points", "points", WriteSpherePoints(dir_ / "in", 2000));
   EXPECT_THAT(Run("mesh.poisson", both).message(), HasSubstr("not both"));
 
+  FakeContext pcl_trim(dir_ / "pcl_trim", {{"depth", 6}, {"implementation", "pcl"}, {"trim", 0.02}});
+  pcl_trim.AddInput("points", "points", WriteSpherePoints(dir_ / "in", 2000));
+  EXPECT_THAT(Run("mesh.poisson", pcl_trim).message(), HasSubstr("follow with mesh.trim"));
+
   FakeContext bare(dir_ / "bare", {{"depth", 6}});
   bare.AddInput("points", "points", WriteSpherePoints(dir_ / "bare_in", 2000, false));
   const Status status = Run("mesh.poisson", bare);
