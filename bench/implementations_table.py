@@ -49,6 +49,10 @@ def main(out_dir):
                 variant = run.split("+", 1)[1]
                 label = variant.split(",")[0]
                 varied = {"poisson": "low_poisson"}.get(label, label)
+                if varied not in STAGES:
+                    sys.exit(f"{folder}: the run's label '{label}' names no compared stage; label "
+                             "each variant with the stage it varies (outliers, smooth, normals, "
+                             "poisson), as configs/campaigns/implementations.yaml does")
                 names = [varied]
                 value = variant.split("=", 1)[1]
             else:
