@@ -32,7 +32,7 @@ constexpr const char* kSchema = R"({
       "type": "string",
       "enum": ["own", "pcl", "open3d"],
       "default": "own",
-      "description": "Whose code fits the planes: 'own' (exact kd-tree, the same result for any thread count), 'pcl' (PCL 1.13's NormalEstimationOMP, in pointbake-pcl.so) or 'open3d' (Open3D 0.16's EstimateNormals with a k-NN search, in pointbake-poisson-open3d.so; uses all cores). The same k points and the same orientation step for all three. docs/implementations.md compares them."
+      "description": "Whose code fits the planes: 'own' (exact kd-tree, the same result for any thread count), 'pcl' (PCL 1.13's NormalEstimationOMP, in pointbake-pcl.so) or 'open3d' (Open3D 0.16's EstimateNormals with a k-NN search, in pointbake-poisson-open3d.so). The same k points and the same orientation step for all three. docs/implementations.md compares them."
     }
   }
 })";

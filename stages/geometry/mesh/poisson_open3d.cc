@@ -5,6 +5,7 @@
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
 #include <open3d/utility/Logging.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -103,7 +104,9 @@ extern "C" __attribute__((visibility("default"))) bool pb_open3d_normals_v1(
       input.points_[i] = Eigen::Vector3d(p[0], p[1], p[2]);
     }
     // Without normals on input, Open3D leaves each sign as its solver found
-    // it; the caller orients. Open3D parallelizes with OpenMP.
+    // it; the caller orients. Open3D parallelizes with OpenMP: as many
+    // threads as the stage was given.
+    omp_set_num_threads(call->threads);
     input.EstimateNormals(open3d::geometry::KDTreeSearchParamKNN(call->k),
                           /*fast_normal_computation=*/true);
     call->normals->resize(3 * n);
