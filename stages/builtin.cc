@@ -9,7 +9,8 @@ namespace {
 // Every built-in stage type, in the order `pointbake stages` lists them.
 constexpr StageType (*kBuiltinStages[])() = {
     ReadPointsStage,   SynthScanStage,    DownsampleStage,       StatsStage,
-    OutliersStage,     NormalsStage,      SpacingStage,          PoissonStage,
+    OutliersStage,     NormalsStage,      SpacingStage,          SmoothStage,
+    PoissonStage,
     TrimStage,
     DecimateStage,     CleanStage,        UnwrapStage,           VertexColorsBakeStage,
     FromMeshBakeStage, FromPointsBakeStage, GltfExportStage,     ObjExportStage,

@@ -26,6 +26,8 @@ StageType OutliersStage();
 StageType NormalsStage();
 // points.spacing: median nearest-neighbour distance into the meta.
 StageType SpacingStage();
+// points.smooth: moving-least-squares smoothing (PCL, through a module).
+StageType SmoothStage();
 
 // mesh.poisson: screened Poisson surface reconstruction with trimming.
 StageType PoissonStage();

@@ -11,6 +11,8 @@
 #include <string>
 
 #include "stages/builtin.h"
+#include "stages/geometry/core/module.h"
+#include "stages/geometry/mesh/poisson_module.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/stage_test_util.h"
 
@@ -239,10 +241,43 @@ TEST_F(MeshStagesTest, PoissonThenDecimateMeetsTheBudget) {
   EXPECT_TRUE(mesh->mesh.has_normals());
 }
 
+// implementation: pcl through the stage: PCL's solver, the vertex attributes
+// taken from the points (red follows z on this sphere), the meta says which.
+TEST_F(MeshStagesTest, PoissonWithPclGivesAColoredSphere) {
+  if (!ModuleSymbol(kPclModule, PB_PCL_POISSON_SYMBOL, "test").ok()) {
+    GTEST_SKIP() << "this build has no pointbake-pcl.so";
+  }
+  FakeContext ctx(dir_ / "run", {{"depth", 6}, {"implementation", "pcl"}});
+  ctx.AddInput("points", "points", WriteSpherePoints(dir_ / "in", 20000));
+  const Status status = Run("mesh.poisson", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.meta_["mesh"]["poisson"]["implementation"], "PCL 1.13 (pcl::Poisson)");
+  auto mesh = ReadPlyMesh(ctx.outputs_["mesh"]);
+  ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+  ASSERT_GT(mesh->mesh.face_count(), 1000u);
+  ASSERT_TRUE(mesh->mesh.has_colors());
+  ASSERT_TRUE(mesh->mesh.has_normals());
+  EXPECT_EQ(mesh->mesh.origin, (std::array<double, 3>{500000.0, 4000000.0, 120.0}));
+  double worst_red = 0, worst_normal = 1;
+  for (size_t v = 0; v < mesh->mesh.vertex_count(); ++v) {
+    const float* p = &mesh->mesh.positions[3 * v];
+    const float* n = &mesh->mesh.normals[3 * v];
+    const double r = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+    worst_normal = std::min(worst_normal, (p[0] * n[0] + p[1] * n[1] + p[2] * n[2]) / r);
+    worst_red = std::max(worst_red, std::abs(mesh->mesh.colors[3 * v] - 127.5 * (p[2] / r + 1)));
+  }
+  EXPECT_GT(worst_normal, 0.95);
+  EXPECT_LT(worst_red, 12);
+}
+
 TEST_F(MeshStagesTest, PoissonExplainsWhatItNeeds) {
   FakeContext both(dir_ / "both", {{"depth", 7}, {"target_faces", 1000}});
   both.AddInput("points", "points", WriteSpherePoints(dir_ / "in", 2000));
   EXPECT_THAT(Run("mesh.poisson", both).message(), HasSubstr("not both"));
+
+  FakeContext pcl_trim(dir_ / "pcl_trim", {{"depth", 6}, {"implementation", "pcl"}, {"trim", 0.02}});
+  pcl_trim.AddInput("points", "points", WriteSpherePoints(dir_ / "in", 2000));
+  EXPECT_THAT(Run("mesh.poisson", pcl_trim).message(), HasSubstr("follow with mesh.trim"));
 
   FakeContext bare(dir_ / "bare", {{"depth", 6}});
   bare.AddInput("points", "points", WriteSpherePoints(dir_ / "bare_in", 2000, false));

@@ -59,6 +59,12 @@ constexpr const char* kSchema = R"({
       "default": false,
       "description": "Place iso-surface vertices by linear interpolation of the implicit function (PoissonRecon --linearFit) instead of at the cell-edge midpoint of the sign change."
     },
+    "implementation": {
+      "type": "string",
+      "enum": ["open3d", "pcl"],
+      "default": "open3d",
+      "description": "Whose solver runs: 'open3d' (Open3D 0.16, pointbake-poisson-open3d.so) or 'pcl' (PCL 1.13's pcl::Poisson, an older PoissonRecon, point weight 4 and samples per node 1.5, pointbake-pcl.so). PCL's gives no densities (so `trim` must be 0: use mesh.trim) and no vertex attributes: its normals and colors are those of the nearest 4 points, distance-weighted. docs/poisson.md and docs/implementations.md compare them."
+    },
     "threads": {
       "type": "integer",
       "minimum": 0,
@@ -83,7 +89,23 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.linear_fit, BoolParam(ctx, kId, "linear_fit"));
   PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", {0}));
   options.threads = threads > 0 ? static_cast<int>(threads) : ctx.threads();
+  PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
+  if (implementation == "pcl") {
+    options.implementation = PoissonImplementation::kPcl;
+  } else if (implementation != "open3d") {
+    return Status::Invalid(std::string(kId) + ": parameter 'implementation' must be 'open3d' or "
+                           "'pcl', got '" + implementation + "'");
+  }
   PB_ASSIGN_OR_RETURN(const double trim, NumberParam(ctx, kId, "trim"));
+  if (implementation == "pcl" && trim > 0) {
+    return Status::Invalid(std::string(kId) + ": 'trim' needs the solver's densities, which "
+                           "implementation 'pcl' does not give; set trim: 0 and follow with "
+                           "mesh.trim");
+  }
+  if (implementation == "pcl" && options.linear_fit) {
+    return Status::Invalid(std::string(kId) + ": 'linear_fit' is an Open3D option; "
+                           "implementation 'pcl' has none");
+  }
   if (!(trim >= 0 && trim <= 0.5)) {
     return Status::Invalid(std::string(kId) + ": parameter 'trim' must be in [0, 0.5], got " +
                            std::to_string(trim));
@@ -103,7 +125,9 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.1));
   const PointCloud& cloud = input.cloud;
 
-  nlohmann::json poisson_meta = {{"implementation", "Open3D 0.16 (PoissonRecon)"},
+  nlohmann::json poisson_meta = {{"implementation", implementation == "pcl"
+                                                        ? "PCL 1.13 (pcl::Poisson)"
+                                                        : "Open3D 0.16 (PoissonRecon)"},
                                  {"scale", options.scale},
                                  {"linear_fit", options.linear_fit},
                                  {"trim", trim}};
@@ -190,7 +214,7 @@ StageType PoissonStage() {
   StageType type;
   type.id = kId;
   type.version = 1;
-  type.summary = "Screened Poisson surface reconstruction from oriented points (Open3D 0.16)";
+  type.summary = "Screened Poisson surface reconstruction from oriented points (Open3D 0.16 or PCL)";
   type.doc =
       "Screened Poisson reconstruction (Kazhdan & Hoppe 2013) through Open3D 0.16, chosen over "
       "PCL's with the evidence in docs/poisson.md. Needs oriented normals (points.normals). "
@@ -203,7 +227,9 @@ StageType PoissonStage() {
       "cell is finer than the scan's noise the output fills with small closed bubbles and "
       "non-manifold edges: follow with mesh.clean before UV unwrapping.\n\n"
       "Counters: `depth`, `faces_solved` (before trimming), `faces_out`. The solver runs in a "
-      "module, pointbake-poisson-open3d.so, loaded on first use.";
+      "module, pointbake-poisson-open3d.so, loaded on first use; `implementation: pcl` runs "
+      "PCL's pcl::Poisson from pointbake-pcl.so instead, for campaigns that compare "
+      "implementations.";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "Oriented points (points.ply with normals).", false}};
   type.outputs = {{"mesh", "mesh", "The reconstructed mesh (mesh.ply).", false}};

@@ -27,6 +27,12 @@ constexpr const char* kSchema = R"({
       "enum": ["auto", "stations", "propagate", "none"],
       "default": "auto",
       "description": "How each normal's sign is chosen: 'stations' faces the scanner that saw the point; 'propagate' spreads a consistent sign over the neighbour graph (Hoppe 1992) from the point farthest from the centroid, facing outward; 'auto' uses stations when the cloud has them, else propagate; 'none' keeps the solver's arbitrary sign."
+    },
+    "implementation": {
+      "type": "string",
+      "enum": ["own", "pcl", "open3d"],
+      "default": "own",
+      "description": "Whose code fits the planes: 'own' (exact kd-tree, the same result for any thread count), 'pcl' (PCL 1.13's NormalEstimationOMP, in pointbake-pcl.so) or 'open3d' (Open3D 0.16's EstimateNormals with a k-NN search, in pointbake-poisson-open3d.so). The same k points and the same orientation step for all three. docs/implementations.md compares them."
     }
   }
 })";
@@ -54,6 +60,16 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {3, 100}));
   PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation"));
   PB_ASSIGN_OR_RETURN(const NormalOrientation orientation, ParseOrientation(orientation_name));
+  PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
+  NormalImplementation solver = NormalImplementation::kOwn;
+  if (implementation == "pcl") {
+    solver = NormalImplementation::kPcl;
+  } else if (implementation == "open3d") {
+    solver = NormalImplementation::kOpen3d;
+  } else if (implementation != "own") {
+    return Status::Invalid(std::string(kId) + ": parameter 'implementation' must be one of own, "
+                           "pcl, open3d; got '" + implementation + "'");
+  }
   PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.3));
   PointCloud& cloud = input.cloud;
   NormalReport report;
@@ -62,6 +78,7 @@ Status Run(StageContext& ctx) {
     NormalOptions options;
     options.k = static_cast<int>(k);
     options.orientation = orientation;
+    options.implementation = solver;
     options.threads = ctx.threads();
     options.progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); };
     PB_RETURN_IF_ERROR(EstimateNormals(cloud, options, &report).WithContext(input.path));
@@ -72,7 +89,8 @@ Status Run(StageContext& ctx) {
       InputPointsMetaWith(ctx, {{"points", cloud.size()},
                                 {"has_normals", true},
                                 {"normals_k", static_cast<int>(k)},
-                                {"normals_orientation", OrientationName(report.orientation_used)}});
+                                {"normals_orientation", OrientationName(report.orientation_used)},
+                                {"normals_implementation", implementation}});
   PB_RETURN_IF_ERROR(WriteOutputPoints(ctx, cloud, meta));
   ctx.progress(1.0);
   return Status::Ok();
@@ -93,8 +111,11 @@ StageType NormalsStage() {
       "neighbour graph seeded outward from the point farthest from the centroid (`propagate`, "
       "Hoppe et al. 1992; right for closed objects), `auto` (stations if present, else "
       "propagate) or `none`. Existing normals are replaced; other attributes pass through. The "
-      "result does not depend on the thread count.\n\n"
-      "Meta added: `has_normals`, `normals_k`, `normals_orientation` (the method used). "
+      "result does not depend on the thread count. `implementation` swaps the plane fit for "
+      "PCL's NormalEstimationOMP or Open3D's EstimateNormals (modules loaded on first use), "
+      "for campaigns that compare implementations.\n\n"
+      "Meta added: `has_normals`, `normals_k`, `normals_orientation` (the method used), "
+      "`normals_implementation`. "
       "Counters: `points`, `flipped` (normals whose sign orientation reversed).";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "The points to estimate normals for.", false}};

@@ -9,9 +9,12 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <random>
 #include <set>
 
 #include "stages/builtin.h"
+#include "stages/geometry/core/module.h"
+#include "stages/geometry/points/module_calls.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/core/table.h"
 #include "stages/stage_test_util.h"
@@ -35,7 +38,7 @@ TEST_F(PointsStagesTest, RegistersWellFormedTypes) {
   const std::vector<const StageType*> all = registry_.All();
   // Other families register here too; check that ours are all present.
   for (const char* id : {"io.read_points", "points.downsample", "points.stats", "points.outliers",
-                         "points.normals", "points.spacing"}) {
+                         "points.normals", "points.spacing", "points.smooth"}) {
     EXPECT_NE(registry_.Find(id), nullptr) << id;
   }
   for (const StageType* type : all) {
@@ -246,6 +249,73 @@ TEST_F(PointsStagesTest, OutliersRemovesFarPoints) {
   EXPECT_EQ(out->points.origin, cloud.origin);
   EXPECT_EQ(out->points.positions, std::vector<float>(cloud.positions.begin(), cloud.positions.begin() + 2700));
   EXPECT_EQ(out->points.colors, std::vector<uint8_t>(cloud.colors.begin(), cloud.colors.begin() + 2700));
+}
+
+// The implementations in pointbake-pcl.so (built when libpcl-dev is
+// installed; stages/CMakeLists.txt makes this test depend on it).
+bool HavePclModule() { return ModuleSymbol(kPclModule, PB_PCL_SMOOTH_SYMBOL, "test").ok(); }
+
+TEST_F(PointsStagesTest, OutliersWithPclRemovesTheSameFarPoints) {
+  if (!HavePclModule()) GTEST_SKIP() << "this build has no pointbake-pcl.so";
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, GridCloud(2)).ok());
+  FakeContext ctx(dir_ / "o", {{"implementation", "pcl"}});
+  ctx.AddInput("points", "points", input);
+  const Status status = Run("points.outliers", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["removed"], 2);
+  EXPECT_EQ(ctx.meta_["points"]["outliers_implementation"], "pcl");
+  EXPECT_FALSE(ctx.meta_["points"].contains("outliers_threshold_m"));
+}
+
+TEST_F(PointsStagesTest, SmoothFlattensANoisyGridAndKeepsItsPoints) {
+  if (!HavePclModule()) GTEST_SKIP() << "this build has no pointbake-pcl.so";
+  PointCloud cloud = GridCloud(0);
+  // 0.3 mm of Gaussian range noise on a 2 mm grid.
+  std::mt19937 rng(4);
+  std::normal_distribution<float> noise(0.0f, 0.0003f);
+  for (size_t i = 0; i < cloud.size(); ++i) cloud.positions[3 * i + 2] = noise(rng);
+  cloud.normals.assign(3 * cloud.size(), 0.0f);
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+  FakeContext ctx(dir_ / "s", nlohmann::json::object(), 2);
+  ctx.AddInput("points", "points", input, {{"spacing_m", 0.002}, {"has_normals", true}});
+  const Status status = Run("points.smooth", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io", "compute"}));
+  EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
+  EXPECT_EQ(ctx.meta_["points"]["has_normals"], false);
+  EXPECT_DOUBLE_EQ(ctx.meta_["points"]["smooth"]["radius_m"], 0.008);  // 4 spacings
+  EXPECT_EQ(ctx.meta_["points"]["smooth"]["polynomial_order"], 2);
+  EXPECT_GT(ctx.counters_["mean_shift_mm"], 0.1);
+  auto out = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  ASSERT_EQ(out->points.size(), cloud.size());
+  EXPECT_EQ(out->points.origin, cloud.origin);
+  EXPECT_EQ(out->points.colors, cloud.colors);
+  EXPECT_FALSE(out->points.has_normals());
+  double before = 0, after = 0;
+  // Interior points (the fit is one-sided at the border).
+  for (int y = 5; y < 25; ++y) {
+    for (int x = 5; x < 25; ++x) {
+      const size_t i = static_cast<size_t>(30 * y + x);
+      before += std::abs(cloud.positions[3 * i + 2]);
+      after += std::abs(out->points.positions[3 * i + 2]);
+    }
+  }
+  EXPECT_LT(after, before / 2) << before << " -> " << after;
+
+  FakeContext bad(dir_ / "b", {{"polynomial_order", 5}});
+  bad.AddInput("points", "points", input);
+  EXPECT_THAT(Run("points.smooth", bad).message(), HasSubstr("polynomial_order"));
+}
+
+TEST_F(PointsStagesTest, NormalsRejectsAnUnknownImplementation) {
+  const std::string input = (dir_ / "in.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, GridCloud(0)).ok());
+  FakeContext ctx(dir_ / "n", {{"implementation", "cgal"}});
+  ctx.AddInput("points", "points", input);
+  EXPECT_THAT(Run("points.normals", ctx).message(), HasSubstr("implementation"));
 }
 
 TEST_F(PointsStagesTest, NormalsOfASphereFaceOutward) {

@@ -1,6 +1,7 @@
 #include "stages/geometry/core/point_cloud.h"
 
 #include <algorithm>
+#include <cassert>
 #include <limits>
 #include <string>
 
@@ -71,6 +72,28 @@ Status Validate(const PointCloud& cloud) {
                                std::to_string(cloud.stations.size()));
   }
   return Status::Ok();
+}
+
+PointCloud SelectPoints(const PointCloud& cloud, std::span<const uint32_t> indices) {
+  PointCloud out;
+  out.origin = cloud.origin;
+  out.stations = cloud.stations;
+  const size_t m = indices.size();
+  out.positions.resize(3 * m);
+  if (cloud.has_normals()) out.normals.resize(3 * m);
+  if (cloud.has_colors()) out.colors.resize(3 * m);
+  if (cloud.has_intensities()) out.intensities.resize(m);
+  if (cloud.has_stations()) out.station_ids.resize(m);
+  for (size_t j = 0; j < m; ++j) {
+    const size_t i = indices[j];
+    assert(i < cloud.size());
+    std::copy_n(&cloud.positions[3 * i], 3, &out.positions[3 * j]);
+    if (cloud.has_normals()) std::copy_n(&cloud.normals[3 * i], 3, &out.normals[3 * j]);
+    if (cloud.has_colors()) std::copy_n(&cloud.colors[3 * i], 3, &out.colors[3 * j]);
+    if (cloud.has_intensities()) out.intensities[j] = cloud.intensities[i];
+    if (cloud.has_stations()) out.station_ids[j] = cloud.station_ids[i];
+  }
+  return out;
 }
 
 }  // namespace pb

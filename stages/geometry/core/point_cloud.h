@@ -62,4 +62,8 @@ Bounds AbsoluteBounds(const PointCloud& cloud);
 // naming the attribute otherwise.
 Status Validate(const PointCloud& cloud);
 
+// The points `indices` (each < cloud.size()) in that order, with every
+// attribute; origin and stations copied.
+PointCloud SelectPoints(const PointCloud& cloud, std::span<const uint32_t> indices);
+
 }  // namespace pb

@@ -1,8 +1,5 @@
 #include "stages/geometry/mesh/poisson.h"
 
-#include <dlfcn.h>
-#include <unistd.h>
-
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -12,60 +9,48 @@
 #include <mutex>
 #include <string>
 
+#include "stages/geometry/core/module.h"
 #include "stages/geometry/mesh/poisson_module.h"
-
-#ifndef PB_POISSON_MODULE_DIR
-#define PB_POISSON_MODULE_DIR ""
-#endif
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 namespace {
 
-constexpr const char* kModuleName = "pointbake-poisson-open3d.so";
-
 using ModuleFn = bool (*)(PoissonModuleCall*);
 
-std::string ExecutableDir() {
-  std::error_code ec;
-  const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
-  return ec ? std::string() : exe.parent_path().string();
-}
-
-struct LoadedModule {
-  ModuleFn fn = nullptr;
-  std::string error;  // when fn is null
-};
-
-// Loads the module once per process; later calls return the same result.
-const LoadedModule& LoadModule() {
-  static std::once_flag once;
-  static LoadedModule loaded;
-  std::call_once(once, [] {
-    std::string tried;
-    for (const std::string& path : PoissonModuleCandidates()) {
-      if (!std::filesystem::exists(path)) {
-        tried += "\n  " + path + ": not there";
-        continue;
+// PCL's Poisson returns positions and faces only: each vertex takes the
+// inverse-distance-weighted mean of the normals and colors of its
+// kAttributeNeighbors nearest points (Open3D interpolates them inside its
+// solver), so the two implementations give the same kind of mesh.
+constexpr int kAttributeNeighbors = 4;
+Status AttributesFromPoints(const PointCloud& cloud, Mesh& mesh) {
+  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
+  const size_t nv = mesh.vertex_count();
+  mesh.normals.assign(3 * nv, 0.0f);
+  if (cloud.has_colors()) mesh.colors.assign(3 * nv, 0);
+  std::vector<Neighbor> neighbors(kAttributeNeighbors);
+  for (size_t v = 0; v < nv; ++v) {
+    const int count = index.Query(&mesh.positions[3 * v], kAttributeNeighbors, neighbors);
+    double normal[3] = {0, 0, 0}, color[3] = {0, 0, 0}, total = 0;
+    for (int j = 0; j < count; ++j) {
+      const uint32_t p = neighbors[j].index;
+      const double weight = 1.0 / (std::sqrt(neighbors[j].squared_distance_m2) + 1e-9);
+      total += weight;
+      for (int c = 0; c < 3; ++c) {
+        normal[c] += weight * cloud.normals[3 * p + c];
+        if (cloud.has_colors()) color[c] += weight * cloud.colors[3 * p + c];
       }
-      void* handle = ::dlopen(path.c_str(), RTLD_NOW | RTLD_LOCAL | RTLD_NODELETE);
-      if (!handle) {
-        tried += "\n  " + path + ": " + ::dlerror();
-        continue;
-      }
-      void* symbol = ::dlsym(handle, PB_POISSON_MODULE_SYMBOL);
-      if (!symbol) {
-        tried += "\n  " + path + ": no " PB_POISSON_MODULE_SYMBOL " (built from another version?)";
-        continue;
-      }
-      loaded.fn = reinterpret_cast<ModuleFn>(symbol);
-      return;
     }
-    loaded.error = std::string("screened Poisson needs ") + kModuleName +
-                   ", built when Open3D 0.16 is installed (apt install libopen3d-dev, then "
-                   "rebuild); looked in:" +
-                   tried;
-  });
-  return loaded;
+    const double length = std::sqrt(normal[0] * normal[0] + normal[1] * normal[1] + normal[2] * normal[2]);
+    for (int c = 0; c < 3; ++c) {
+      if (length > 0) mesh.normals[3 * v + c] = static_cast<float>(normal[c] / length);
+      if (cloud.has_colors() && total > 0) {
+        mesh.colors[3 * v + c] =
+            static_cast<uint8_t>(std::clamp(std::lround(color[c] / total), 0L, 255L));
+      }
+    }
+  }
+  return Status::Ok();
 }
 
 // Re-winds every face when most disagree with the interpolated normals.
@@ -174,18 +159,7 @@ uint64_t Morton(uint32_t x, uint32_t y, uint32_t z, int bits) {
 
 }  // namespace
 
-std::vector<std::string> PoissonModuleCandidates() {
-  std::vector<std::string> paths;
-  if (const char* env = std::getenv("PB_POISSON_MODULE"); env && *env) paths.push_back(env);
-  if (const std::string dir = ExecutableDir(); !dir.empty()) {
-    paths.push_back(dir + "/" + kModuleName);
-  }
-  if (std::string(PB_POISSON_MODULE_DIR).size() > 0) {
-    const std::string built = std::string(PB_POISSON_MODULE_DIR) + "/" + kModuleName;
-    if (std::find(paths.begin(), paths.end(), built) == paths.end()) paths.push_back(built);
-  }
-  return paths;
-}
+std::vector<std::string> PoissonModuleCandidates() { return ModuleCandidates(kOpen3dModule); }
 
 Expected<PoissonOutput> ReconstructPoisson(const PointCloud& cloud, const PoissonOptions& options) {
   if (options.depth < kPoissonMinDepth || options.depth > kPoissonMaxDepth) {
@@ -212,8 +186,16 @@ Expected<PoissonOutput> ReconstructPoisson(const PointCloud& cloud, const Poisso
                              "(io.read_points drop_invalid)");
     }
   }
-  const LoadedModule& module = LoadModule();
-  if (!module.fn) return Status::Unsupported(module.error);
+  const bool pcl = options.implementation == PoissonImplementation::kPcl;
+  if (pcl && options.linear_fit) {
+    return Status::Invalid("Poisson: linear_fit is an Open3D option; PCL's Poisson has none");
+  }
+  PB_ASSIGN_OR_RETURN(
+      void* symbol,
+      pcl ? ModuleSymbol(kPclModule, PB_PCL_POISSON_SYMBOL, "screened Poisson (implementation 'pcl')")
+          : ModuleSymbol(kOpen3dModule, PB_POISSON_MODULE_SYMBOL,
+                         "screened Poisson (implementation 'open3d')"));
+  const auto run = reinterpret_cast<ModuleFn>(symbol);
 
   PoissonOutput out;
   std::string error;
@@ -223,13 +205,19 @@ Expected<PoissonOutput> ReconstructPoisson(const PointCloud& cloud, const Poisso
   call.mesh = &out.mesh;
   call.densities = &out.densities;
   call.error = &error;
-  if (!module.fn(&call)) return Status::Internal("Open3D screened Poisson failed: " + error);
+  const char* solver = pcl ? "PCL" : "Open3D";
+  if (!run(&call)) return Status::Internal(std::string(solver) + " screened Poisson failed: " + error);
+  if (pcl) {
+    PB_RETURN_IF_ERROR(Validate(out.mesh).WithContext("PCL's Poisson output"));
+    PB_RETURN_IF_ERROR(AttributesFromPoints(cloud, out.mesh));
+    out.densities.assign(out.mesh.vertex_count(), 0.0f);
+  }
   if (out.densities.size() != out.mesh.vertex_count()) {
-    return Status::Internal("Open3D returned " + std::to_string(out.densities.size()) +
+    return Status::Internal(std::string(solver) + " returned " + std::to_string(out.densities.size()) +
                             " densities for " + std::to_string(out.mesh.vertex_count()) +
                             " vertices");
   }
-  PB_RETURN_IF_ERROR(Validate(out.mesh).WithContext("Open3D's Poisson output"));
+  PB_RETURN_IF_ERROR(Validate(out.mesh).WithContext(std::string(solver) + "'s Poisson output"));
   out.rewound = AgreeWithNormals(out.mesh);
   CanonicalOrder(out);
   return out;

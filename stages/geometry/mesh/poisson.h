@@ -25,7 +25,16 @@
 
 namespace pb {
 
+// Which solver runs: Open3D 0.16's (the default) or PCL 1.13's pcl::Poisson
+// (an older PoissonRecon, run with its point weight 4 and samples per node
+// 1.5), each from its module (pointbake-poisson-open3d.so, pointbake-pcl.so).
+// PCL's returns no densities (PoissonOutput::densities are then all 0, so
+// TrimByDensity keeps everything) and no per-vertex attributes: normals and
+// colors are the inverse-distance-weighted mean of the 4 nearest points'.
+enum class PoissonImplementation { kOpen3d, kPcl };
+
 struct PoissonOptions {
+  PoissonImplementation implementation = PoissonImplementation::kOpen3d;
   int depth = 8;            // octree depth: the grid is at most 2^depth cells per side
   double scale = 1.1;       // reconstruction cube / the points' bounding cube
   bool linear_fit = false;  // place iso-vertices by linear interpolation
@@ -50,8 +59,8 @@ struct PoissonOutput {
 
 // Status::Invalid if the cloud has no normals, fewer than 3 points, a
 // non-finite coordinate or depth outside [kPoissonMinDepth,
-// kPoissonMaxDepth]; Status::Unsupported if the Open3D module cannot be
-// loaded (the message says where it looked and how to get it).
+// kPoissonMaxDepth]; Status::Unsupported if the implementation's module
+// cannot be loaded (the message says where it looked and how to get it).
 inline constexpr int kPoissonMinDepth = 3;
 inline constexpr int kPoissonMaxDepth = 14;
 Expected<PoissonOutput> ReconstructPoisson(const PointCloud& cloud, const PoissonOptions& options);

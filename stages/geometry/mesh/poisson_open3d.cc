@@ -1,8 +1,11 @@
 // pointbake-poisson-open3d.so: Open3D 0.16's screened Poisson behind the
-// call in poisson_module.h. The only file that includes Open3D.
+// call in poisson_module.h, and its normal estimation behind the call in
+// stages/geometry/points/module_calls.h. The only file that includes Open3D.
+#include <open3d/geometry/KDTreeSearchParam.h>
 #include <open3d/geometry/PointCloud.h>
 #include <open3d/geometry/TriangleMesh.h>
 #include <open3d/utility/Logging.h>
+#include <omp.h>
 
 #include <algorithm>
 #include <cmath>
@@ -11,6 +14,7 @@
 #include <tuple>
 
 #include "stages/geometry/mesh/poisson_module.h"
+#include "stages/geometry/points/module_calls.h"
 
 extern "C" __attribute__((visibility("default"))) bool pb_poisson_open3d_run_v1(
     pb::PoissonModuleCall* call) {
@@ -78,6 +82,39 @@ extern "C" __attribute__((visibility("default"))) bool pb_poisson_open3d_run_v1(
       }
     }
     call->densities->assign(densities.begin(), densities.end());
+    return true;
+  } catch (const std::exception& e) {
+    *call->error = e.what();
+  } catch (...) {
+    *call->error = "unknown exception";
+  }
+  return false;
+}
+
+extern "C" __attribute__((visibility("default"))) bool pb_open3d_normals_v1(
+    pb::NormalsModuleCall* call) {
+  try {
+    open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
+    const pb::PointCloud& cloud = *call->cloud;
+    const size_t n = cloud.size();
+    open3d::geometry::PointCloud input;
+    input.points_.resize(n);
+    for (size_t i = 0; i < n; ++i) {
+      const float* p = &cloud.positions[3 * i];
+      input.points_[i] = Eigen::Vector3d(p[0], p[1], p[2]);
+    }
+    // Without normals on input, Open3D leaves each sign as its solver found
+    // it; the caller orients. Open3D parallelizes with OpenMP: as many
+    // threads as the stage was given.
+    omp_set_num_threads(call->threads);
+    input.EstimateNormals(open3d::geometry::KDTreeSearchParamKNN(call->k),
+                          /*fast_normal_computation=*/true);
+    call->normals->resize(3 * n);
+    for (size_t i = 0; i < n; ++i) {
+      for (int k = 0; k < 3; ++k) {
+        (*call->normals)[3 * i + k] = static_cast<float>(input.normals_[i][k]);
+      }
+    }
     return true;
   } catch (const std::exception& e) {
     *call->error = e.what();

@@ -30,7 +30,9 @@
 #include <string>
 #include <vector>
 
+#include "stages/geometry/core/module.h"
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/module_calls.h"
 
 namespace pb {
 namespace {
@@ -218,6 +220,75 @@ size_t OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph
   return flipped;
 }
 
+// The propagation graph alone (kPropagationNeighbors per point, self
+// excluded), for normals computed by another library.
+void NeighborGraph(const KnnIndex& index, std::vector<uint32_t>& graph) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, index.size(), 1024),
+                    [&](const tbb::blocked_range<size_t>& range) {
+    std::vector<Neighbor> neighbors(kPropagationNeighbors);
+    for (size_t slot = range.begin(); slot < range.end(); ++slot) {
+      const uint32_t i = index.PointAtSlot(slot);
+      const int count = index.QueryPoint(i, kPropagationNeighbors, neighbors);
+      uint32_t* edges = &graph[size_t{kPropagationNeighbors} * i];
+      int edge = 0;
+      for (int j = 0; j < count && edge < kPropagationNeighbors; ++j) {
+        if (neighbors[j].index != i) edges[edge++] = neighbors[j].index;
+      }
+    }
+  });
+}
+
+// Unoriented normals from PCL's NormalEstimationOMP or Open3D's
+// EstimateNormals, through their module. A normal the library could not fit
+// (non-finite or zero) becomes +z, so every normal is a unit vector.
+Status EstimateWithModule(PointCloud& cloud, const NormalOptions& options) {
+  // Our kd-tree names a non-finite point; the libraries would not.
+  for (size_t i = 0; i < cloud.positions.size(); ++i) {
+    if (!std::isfinite(cloud.positions[i])) {
+      return Status::Invalid("normal estimation: point " + std::to_string(i / 3) +
+                             " has a non-finite coordinate");
+    }
+  }
+  const bool pcl = options.implementation == NormalImplementation::kPcl;
+  PB_ASSIGN_OR_RETURN(
+      void* symbol,
+      pcl ? ModuleSymbol(kPclModule, PB_PCL_NORMALS_SYMBOL,
+                         "normal estimation (implementation 'pcl')")
+          : ModuleSymbol(kOpen3dModule, PB_OPEN3D_NORMALS_SYMBOL,
+                         "normal estimation (implementation 'open3d')"));
+  std::vector<float> normals;
+  std::string error;
+  NormalsModuleCall call;
+  call.cloud = &cloud;
+  call.k = options.k;
+  call.threads = options.threads > 0 ? options.threads
+                                     : tbb::this_task_arena::max_concurrency();
+  call.normals = &normals;
+  call.error = &error;
+  if (!reinterpret_cast<bool (*)(NormalsModuleCall*)>(symbol)(&call)) {
+    return Status::Internal(std::string(pcl ? "PCL" : "Open3D") + " normal estimation failed: " +
+                            error);
+  }
+  if (normals.size() != cloud.positions.size()) {
+    return Status::Internal(std::string(pcl ? "PCL" : "Open3D") + " returned " +
+                            std::to_string(normals.size() / 3) + " normals for " +
+                            std::to_string(cloud.size()) + " points");
+  }
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    float* q = &normals[3 * i];
+    const double length = std::sqrt(double{q[0]} * q[0] + double{q[1]} * q[1] + double{q[2]} * q[2]);
+    if (!(length > 0) || !std::isfinite(length)) {
+      q[0] = q[1] = 0;
+      q[2] = 1;
+      continue;
+    }
+    for (int a = 0; a < 3; ++a) q[a] = static_cast<float>(q[a] / length);
+  }
+  cloud.normals = std::move(normals);
+  if (options.progress) options.progress(0.8);
+  return Status::Ok();
+}
+
 Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalReport& report) {
   const size_t n = cloud.size();
   NormalOrientation orientation = options.orientation;
@@ -232,11 +303,19 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
           "positions, and this cloud has none; use orientation 'propagate' or 'auto'");
     }
   }
-  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
-  cloud.normals.assign(3 * n, 0.0f);
   std::vector<uint32_t> graph;
   if (orientation == NormalOrientation::kPropagate) graph.assign(n * kPropagationNeighbors, kNoNeighbor);
-  EstimateUnoriented(index, options.k, cloud.normals, graph, options.progress);
+  if (options.implementation == NormalImplementation::kOwn) {
+    PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
+    cloud.normals.assign(3 * n, 0.0f);
+    EstimateUnoriented(index, options.k, cloud.normals, graph, options.progress);
+  } else {
+    PB_RETURN_IF_ERROR(EstimateWithModule(cloud, options));
+    if (!graph.empty()) {
+      PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
+      NeighborGraph(index, graph);
+    }
+  }
   report.points = n;
   report.orientation_used = orientation;
   if (orientation == NormalOrientation::kStations) report.flipped = OrientTowardStations(cloud);

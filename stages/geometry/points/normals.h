@@ -37,7 +37,17 @@ namespace pb {
 
 enum class NormalOrientation { kAuto, kStations, kPropagate, kNone };
 
+// Whose code finds the unoriented normals (the orientation step is always
+// ours, so the three differ only in the PCA): ours (above), PCL 1.13's
+// NormalEstimationOMP (pointbake-pcl.so) or Open3D 0.16's
+// PointCloud::EstimateNormals with a k-NN search (pointbake-poisson-open3d.so),
+// each loaded on first use. Both libraries take the same k nearest points,
+// the point included; a normal they cannot fit becomes +z. Their output is
+// float-rounding close to ours, not bit-identical.
+enum class NormalImplementation { kOwn, kPcl, kOpen3d };
+
 struct NormalOptions {
+  NormalImplementation implementation = NormalImplementation::kOwn;
   int k = 16;  // points in each PCA neighbourhood, the point included; 3..100
   NormalOrientation orientation = NormalOrientation::kAuto;
   int threads = 0;  // worker threads; 0 = TBB's default (all cores)
@@ -54,7 +64,8 @@ struct NormalReport {
 // Replaces cloud.normals with estimated, oriented unit normals (3 floats per
 // point). Status::Invalid if k is outside 3..100, the cloud has fewer than 3
 // points or a non-finite coordinate, kStations is asked for a cloud without
-// stations, or (from Validate) a station id is out of range.
+// stations, or (from Validate) a station id is out of range;
+// Status::Unsupported if the implementation's module is not in this build.
 Status EstimateNormals(PointCloud& cloud, const NormalOptions& options, NormalReport* report = nullptr);
 
 // Eigen-decomposition of the symmetric 3x3 matrix `a` (row-major, only

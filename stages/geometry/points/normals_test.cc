@@ -192,6 +192,17 @@ TEST(NormalsTest, Errors) {
   PointCloud two;
   two.positions = {0, 0, 0, 1, 0, 0};
   EXPECT_THAT(EstimateNormals(two, {}).message(), HasSubstr("needs at least 3 points, the cloud has 2"));
+  // Every implementation names a non-finite point (the other libraries'
+  // are checked before their module is loaded).
+  for (const NormalImplementation implementation :
+       {NormalImplementation::kOwn, NormalImplementation::kPcl, NormalImplementation::kOpen3d}) {
+    PointCloud bad;
+    bad.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, std::nanf("")};
+    NormalOptions options;
+    options.implementation = implementation;
+    options.orientation = NormalOrientation::kNone;
+    EXPECT_THAT(EstimateNormals(bad, options).message(), HasSubstr("point 3"));
+  }
 }
 
 TEST(NormalsTest, SameNormalsWithOneAndTwoThreads) {

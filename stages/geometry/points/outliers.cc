@@ -17,7 +17,9 @@
 #include <string>
 #include <vector>
 
+#include "stages/geometry/core/module.h"
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/module_calls.h"
 
 namespace pb {
 namespace {
@@ -54,26 +56,51 @@ Expected<PointCloud> RemoveInArena(const PointCloud& cloud, const OutlierOptions
   const double stddev = std::sqrt(squares / static_cast<double>(n - 1));
   const double threshold = mean + options.std_ratio * stddev;
 
-  PointCloud out;
-  out.origin = cloud.origin;
-  out.stations = cloud.stations;
+  std::vector<uint32_t> kept;
+  kept.reserve(n);
   for (size_t i = 0; i < n; ++i) {
-    if (mean_distance[i] > threshold) continue;
-    out.positions.insert(out.positions.end(), &cloud.positions[3 * i], &cloud.positions[3 * i + 3]);
-    if (cloud.has_normals()) {
-      out.normals.insert(out.normals.end(), &cloud.normals[3 * i], &cloud.normals[3 * i + 3]);
-    }
-    if (cloud.has_colors()) {
-      out.colors.insert(out.colors.end(), &cloud.colors[3 * i], &cloud.colors[3 * i + 3]);
-    }
-    if (cloud.has_intensities()) out.intensities.push_back(cloud.intensities[i]);
-    if (cloud.has_stations()) out.station_ids.push_back(cloud.station_ids[i]);
+    if (mean_distance[i] <= threshold) kept.push_back(static_cast<uint32_t>(i));
   }
+  PointCloud out = SelectPoints(cloud, kept);
   report.mean_distance_m = mean;
   report.stddev_m = stddev;
   report.threshold_m = threshold;
   report.points_out = out.size();
   report.removed = n - out.size();
+  if (options.progress) options.progress(1.0);
+  return out;
+}
+
+Expected<PointCloud> RemoveWithPcl(const PointCloud& cloud, const OutlierOptions& options,
+                                   OutlierReport& report) {
+  PB_ASSIGN_OR_RETURN(void* symbol,
+                      ModuleSymbol(kPclModule, PB_PCL_OUTLIERS_SYMBOL,
+                                   "statistical outlier removal (implementation 'pcl')"));
+  for (size_t i = 0; i < cloud.positions.size(); ++i) {
+    if (!std::isfinite(cloud.positions[i])) {
+      return Status::Invalid("statistical outlier removal: point " + std::to_string(i / 3) +
+                             " has a non-finite coordinate");
+    }
+  }
+  std::vector<uint32_t> kept;
+  std::string error;
+  OutliersModuleCall call;
+  call.cloud = &cloud;
+  call.k = options.k;
+  call.std_ratio = options.std_ratio;
+  call.kept = &kept;
+  call.error = &error;
+  if (!reinterpret_cast<bool (*)(OutliersModuleCall*)>(symbol)(&call)) {
+    return Status::Internal("PCL StatisticalOutlierRemoval failed: " + error);
+  }
+  for (size_t j = 0; j < kept.size(); ++j) {
+    if (kept[j] >= cloud.size() || (j > 0 && kept[j] <= kept[j - 1])) {
+      return Status::Internal("PCL StatisticalOutlierRemoval returned an invalid index list");
+    }
+  }
+  PointCloud out = SelectPoints(cloud, kept);
+  report.points_out = out.size();
+  report.removed = cloud.size() - out.size();
   if (options.progress) options.progress(1.0);
   return out;
 }
@@ -96,6 +123,11 @@ Expected<PointCloud> RemoveStatisticalOutliers(const PointCloud& cloud, const Ou
   if (cloud.size() < 2) {
     if (report) *report = local;
     return cloud;
+  }
+  if (options.implementation == OutlierImplementation::kPcl) {
+    Expected<PointCloud> out = RemoveWithPcl(cloud, options, local);
+    if (out.ok() && report) *report = local;
+    return out;
   }
   auto run = [&] { return RemoveInArena(cloud, options, local); };
   Expected<PointCloud> out = Status::Internal("not run");

@@ -17,7 +17,15 @@
 
 namespace pb {
 
+// Whose code runs: ours (below) or PCL 1.13's StatisticalOutlierRemoval
+// (pointbake-pcl.so, loaded on first use; single-threaded, float distances,
+// so a point right at the threshold may go the other way). With kPcl the
+// report's mean_distance_m, stddev_m and threshold_m stay 0: PCL does not
+// expose them.
+enum class OutlierImplementation { kOwn, kPcl };
+
 struct OutlierOptions {
+  OutlierImplementation implementation = OutlierImplementation::kOwn;
   int k = 16;              // neighbours per point, the point excluded; 1..1000
   double std_ratio = 2.0;  // threshold in standard deviations above the mean, >= 0
   int threads = 0;         // worker threads; 0 = TBB's default (all cores)
@@ -36,7 +44,8 @@ struct OutlierReport {
 
 // Status::Invalid for k outside 1..1000, a negative or non-finite std_ratio,
 // inconsistent attribute arrays or a non-finite coordinate (naming the point).
-// A cloud with fewer than 2 points is returned unchanged.
+// A cloud with fewer than 2 points is returned unchanged. Status::Unsupported
+// when kPcl is asked for and this build has no pointbake-pcl.so.
 Expected<PointCloud> RemoveStatisticalOutliers(const PointCloud& cloud, const OutlierOptions& options,
                                                OutlierReport* report = nullptr);
 
