@@ -447,7 +447,7 @@ class Atlas {
   int size_, height_, words_;
   std::vector<uint64_t> bits_;
   std::vector<int> max_free_;
-  mutable std::vector<int> lowest_row_;  // per run length, see LowestRowWithRun
+  mutable std::vector<int> lowest_row_;                 // per run length, see LowestRowWithRun
   std::vector<std::vector<std::pair<int, int>>> runs_;  // free runs [s, e) per row
 };
 
@@ -597,7 +597,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     tbb::parallel_for(0, 2, [&](int i) {
       trials[i].used =
           PackAtScale(charts, order, trials[i].s, size, g, give_up, &trials[i].placements);
-      });
+    });
     result.attempts += 2;
     // Measured (s^2, height) pairs of this round, for the secant.
     double x[2], y[2];
@@ -643,8 +643,8 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
       if (a >= s_limit) a = 0.5 * (lo + s_limit);
     } else {  // a bracket: straddle the target by 0.4 % each way, inside it
       const double width = hi - lo;
-      const double center = target > 0 ? std::clamp(target, lo + 0.2 * width, hi - 0.2 * width)
-                                       : lo + 0.5 * width;
+      const double center =
+          target > 0 ? std::clamp(target, lo + 0.2 * width, hi - 0.2 * width) : lo + 0.5 * width;
       a = std::max(center * 0.996, lo + 0.1 * width);
       b = std::min(center * 1.004, hi - 0.1 * width);
       if (!(a < b)) {
@@ -676,7 +676,9 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
           PackAtScale(charts, others[i], trial_s, size, g, size, &trials[i].placements);
     });
     result.attempts += 2;
-    Trial* fit = trials[0].used <= size ? &trials[0] : trials[1].used <= size ? &trials[1] : nullptr;
+    Trial* fit = trials[0].used <= size   ? &trials[0]
+                 : trials[1].used <= size ? &trials[1]
+                                          : nullptr;
     if (fit == nullptr) break;
     lo = trial_s;
     result.texels_per_meter = trial_s;
