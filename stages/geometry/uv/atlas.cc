@@ -12,6 +12,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <functional>
 #include <iterator>
 #include <limits>
 #include <numeric>
@@ -219,51 +220,75 @@ auto InArena(int threads, F&& body) {
 
 }  // namespace
 
+namespace {
+
+// One atlas built with the given isolated faces (see TinyFaces): the
+// unwrapped mesh and its packing scale. `first_round` reports progress.
+using AtlasAttempt = std::function<Expected<Mesh>(const std::vector<uint32_t>& isolated_faces,
+                                                  bool first_round, double* texels_per_meter)>;
+
+// Builds atlases until every face has float UV area: faces whose float UVs
+// come out with none at the packed scale are isolated and everything is
+// redone; each round isolates more faces, so this ends (in practice after
+// one or two rounds). Shared by the `charts` and `conformal` methods.
+Expected<Mesh> UnwrapInRounds(const Mesh& mesh, const UnwrapOptions& options,
+                              const AtlasAttempt& attempt, AtlasReport* report) {
+  std::vector<uint32_t> isolated = TinyFaces(mesh, options.size_texels);
+  for (int round = 0;; ++round) {
+    double texels_per_meter = 0;
+    // Progress is reported by the first round only (it must not go back).
+    auto out = attempt(isolated, round == 0, &texels_per_meter);
+    if (!out.ok()) return out.status();
+    std::vector<uint32_t> flat_faces = FacesWithoutUvArea(*out, options.size_texels);
+    std::vector<uint32_t> merged;
+    std::set_union(isolated.begin(), isolated.end(), flat_faces.begin(), flat_faces.end(),
+                   std::back_inserter(merged));
+    if (merged.size() > isolated.size()) {
+      isolated = std::move(merged);
+      continue;
+    }
+    if (report != nullptr) {
+      *report = MeasureAtlas(*out, options.size_texels);
+      report->texels_per_meter = texels_per_meter;
+      report->isolated_faces = isolated.size();
+      report->rounds = round + 1;
+    }
+    if (options.progress) options.progress(1.0);
+    return out;
+  }
+}
+
+}  // namespace
+
 Expected<Mesh> UnwrapCharts(const Mesh& mesh, const UnwrapOptions& options, AtlasReport* report) {
   PB_RETURN_IF_ERROR(CheckOptions(mesh, options));
   return InArena(options.threads, [&]() -> Expected<Mesh> {
     auto progress = [&](double f) {
       if (options.progress) options.progress(0.8 * f);
     };
-    ChartOptions chart_options;
-    chart_options.max_angle_deg = options.max_angle_deg;
-    chart_options.max_stretch = options.max_stretch;
-    chart_options.isolated_faces = TinyFaces(mesh, options.size_texels);
-    // Faces whose float UVs come out with no area at the packed scale are
-    // isolated and everything is redone; each round isolates more faces, so
-    // this ends (in practice after one or two rounds).
-    for (int round = 0;; ++round) {
-      // Progress is reported by the first round only (it must not go back).
+    auto attempt = [&](const std::vector<uint32_t>& isolated, bool first_round,
+                       double* texels_per_meter) -> Expected<Mesh> {
+      ChartOptions chart_options;
+      chart_options.max_angle_deg = options.max_angle_deg;
+      chart_options.max_stretch = options.max_stretch;
+      chart_options.isolated_faces = isolated;
       std::vector<FlatChart> charts = MakeFlatCharts(
           mesh, chart_options, nullptr,
-          round == 0 ? std::function<void(double)>(progress) : std::function<void(double)>());
+          first_round ? std::function<void(double)>(progress) : std::function<void(double)>());
       std::vector<ChartExtent> extents(charts.size());
       for (size_t c = 0; c < charts.size(); ++c) {
         extents[c] = {charts[c].width_m, charts[c].height_m};
       }
       auto packed = PackCharts(extents, options.size_texels, options.gutter_texels);
       if (!packed.ok()) return packed.status();
-      if (options.progress && round == 0) options.progress(0.85);
-      Mesh out = Layout(mesh, charts, *packed, options.size_texels);
-      std::vector<uint32_t> flat_faces = FacesWithoutUvArea(out, options.size_texels);
-      std::vector<uint32_t> merged;
-      std::set_union(chart_options.isolated_faces.begin(), chart_options.isolated_faces.end(),
-                     flat_faces.begin(), flat_faces.end(), std::back_inserter(merged));
-      if (merged.size() > chart_options.isolated_faces.size()) {
-        chart_options.isolated_faces = std::move(merged);
-        continue;
-      }
-      if (report != nullptr) {
-        *report = MeasureAtlas(out, options.size_texels);
-        report->texels_per_meter = packed->texels_per_meter;
-        report->isolated_faces = chart_options.isolated_faces.size();
-        report->rounds = round + 1;
-      }
-      if (options.progress) options.progress(1.0);
-      return out;
-    }
+      if (options.progress && first_round) options.progress(0.85);
+      *texels_per_meter = packed->texels_per_meter;
+      return Layout(mesh, charts, *packed, options.size_texels);
+    };
+    return UnwrapInRounds(mesh, options, attempt, report);
   });
 }
+
 Expected<Mesh> UnwrapConformal(const Mesh& mesh, const UnwrapOptions& options,
                                AtlasReport* report) {
   PB_RETURN_IF_ERROR(CheckOptions(mesh, options));
@@ -271,37 +296,22 @@ Expected<Mesh> UnwrapConformal(const Mesh& mesh, const UnwrapOptions& options,
     auto progress = [&](double f) {
       if (options.progress) options.progress(0.7 * f);
     };
-    SurfaceChartOptions chart_options;
-    chart_options.cone_deg = options.cone_deg;
-    chart_options.max_chart_stretch = options.max_chart_stretch;
-    chart_options.isolated_faces = TinyFaces(mesh, options.size_texels);
-    // As in UnwrapCharts: faces without float UV area are isolated and the
-    // atlas is rebuilt.
-    for (int round = 0;; ++round) {
+    auto attempt = [&](const std::vector<uint32_t>& isolated, bool first_round,
+                       double* texels_per_meter) -> Expected<Mesh> {
+      SurfaceChartOptions chart_options;
+      chart_options.cone_deg = options.cone_deg;
+      chart_options.max_chart_stretch = options.max_chart_stretch;
+      chart_options.isolated_faces = isolated;
       std::vector<FlatChart> charts = MakeSurfaceCharts(
           mesh, chart_options,
-          round == 0 ? std::function<void(double)>(progress) : std::function<void(double)>());
+          first_round ? std::function<void(double)>(progress) : std::function<void(double)>());
       auto packed = RasterPackCharts(charts, options.size_texels, options.gutter_texels);
       if (!packed.ok()) return packed.status();
-      if (options.progress && round == 0) options.progress(0.9);
-      Mesh out = RasterLayout(mesh, charts, *packed, options.size_texels);
-      std::vector<uint32_t> flat_faces = FacesWithoutUvArea(out, options.size_texels);
-      std::vector<uint32_t> merged;
-      std::set_union(chart_options.isolated_faces.begin(), chart_options.isolated_faces.end(),
-                     flat_faces.begin(), flat_faces.end(), std::back_inserter(merged));
-      if (merged.size() > chart_options.isolated_faces.size()) {
-        chart_options.isolated_faces = std::move(merged);
-        continue;
-      }
-      if (report != nullptr) {
-        *report = MeasureAtlas(out, options.size_texels);
-        report->texels_per_meter = packed->texels_per_meter;
-        report->isolated_faces = chart_options.isolated_faces.size();
-        report->rounds = round + 1;
-      }
-      if (options.progress) options.progress(1.0);
-      return out;
-    }
+      if (options.progress && first_round) options.progress(0.9);
+      *texels_per_meter = packed->texels_per_meter;
+      return RasterLayout(mesh, charts, *packed, options.size_texels);
+    };
+    return UnwrapInRounds(mesh, options, attempt, report);
   });
 }
 

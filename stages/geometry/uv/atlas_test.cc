@@ -315,6 +315,35 @@ TEST(UvAtlasTest, SpiralThatWouldOverlapIsSplit) {
   EXPECT_GE(report.charts, 2u);
 }
 
+// Regression (c5c37d9): faces of charts settled in an earlier round kept
+// their old pending-chart index, so peeling or splitting a chart in a later
+// round took in settled neighbours whose old index matched (and wrote out
+// of bounds: heap corruption on the bunny's 93k-face Poisson mesh). A
+// bumpy sphere with a little scanner-like noise needs eight rounds of
+// peeling and splitting at the default bound; without the fix face 10467
+// comes out in two charts (and the sanitizer build reports the overflow).
+TEST(UvAtlasTest, SplitRoundsKeepEveryFaceInOneChart) {
+  Mesh sphere = MakeBumpySphere(1.0, 5, 0.1);  // 20,480 faces
+  // Each vertex moved along its radius by up to 0.1 % (Knuth's
+  // multiplicative hash of its index: fixed pseudo-random amounts).
+  for (size_t v = 0; v < sphere.vertex_count(); ++v) {
+    const double u = double((uint32_t(v) * 2654435761u) >> 8) / double(1u << 24) - 0.5;
+    for (int d = 0; d < 3; ++d) sphere.positions[3 * v + d] *= float(1 + 0.002 * u);
+  }
+  const std::vector<FlatChart> charts = MakeFlatCharts(sphere, ChartOptions(), nullptr, {});
+  std::vector<int> seen(sphere.face_count(), 0);
+  for (const FlatChart& chart : charts) {
+    for (uint32_t f : chart.faces) ++seen[f];
+  }
+  for (size_t f = 0; f < seen.size(); ++f) ASSERT_EQ(seen[f], 1) << "face " << f;
+  UnwrapOptions unwrap;
+  unwrap.method = UnwrapMethod::kCharts;
+  unwrap.size_texels = 2048;
+  auto out = UnwrapCharts(sphere, unwrap, nullptr);
+  ASSERT_TRUE(out.ok());
+  ExpectValidAtlas(sphere, *out, unwrap);
+}
+
 TEST(UvAtlasTest, SliversBecomeOneTexelTriangles) {
   // A cylinder plus a needle 1 m long and 1 nm high: float UVs cannot hold
   // the needle at its true shape, so it gets a fixed triangle and stays CCW.

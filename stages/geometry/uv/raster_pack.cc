@@ -82,16 +82,68 @@ void ComputeRuns(Mask* mask) {
   }
 }
 
-// The chart's integer box at scale s and its conservative raster.
-Mask Rasterize(const FlatChart& chart, double s) {
+// Sets bits a..b (inclusive) of a row.
+void FillRun(uint64_t* row, int a, int b) {
+  const int first = a >> 6, last = b >> 6;
+  const uint64_t head = ~uint64_t(0) << (a & 63), tail = ~uint64_t(0) >> (63 - (b & 63));
+  if (first == last) {
+    row[first] |= head & tail;
+    return;
+  }
+  row[first] |= head;
+  for (int w = first + 1; w < last; ++w) row[w] = ~uint64_t(0);
+  row[last] |= tail;
+}
+
+uint64_t ReverseBits(uint64_t x) {
+  x = ((x >> 1) & 0x5555555555555555ull) | ((x & 0x5555555555555555ull) << 1);
+  x = ((x >> 2) & 0x3333333333333333ull) | ((x & 0x3333333333333333ull) << 2);
+  x = ((x >> 4) & 0x0F0F0F0F0F0F0F0Full) | ((x & 0x0F0F0F0F0F0F0F0Full) << 4);
+  return __builtin_bswap64(x);
+}
+
+// The mask turned by half a turn: texel (i, j) -> (w - 1 - i, h - 1 - j),
+// as PlacedTexel turns a chart by two quarter turns.
+Mask HalfTurn(const Mask& in) {
+  Mask out;
+  out.Reset(in.w, in.h);
+  const int pad = in.words * 64 - in.w;  // unused high bits of a row
+  std::vector<uint64_t> reversed(in.words + 1, 0);
+  for (int j = 0; j < in.h; ++j) {
+    const uint64_t* row = in.Row(j);
+    // Bit i goes to words * 64 - 1 - i, then down by `pad` to w - 1 - i.
+    for (int k = 0; k < in.words; ++k) reversed[in.words - 1 - k] = ReverseBits(row[k]);
+    uint64_t* dst = out.Row(in.h - 1 - j);
+    const int word_shift = pad >> 6, bit_shift = pad & 63;
+    for (int k = 0; k < in.words; ++k) {
+      const int src = k + word_shift;
+      uint64_t v = src < in.words ? reversed[src] >> bit_shift : 0;
+      if (bit_shift != 0 && src + 1 < in.words) v |= reversed[src + 1] << (64 - bit_shift);
+      dst[k] = v;
+    }
+  }
+  return out;
+}
+
+// The chart's integer box at scale s, turned `quarter_turns` times
+// counter-clockwise (the mapping of PlacedTexel), and its conservative
+// raster. Each turn is rasterized from the turned triangles: cheaper than
+// turning a large mask bit by bit, and exactly the texels the placed UVs
+// touch.
+Mask Rasterize(const FlatChart& chart, double s, int quarter_turns) {
   Mask mask;
   if (chart.isolated) {
     mask.Reset(1, 1);
     mask.Set(0, 0);
     return mask;
   }
-  const int w = std::max(1, int(std::ceil(chart.width_m * s)));
-  const int h = std::max(1, int(std::ceil(chart.height_m * s)));
+  RasterPlacement turn;
+  turn.box_width = std::max(1, int(std::ceil(chart.width_m * s)));
+  turn.box_height = std::max(1, int(std::ceil(chart.height_m * s)));
+  turn.quarter_turns = quarter_turns;
+  const bool swap = quarter_turns % 2 == 1;
+  const int w = swap ? turn.box_height : turn.box_width;
+  const int h = swap ? turn.box_width : turn.box_height;
   mask.Reset(w, h);
   // Texels grown by a hair: float UVs may move a vertex by ~1e-4 texel.
   constexpr double kEps = 0.01;
@@ -99,8 +151,9 @@ Mask Rasterize(const FlatChart& chart, double s) {
     double x[3], y[3];
     for (int k = 0; k < 3; ++k) {
       const uint32_t v = chart.corners[3 * f + k];
-      x[k] = chart.uv_m[2 * v] * s;
-      y[k] = chart.uv_m[2 * v + 1] * s;
+      const auto texel = PlacedTexel(turn, s, chart.uv_m[2 * v], chart.uv_m[2 * v + 1]);
+      x[k] = texel[0];
+      y[k] = texel[1];
     }
     const int y0 = std::clamp(int(std::floor(std::min({y[0], y[1], y[2]}) - kEps)), 0, h - 1);
     const int y1 = std::clamp(int(std::floor(std::max({y[0], y[1], y[2]}) + kEps)), 0, h - 1);
@@ -128,47 +181,10 @@ Mask Rasterize(const FlatChart& chart, double s) {
       if (!(min_x <= max_x)) continue;
       const int tx0 = std::clamp(int(std::floor(min_x - kEps)), 0, w - 1);
       const int tx1 = std::clamp(int(std::floor(max_x + kEps)), 0, w - 1);
-      uint64_t* row = mask.Row(ty);
-      for (int tx = tx0; tx <= tx1;) {
-        if ((tx & 63) == 0 && tx + 63 <= tx1) {
-          row[tx >> 6] = ~uint64_t(0);
-          tx += 64;
-        } else {
-          row[tx >> 6] |= uint64_t(1) << (tx & 63);
-          ++tx;
-        }
-      }
+      FillRun(mask.Row(ty), tx0, tx1);
     }
   }
   return mask;
-}
-
-// The mask turned `quarter_turns` times counter-clockwise (see PlacedTexel).
-Mask Turn(const Mask& in, int quarter_turns) {
-  if (quarter_turns == 0) return in;
-  Mask out;
-  const bool swap = quarter_turns % 2 == 1;
-  out.Reset(swap ? in.h : in.w, swap ? in.w : in.h);
-  for (int j = 0; j < in.h; ++j) {
-    const uint64_t* row = in.Row(j);
-    for (int word = 0; word < in.words; ++word) {
-      for (uint64_t m = row[word]; m != 0; m &= m - 1) {
-        const int i = word * 64 + __builtin_ctzll(m);
-        switch (quarter_turns) {
-          case 1:
-            out.Set(in.h - 1 - j, i);
-            break;
-          case 2:
-            out.Set(in.w - 1 - i, in.h - 1 - j);
-            break;
-          default:
-            out.Set(j, in.w - 1 - i);
-            break;
-        }
-      }
-    }
-  }
-  return out;
 }
 
 // dst |= src shifted left (towards higher x) by `shift` bits.
@@ -181,23 +197,41 @@ void ShiftOr(uint64_t* dst, int dst_words, const uint64_t* src, int src_words, i
   }
 }
 
-// The mask grown by g texels in x and y (a square), offset by g.
+// The mask grown by g texels in x and y (a square), offset by g: each
+// direction is an OR over a window of 2g + 1, made by doubling (the window
+// of `span` ORed with itself shifted by `span`), log2(2g + 1) passes.
 Mask Dilate(const Mask& in, int g) {
+  const int window = 2 * g + 1;
   Mask horizontal;
   horizontal.Reset(in.w + 2 * g, in.h);
+  std::vector<uint64_t> shifted(horizontal.words);
   for (int y = 0; y < in.h; ++y) {
-    for (int d = 0; d <= 2 * g; ++d) {
-      ShiftOr(horizontal.Row(y), horizontal.words, in.Row(y), in.words, d);
+    uint64_t* row = horizontal.Row(y);
+    ShiftOr(row, horizontal.words, in.Row(y), in.words, 0);
+    int span = 1;
+    while (span < window) {
+      const int step = std::min(span, window - span);
+      std::fill(shifted.begin(), shifted.end(), 0);
+      ShiftOr(shifted.data(), horizontal.words, row, horizontal.words, step);
+      for (int i = 0; i < horizontal.words; ++i) row[i] |= shifted[i];
+      span += step;
     }
   }
   Mask out;
   out.Reset(in.w + 2 * g, in.h + 2 * g);
-  for (int y = 0; y < out.h; ++y) {
-    uint64_t* row = out.Row(y);
-    for (int r = std::max(0, y - 2 * g); r <= std::min(in.h - 1, y); ++r) {
-      const uint64_t* src = horizontal.Row(r);
-      for (int i = 0; i < out.words; ++i) row[i] |= src[i];
+  for (int y = 0; y < in.h; ++y) {
+    std::copy(horizontal.Row(y), horizontal.Row(y) + out.words, out.Row(y));
+  }
+  // Row y ORs rows y - span + 1 .. y; top down so that row y - step is
+  // still the narrower window.
+  for (int span = 1; span < window;) {
+    const int step = std::min(span, window - span);
+    for (int y = out.h - 1; y >= step; --y) {
+      uint64_t* row = out.Row(y);
+      const uint64_t* below = out.Row(y - step);
+      for (int i = 0; i < out.words; ++i) row[i] |= below[i];
     }
+    span += step;
   }
   ComputeRuns(&out);
   return out;
@@ -211,9 +245,9 @@ struct Shapes {
 
 Shapes MakeShapes(const FlatChart& chart, double s, int gutter) {
   Shapes shapes;
-  const Mask base = Rasterize(chart, s);
-  for (int k = 0; k < 4; ++k) {
-    shapes.stamp[k] = Turn(base, k);
+  for (int k = 0; k < (chart.isolated ? 1 : 4); ++k) {
+    // Quarter turns 0 and 1 from the triangles, 2 and 3 by half turns.
+    shapes.stamp[k] = k < 2 ? Rasterize(chart, s, k) : HalfTurn(shapes.stamp[k - 2]);
     shapes.probe[k] = Dilate(shapes.stamp[k], gutter);
     const Mask& p = shapes.probe[k];
     std::vector<int>& rows = shapes.check_rows[k];
@@ -243,11 +277,12 @@ class Atlas {
       for (int x = size_; x < words_ * 64; ++x) row[x >> 6] |= uint64_t(1) << (x & 63);
     }
     max_free_.assign(height_, size_);
+    lowest_row_.assign(size_ + 1, 0);
     runs_.assign(height_, std::vector<std::pair<int, int>>(1, {0, size_}));
   }
 
   // The lowest-top, then leftmost position of `probe` (its lower-left
-  // corner), or false. Positions whose top reaches `best_top` are not
+  // corner), or false. Positions whose top is above `best_top` are not
   // searched. `check_rows` starts with the rows used to prune candidates.
   struct Scratch {
     std::vector<std::pair<int, int>> candidates, next;
@@ -261,7 +296,14 @@ class Atlas {
     auto& candidates_ = scratch->candidates;
     auto& next_ = scratch->next;
     const int prune = std::min<int>(kPruneRows, int(check_rows.size()));
-    for (int y = 0; y + probe.h <= height_ && y + probe.h < best_top; ++y) {
+    // Below the lowest row with a long enough free run for a pruning row,
+    // nothing fits.
+    int start = 0;
+    for (int i = 0; i < prune; ++i) {
+      const int r = check_rows[i];
+      start = std::max(start, LowestRowWithRun(probe.run_len[r]) - r);
+    }
+    for (int y = start; y + probe.h <= height_ && y + probe.h <= best_top; ++y) {
       bool possible = true;
       for (int i = 0; i < prune && possible; ++i) {
         const int r = check_rows[i];
@@ -311,6 +353,17 @@ class Atlas {
       }
     }
     return false;
+  }
+
+  // The lowest row with a free run of `length` texels or more (height_ if
+  // none). Rows only fill up, so the answer only rises: kept per length
+  // and advanced lazily.
+  int LowestRowWithRun(int length) const {
+    if (length <= 0) return 0;
+    if (length > size_) return height_;
+    int& y = lowest_row_[length];
+    while (y < height_ && max_free_[y] < length) ++y;
+    return y;
   }
 
   void Stamp(const Mask& stamp, int x0, int y0) {
@@ -394,6 +447,7 @@ class Atlas {
   int size_, height_, words_;
   std::vector<uint64_t> bits_;
   std::vector<int> max_free_;
+  mutable std::vector<int> lowest_row_;                 // per run length, see LowestRowWithRun
   std::vector<std::vector<std::pair<int, int>>> runs_;  // free runs [s, e) per row
 };
 
@@ -402,13 +456,15 @@ class Atlas {
 int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint32_t>& order,
                     double s, int size, int gutter, int64_t give_up_height,
                     std::vector<RasterPlacement>* placements) {
-  Atlas atlas(size, 2 * size);
+  // Nothing is placed above the give-up height: no need for those rows.
+  Atlas atlas(size, int(std::min<int64_t>(2 * int64_t(size), give_up_height + 1)));
   int64_t used = 0;
   placements->assign(charts.size(), RasterPlacement());
   // Shapes are made block by block in parallel (an attempt that gives up
   // early does not rasterize the rest), placed one by one.
   constexpr size_t kBlock = 64;
   std::vector<Shapes> block;
+  Atlas::Scratch scratch;
   for (size_t begin = 0; begin < order.size(); begin += kBlock) {
     const size_t end = std::min(order.size(), begin + kBlock);
     block.assign(end - begin, Shapes());
@@ -420,26 +476,20 @@ int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint
     for (size_t i = begin; i < end; ++i) {
       const uint32_t c = order[i];
       const Shapes& shape = block[i - begin];
-      // The four turns are searched side by side (each to its own first
-      // fit) and compared in a fixed order.
+      // The four turns one after the other, each searched only up to the
+      // best top edge so far (a packing runs on one thread: the scale
+      // search runs its trials side by side instead).
       const int turns = charts[c].isolated ? 1 : 4;
-      int found_x[4], found_y[4];
-      bool found[4] = {false, false, false, false};
-      tbb::parallel_for(0, turns, [&](int k) {
-        thread_local Atlas::Scratch scratch;
-        found[k] =
-            atlas.Find(shape.probe[k], shape.check_rows[k], std::numeric_limits<int64_t>::max(),
-                       &scratch, &found_x[k], &found_y[k]);
-      });
       int64_t best_top = std::numeric_limits<int64_t>::max();
       int best_x = 0, best_y = 0, best_k = -1;
       for (int k = 0; k < turns; ++k) {
-        if (!found[k]) continue;
-        const int64_t top = int64_t(found_y[k]) + shape.probe[k].h;
-        if (top < best_top || (top == best_top && found_x[k] < best_x)) {
+        int x = 0, y = 0;
+        if (!atlas.Find(shape.probe[k], shape.check_rows[k], best_top, &scratch, &x, &y)) continue;
+        const int64_t top = int64_t(y) + shape.probe[k].h;
+        if (top < best_top || (top == best_top && x < best_x)) {
           best_top = top;
-          best_x = found_x[k];
-          best_y = found_y[k];
+          best_x = x;
+          best_y = y;
           best_k = k;
         }
       }
@@ -520,61 +570,119 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
   // No chart may be wider than the square; nothing beats filling it.
   const double s_limit = longest_m > 0 ? (usable - 1) / longest_m : usable;
   const double s_area = area_m2 > 0 ? usable / std::sqrt(area_m2) : usable;
-  // Secant steps on the packed height (area grows with s^2 on a fixed
-  // width), then halving the bracket, to 0.8 %.
+  // The scale search: rounds of two trial packings side by side (one per
+  // core; each packing is sequential), the next pair aimed at the scale
+  // where the packed height reaches the square (height grows about as s^2
+  // on a fixed width: a secant on s^2), inside the bracket [lo, hi) of the
+  // largest fitting and smallest failing scales, until it is within 0.8 %.
+  // The choices depend only on the trials' results, never on timing.
+  struct Trial {
+    double s = 0;
+    int64_t used = 0;
+    std::vector<RasterPlacement> placements;
+  };
   constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
-  double lo = 0, hi = std::numeric_limits<double>::infinity();
-  double s = std::min(std::sqrt(0.75) * s_area, s_limit);
-  std::vector<RasterPlacement> placements;
-  for (int attempt = 0; attempt < 12; ++attempt) {
-    ++result.attempts;
-    // Once a scale fits, a taller packing cannot win: give up early.
-    const int64_t give_up = lo > 0 ? size : 2 * int64_t(size);
-    const int64_t used = PackAtScale(charts, order, s, size, g, give_up, &placements);
-    const bool fits = used <= size;
-    if (fits) {
-      lo = s;
-      result.texels_per_meter = s;
-      result.placements = placements;
-    } else {
-      hi = s;
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  double lo = 0, hi = kInf;
+  double a = std::min(std::sqrt(0.70) * s_area, s_limit);
+  double b = std::min(std::sqrt(0.80) * s_area, s_limit);
+  if (b < a * 1.01) a = b / 1.05;
+  for (int round = 0; round < 16; ++round) {
+    // A failing trial stops a little above the square (its height still
+    // aims the next pair) once some scale is known to fit.
+    const int64_t give_up = lo > 0 ? size + size / 16 : 2 * int64_t(size);
+    Trial trials[2];
+    trials[0].s = a;
+    trials[1].s = b;
+    tbb::parallel_for(0, 2, [&](int i) {
+      trials[i].used =
+          PackAtScale(charts, order, trials[i].s, size, g, give_up, &trials[i].placements);
+    });
+    result.attempts += 2;
+    // Measured (s^2, height) pairs of this round, for the secant.
+    double x[2], y[2];
+    int measured = 0;
+    for (Trial& trial : trials) {
+      if (trial.used <= size) {
+        if (trial.s > lo) {
+          lo = trial.s;
+          result.texels_per_meter = trial.s;
+          result.placements = std::move(trial.placements);
+        }
+      } else if (trial.s > lo && trial.s < hi) {
+        hi = trial.s;
+      }
+      if (trial.used != kNever && trial.used <= give_up) {
+        x[measured] = trial.s * trial.s;
+        y[measured] = double(std::max<int64_t>(trial.used, 1));
+        ++measured;
+      }
     }
-    if (lo > 0 && (hi <= lo * 1.008 || (fits && s >= s_limit) || attempt >= 7)) break;
-    const bool measured = used != kNever && used <= give_up;
-    double next = measured
-                      ? s * std::sqrt(double(size) / double(std::max<int64_t>(used, 1))) * 0.998
-                      : 0.7 * s;
-    if (lo > 0 && hi < std::numeric_limits<double>::infinity()) {
-      next = measured ? std::clamp(next, lo + 0.2 * (hi - lo), hi - 0.2 * (hi - lo))
-                      : std::sqrt(lo * hi);
-    } else if (lo > 0) {
-      next = std::min(std::max(next, 1.005 * s), s_limit);
-    } else {
-      next = std::min(next, 0.99 * s);
+    if (hi <= lo) hi = kInf;  // a smaller scale failed where a larger fitted
+    if (lo > 0 && (hi <= lo * 1.008 || lo >= s_limit || round >= 5)) break;
+    // The scale where the height reaches the square, by the secant through
+    // this round's heights, else by one height's s^2 rule.
+    double target = 0;
+    if (measured == 2 && y[1] != y[0] && x[1] != x[0]) {
+      const double slope = (y[1] - y[0]) / (x[1] - x[0]);
+      const double x_target = x[0] + (double(size) - y[0]) / slope;
+      if (slope > 0 && x_target > 0) target = std::sqrt(x_target);
     }
-    s = next;
+    if (!(target > 0) && measured > 0) target = std::sqrt(x[0] * double(size) / y[0]);
+    if (lo == 0 && hi == kInf) {  // nothing fits anywhere yet
+      a = 0.5 * std::min(trials[0].s, trials[1].s);
+      b = 0.7 * std::min(trials[0].s, trials[1].s);
+    } else if (lo == 0) {  // everything tried fails: go below
+      const double top = std::min(target > 0 ? target * 0.998 : 0.9 * hi, 0.99 * hi);
+      b = top;
+      a = top / 1.04;
+    } else if (hi == kInf) {  // everything tried fits: go above
+      const double bottom = std::max(target > 0 ? target * 0.998 : 1.03 * lo, 1.004 * lo);
+      a = std::min(bottom, s_limit);
+      b = std::min(bottom * 1.03, s_limit);
+      if (a >= s_limit) a = 0.5 * (lo + s_limit);
+    } else {  // a bracket: straddle the target by 0.4 % each way, inside it
+      const double width = hi - lo;
+      const double center =
+          target > 0 ? std::clamp(target, lo + 0.2 * width, hi - 0.2 * width) : lo + 0.5 * width;
+      a = std::max(center * 0.996, lo + 0.1 * width);
+      b = std::min(center * 1.004, hi - 0.1 * width);
+      if (!(a < b)) {
+        a = lo + width / 3;
+        b = lo + 2 * width / 3;
+      }
+    }
   }
-  // Other orders (longest side first, then shortest side first) often nest
-  // better: each is tried one step above the best scale so far, climbing
-  // while it fits.
-  for (int variant = 1; variant <= 2 && lo > 0; ++variant) {
-    std::vector<uint32_t> other(charts.size());
-    std::iota(other.begin(), other.end(), 0u);
+  // The packed height jumps with the scale (one chart more or less on the
+  // top row), and other orders often nest better: longest side first and
+  // shortest side first are tried side by side one step above the best
+  // scale so far, climbing while one of them fits (the first if both do).
+  std::vector<uint32_t> others[2];
+  for (int variant = 0; variant < 2 && lo > 0; ++variant) {
+    others[variant].resize(charts.size());
+    std::iota(others[variant].begin(), others[variant].end(), 0u);
     std::vector<double> key(charts.size(), 0.0);
     for (size_t c = 0; c < charts.size(); ++c) {
-      if (!charts[c].isolated) key[c] = variant == 1 ? charts[c].width_m : charts[c].height_m;
+      if (!charts[c].isolated) key[c] = variant == 0 ? charts[c].width_m : charts[c].height_m;
     }
-    std::stable_sort(other.begin(), other.end(),
+    std::stable_sort(others[variant].begin(), others[variant].end(),
                      [&](uint32_t a, uint32_t b) { return key[a] > key[b]; });
-    for (int climb = 0; climb < 8 && lo * 1.012 <= s_limit; ++climb) {
-      const double step = 1.012;
-      ++result.attempts;
-      const double trial = lo * step;
-      if (PackAtScale(charts, other, trial, size, g, size, &placements) > size) break;
-      lo = trial;
-      result.texels_per_meter = trial;
-      result.placements = placements;
-    }
+  }
+  for (int climb = 0; climb < 8 && lo > 0 && lo * 1.012 <= s_limit; ++climb) {
+    const double trial_s = lo * 1.012;
+    Trial trials[2];
+    tbb::parallel_for(0, 2, [&](int i) {
+      trials[i].used =
+          PackAtScale(charts, others[i], trial_s, size, g, size, &trials[i].placements);
+    });
+    result.attempts += 2;
+    Trial* fit = trials[0].used <= size   ? &trials[0]
+                 : trials[1].used <= size ? &trials[1]
+                                          : nullptr;
+    if (fit == nullptr) break;
+    lo = trial_s;
+    result.texels_per_meter = trial_s;
+    result.placements = std::move(fit->placements);
   }
   // A few large, nearly rectangular charts (walls) can pack tighter as boxes
   // on a skyline (pack.h): keep whichever packing has the larger scale.

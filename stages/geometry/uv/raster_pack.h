@@ -13,10 +13,13 @@
 // mirrored) with the lowest top edge, then leftmost: a bottom-left fill on
 // the texel grid, searched row by row through the free runs of each row
 // (compare xatlas's bitmap packer and Lévy et al. 2002's "Tetris" packing
-// with horizons; this keeps holes usable). The scale is found by secant
-// steps on the packed height and then bisection to 0.8 %. The bounding boxes
-// are also packed by pack.h's skyline; the larger of the two scales wins
-// (a few large rectangular charts, like a room's walls, pack better so).
+// with horizons; this keeps holes usable). The scale is searched by pairs
+// of trial packings run side by side (each packing is sequential), aimed by
+// a secant on the packed height, to 0.8 %; then the orders longest side
+// first and shortest side first climb by 1.2 % steps while one fits. The
+// bounding boxes are also packed by pack.h's skyline; the larger of the
+// scales wins (a few large rectangular charts, like a room's walls, pack
+// better so).
 #pragma once
 
 #include <array>

@@ -28,8 +28,13 @@ constexpr size_t kSmallChartFaces = 16;
 // Smoothing and merging never cross an edge folding more than this (or
 // cone_deg if larger).
 constexpr double kMergeCreaseDeg = 75;
-// Curved charts with more vertices than this are split rather than solved.
-constexpr size_t kMaxSolveVertices = 60000;
+// Curved charts with more vertices than this are split rather than solved:
+// on a noisy scan such charts fail the stretch bound anyway, and each
+// failed solve of a huge chart cost as much as the rest of the unwrap
+// (the room's 10^6-face depth-10 mesh: chart making 35 -> 16 s on one
+// thread from 60,000 to 10,000, 773 -> 774 charts; the benchmark meshes of
+// docs/uv.md have no curved chart that large and do not change).
+constexpr size_t kMaxSolveVertices = 10000;
 
 double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 double Norm(const V3& a) { return std::sqrt(Dot(a, a)); }
@@ -361,27 +366,45 @@ bool FlattenChart(const Mesh& mesh, const FaceData& data, double max_stretch, Fl
   return ScaleAndCheck(mesh, data, max_stretch, chart);
 }
 
-// Local index of face f in the increasing list `faces`.
-size_t LocalIndex(const std::vector<uint32_t>& faces, uint32_t f) {
-  return size_t(std::lower_bound(faces.begin(), faces.end(), f) - faces.begin());
-}
-bool InList(const std::vector<uint32_t>& faces, uint32_t f) {
-  return std::binary_search(faces.begin(), faces.end(), f);
-}
+// Local index of each face of a chart (kNone for faces outside it): one
+// lookup per neighbour instead of a binary search in the chart's face list,
+// which dominated splitting the huge charts of noisy scans. Kept per thread
+// at the mesh's face count and cleared after use.
+class LocalIndex {
+ public:
+  LocalIndex(size_t face_count, const std::vector<uint32_t>& faces) : faces_(faces) {
+    thread_local std::vector<uint32_t> storage;
+    if (storage.size() < face_count) storage.assign(face_count, kNone);
+    local_ = &storage;
+    for (size_t i = 0; i < faces.size(); ++i) storage[faces[i]] = uint32_t(i);
+  }
+  ~LocalIndex() {
+    for (uint32_t f : faces_) (*local_)[f] = kNone;
+  }
+  LocalIndex(const LocalIndex&) = delete;
+  LocalIndex& operator=(const LocalIndex&) = delete;
+  // The index of face f in the chart, or kNone.
+  uint32_t operator()(uint32_t f) const { return (*local_)[f]; }
+
+ private:
+  const std::vector<uint32_t>& faces_;
+  std::vector<uint32_t>* local_;
+};
 
 // Breadth-first hop distances from `start` within the chart (-1: unreached).
-std::vector<int> Hops(const Topology& topo, const std::vector<uint32_t>& faces, uint32_t start) {
-  std::vector<int> hops(faces.size(), -1);
+std::vector<int> Hops(const Topology& topo, const LocalIndex& local, size_t chart_faces,
+                      uint32_t start) {
+  std::vector<int> hops(chart_faces, -1);
   std::deque<uint32_t> queue{start};
-  hops[LocalIndex(faces, start)] = 0;
+  hops[local(start)] = 0;
   while (!queue.empty()) {
     const uint32_t f = queue.front();
     queue.pop_front();
-    const int h = hops[LocalIndex(faces, f)];
+    const int h = hops[local(f)];
     for (int k = 0; k < 3; ++k) {
       const uint32_t g = topo.neighbor[3 * size_t(f) + k];
-      if (g == kNone || !InList(faces, g)) continue;
-      int& hg = hops[LocalIndex(faces, g)];
+      if (g == kNone || local(g) == kNone) continue;
+      int& hg = hops[local(g)];
       if (hg >= 0) continue;
       hg = h + 1;
       queue.push_back(g);
@@ -401,20 +424,21 @@ std::vector<std::vector<uint32_t>> SplitChart(const Topology& topo,
     }
     return faces[best];
   };
-  const uint32_t a = farthest(Hops(topo, faces, faces.front()));
-  const uint32_t b = farthest(Hops(topo, faces, a));
+  const LocalIndex local(topo.neighbor.size() / 3, faces);
+  const uint32_t a = farthest(Hops(topo, local, faces.size(), faces.front()));
+  const uint32_t b = farthest(Hops(topo, local, faces.size(), a));
   std::vector<int> label(faces.size(), -1);
   std::deque<uint32_t> queue{a, b};
-  label[LocalIndex(faces, a)] = 0;
-  label[LocalIndex(faces, b)] = 1;
+  label[local(a)] = 0;
+  label[local(b)] = 1;
   while (!queue.empty()) {
     const uint32_t f = queue.front();
     queue.pop_front();
-    const int l = label[LocalIndex(faces, f)];
+    const int l = label[local(f)];
     for (int k = 0; k < 3; ++k) {
       const uint32_t g = topo.neighbor[3 * size_t(f) + k];
-      if (g == kNone || !InList(faces, g)) continue;
-      int& lg = label[LocalIndex(faces, g)];
+      if (g == kNone || local(g) == kNone) continue;
+      int& lg = label[local(g)];
       if (lg >= 0) continue;
       lg = l;
       queue.push_back(g);
@@ -436,8 +460,8 @@ std::vector<std::vector<uint32_t>> SplitChart(const Topology& topo,
       part.push_back(f);
       for (int k = 0; k < 3; ++k) {
         const uint32_t g = topo.neighbor[3 * size_t(f) + k];
-        if (g == kNone || !InList(faces, g)) continue;
-        const size_t i = LocalIndex(faces, g);
+        if (g == kNone || local(g) == kNone) continue;
+        const size_t i = local(g);
         if (done[i] || label[i] != label[s]) continue;
         done[i] = 1;
         stack.push_back(g);
