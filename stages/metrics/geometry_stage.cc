@@ -36,7 +36,7 @@ constexpr const char* kSchema = R"({
       "minimum": 1,
       "maximum": 64,
       "default": 8,
-      "description": "With `points`: a scan point's local spacing is the distance to its k-th nearest other point (render.splats uses the same)."
+      "description": "With `points`: a scan point's local spacing is r_k sqrt(pi / k), r_k the distance to its k-th nearest other point (points/spacing.h LocalSpacing; mesh.trim and render.splats use the same)."
     },
     "spacing_factor": {
       "type": "number",
@@ -169,7 +169,7 @@ Status Run(StageContext& ctx) {
 StageType GeometryMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;
+  type.version = 3;  // 3: local spacing r_k sqrt(pi / k), as mesh.trim (was r_k)
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
@@ -183,7 +183,8 @@ StageType GeometryMetricsStage() {
       "surface (column `truth` = \"analytic\"); otherwise the distance to the truth mesh.ply "
       "(\"mesh\").\n\n"
       "With `points` (the scan; no truth needed; stages/geometry/mesh/scan_agreement.h): a scan "
-      "point's local spacing is the distance to its `k`-th nearest other point; the invented area is "
+      "point's local spacing is r_k sqrt(pi / k), r_k the distance to its `k`-th nearest other point "
+      "(an estimate of the distance between neighbouring samples, as mesh.trim's); the invented area is "
       "the fraction of `samples` mesh points (uniform by area, `seed`) farther than "
       "max(`spacing_factor` x local spacing, the mesh's mean edge) from each of their 16 nearest scan "
       "points (surface the scanner never saw); missing surface is the fraction of scan points "

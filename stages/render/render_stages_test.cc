@@ -258,9 +258,14 @@ TEST_F(RenderStagesTest, SplatsWriteTheSameFramesAsRenderFramesWouldNameThem) {
     EXPECT_EQ(ctx.counters_["points"], 41 * 41);
     EXPECT_EQ(ctx.meta_["frames"]["render"]["source"], "splats");
     EXPECT_EQ(ctx.meta_["frames"]["render"]["lighting"], "unlit");
-    // Spacing 5 cm, the 8th neighbour a diagonal: radius 0.75 * 7.07 cm.
-    EXPECT_NEAR(ctx.counters_["median_radius_m"], 0.75 * 0.05 * std::sqrt(2.0), 1e-6);
-    EXPECT_TRUE(ctx.phases_.count("spacing") && ctx.phases_.count("compute"));
+    // Grid step 5 cm, the 8th neighbour a diagonal: local spacing 7.07 cm x
+    // sqrt(pi / 8), radius 1.2 spacings.
+    EXPECT_NEAR(ctx.counters_["median_radius_m"], 1.2 * 0.05 * std::sqrt(2.0) * std::sqrt(M_PI / 8), 1e-6);
+    // A flat grid: every disk lies in its plane; the rim of the grid is its border.
+    EXPECT_EQ(ctx.counters_["oriented_points"], 41 * 41);
+    EXPECT_GE(ctx.counters_["border_points"], 4 * 39);
+    EXPECT_LE(ctx.counters_["border_points"], 4 * 41 * 2);
+    EXPECT_TRUE(ctx.phases_.count("spacing") && ctx.phases_.count("surfels") && ctx.phases_.count("compute"));
     return Frames(ctx).value();
   };
   const FrameSet one = render(1, "a"), two = render(2, "b");

@@ -11,11 +11,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <numeric>
 #include <string>
 
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/spacing.h"
 
 namespace pb {
 namespace {
@@ -66,16 +66,14 @@ Expected<SupportField> BuildField(const Mesh& mesh, const PointCloud& points, in
                            " points for the local spacing, the cloud has " +
                            std::to_string(field.index.size()));
   }
-  field.spacing.resize(field.index.size());
-  const double scale = std::sqrt(std::numbers::pi / k);
-  ParallelRanges(field.index.size(), threads, [&](size_t begin, size_t end) {
-    std::vector<Neighbor> neighbors(static_cast<size_t>(k));
-    for (size_t i = begin; i < end; ++i) {
-      const int found = field.index.QueryPoint(static_cast<uint32_t>(i), k, neighbors);
-      field.spacing[i] =
-          static_cast<float>(std::sqrt(neighbors[found - 1].squared_distance_m2) * scale);
-    }
-  });
+  Expected<std::vector<float>> spacing = Status::Internal("not run");
+  if (threads > 0) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] { spacing = LocalSpacing(field.index, k); });
+  } else {
+    spacing = LocalSpacing(field.index, k);
+  }
+  PB_ASSIGN_OR_RETURN(field.spacing, std::move(spacing));
   for (int c = 0; c < 3; ++c) field.mesh_to_cloud[c] = mesh.origin[c] - points.origin[c];
   return field;
 }
@@ -127,13 +125,6 @@ uint32_t FindRoot(std::vector<uint32_t>& parent, uint32_t x) {
 }
 
 }  // namespace
-
-Expected<std::vector<float>> LocalSpacings(const PointCloud& points, int k, int threads) {
-  PB_RETURN_IF_ERROR(Validate(points));
-  if (k < 1) return Status::Invalid("local spacing: k must be at least 1");
-  PB_ASSIGN_OR_RETURN(SupportField field, BuildField(Mesh(), points, k, threads));
-  return std::move(field.spacing);
-}
 
 double MeanEdgeLength(const Mesh& mesh) {
   if (mesh.face_count() == 0) return 0;
