@@ -169,7 +169,7 @@ Status Run(StageContext& ctx) {
 StageType GeometryMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;  // 3: local spacing r_k sqrt(pi / k), as mesh.trim (was r_k)
+  type.version = 3;  // 3: local spacing r_k sqrt(pi / k), as mesh.trim (was r_k); UV seams are no boundary edges
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
@@ -194,7 +194,7 @@ StageType GeometryMetricsStage() {
       "mesh_to_scan, scan_to_mesh with `points`), `samples`, `mean_m`, `rms_m`, `p95_m`, "
       "`hausdorff_m`, `truth` (analytic, mesh or scan), `beyond_fraction` (mesh_to_scan: the invented "
       "area fraction; scan_to_mesh: the missing fraction; null for the truth rows), "
-      "`boundary_edges_per_1000_faces` (edges with one face, per 1000 faces of `mesh`; every row). "
+      "`boundary_edges_per_1000_faces` (edges with one face, per 1000 faces of `mesh`, vertices at one position counting as one so that UV seams are not counted; every row). "
       "The symmetric row has the larger Hausdorff distance, the mean of the two means, and RMS / "
       "95th percentile over both directions' samples pooled. mesh_to_scan distances go to the "
       "nearest scan point.\n\n"

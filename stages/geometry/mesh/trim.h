@@ -107,7 +107,8 @@ struct SupportReport {
 Expected<SupportReport> MeasureSupport(const Mesh& mesh, const PointCloud& points,
                                        const SupportOptions& options);
 
-// Edges used by exactly one face.
+// Edges used by exactly one face, vertices at the same position counting as
+// one (the copies uv.unwrap makes along its seams), so a UV seam is no border.
 uint64_t CountBoundaryEdges(const Mesh& mesh);
 
 // Mean length of the faces' sides (meters; 0 without faces).
