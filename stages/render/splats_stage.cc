@@ -110,12 +110,12 @@ constexpr const char* kSchema = R"({
       "description": "Largest splat radius on screen, output pixels (points just in front of the eye would otherwise cover the frame)."
     },
     "background": {
-      "type": "array",
-      "items": { "type": "integer", "minimum": 0, "maximum": 255 },
-      "minItems": 3,
-      "maxItems": 3,
+      "anyOf": [
+        { "type": "array", "items": { "type": "integer", "minimum": 0, "maximum": 255 }, "minItems": 3, "maxItems": 3 },
+        { "type": "string", "pattern": "^[0-9]{1,3},[0-9]{1,3},[0-9]{1,3}$" }
+      ],
       "default": [0, 0, 0],
-      "description": "sRGB color where no splat is (alpha 0 there)."
+      "description": "sRGB color where no splat is (alpha 0 there). [R, G, B] or \"R,G,B\" (the form --set and a campaign's set: can give). A non-black background tells missing faces from dark texels."
     }
   }
 })";
