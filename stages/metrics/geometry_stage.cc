@@ -169,7 +169,7 @@ Status Run(StageContext& ctx) {
 StageType GeometryMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;  // 3: local spacing r_k sqrt(pi / k), as mesh.trim (was r_k); UV seams are no boundary edges
+  type.version = 4;  // 3: local spacing r_k sqrt(pi / k), as mesh.trim (was r_k); 4: UV seams are no boundary edges
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
