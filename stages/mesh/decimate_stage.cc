@@ -38,6 +38,11 @@ constexpr const char* kSchema = R"({
       "default": 1000,
       "description": "How strongly open borders (holes, openings, sheet edges) keep their shape, relative to the surface error; 0 lets them erode."
     },
+    "smooth_boundary": {
+      "type": "boolean",
+      "default": true,
+      "description": "Border constraints follow the border's course smoothed over about half an output edge (corners excepted) instead of every input edge, so a border cut face by face (a staircase) is simplified to the output's resolution instead of keeping every step (docs/mesh.md). false: planes through the input's own border edges."
+    },
     "min_normal_dot": {
       "type": "number",
       "minimum": -1,
@@ -58,6 +63,7 @@ Status Run(StageContext& ctx) {
   }
   DecimateOptions options;
   PB_ASSIGN_OR_RETURN(options.boundary_weight, NumberParam(ctx, kId, "boundary_weight"));
+  PB_ASSIGN_OR_RETURN(options.smooth_boundary, BoolParam(ctx, kId, "smooth_boundary"));
   PB_ASSIGN_OR_RETURN(options.min_normal_dot, NumberParam(ctx, kId, "min_normal_dot"));
   double ratio = 0;
   int64_t target = 0;
@@ -111,7 +117,7 @@ Status Run(StageContext& ctx) {
 StageType DecimateStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;  // 2: smooth_boundary
   type.summary = "Quadric edge-collapse decimation to a face budget, keeping the mesh manifold";
   type.doc =
       "Collapses edges in order of quadric error (Garland & Heckbert 1997) until the face count "

@@ -57,7 +57,7 @@ class MeshStagesTest : public StageTest {
 TEST_F(MeshStagesTest, DecimateIsWellFormed) {
   const StageType* type = registry_.Find("mesh.decimate");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 1);
+  EXPECT_EQ(type->version, 2);
   const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["type"], "object");
   EXPECT_EQ(schema["properties"]["target_faces"]["type"], "integer");

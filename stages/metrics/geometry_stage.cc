@@ -39,7 +39,7 @@ constexpr const char* kSchema = R"({
       "minimum": 1,
       "maximum": 64,
       "default": 8,
-      "description": "With `points`: a scan point's local spacing is the distance to its k-th nearest other point (render.splats uses the same)."
+      "description": "With `points`: a scan point's local spacing is r_k sqrt(pi / k), r_k the distance to its k-th nearest other point (points/spacing.h LocalSpacing; mesh.trim and render.splats use the same)."
     },
     "spacing_factor": {
       "type": "number",
@@ -242,7 +242,9 @@ Status Run(StageContext& ctx) {
 StageType GeometryMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;
+  // 3: the 'errors' output (per-vertex error maps); 4: local spacing r_k sqrt(pi / k), as mesh.trim
+  // (was r_k); 5: UV seams are no boundary edges.
+  type.version = 5;
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
@@ -256,7 +258,8 @@ StageType GeometryMetricsStage() {
       "surface (column `truth` = \"analytic\"); otherwise the distance to the truth mesh.ply "
       "(\"mesh\").\n\n"
       "With `points` (the scan; no truth needed; stages/geometry/mesh/scan_agreement.h): a scan "
-      "point's local spacing is the distance to its `k`-th nearest other point; the invented area is "
+      "point's local spacing is r_k sqrt(pi / k), r_k the distance to its `k`-th nearest other point "
+      "(an estimate of the distance between neighbouring samples, as mesh.trim's); the invented area is "
       "the fraction of `samples` mesh points (uniform by area, `seed`) farther than "
       "max(`spacing_factor` x local spacing, the mesh's mean edge) from each of their 16 nearest scan "
       "points (surface the scanner never saw); missing surface is the fraction of scan points "
@@ -266,7 +269,7 @@ StageType GeometryMetricsStage() {
       "mesh_to_scan, scan_to_mesh with `points`), `samples`, `mean_m`, `rms_m`, `p95_m`, "
       "`hausdorff_m`, `truth` (analytic, mesh or scan), `beyond_fraction` (mesh_to_scan: the invented "
       "area fraction; scan_to_mesh: the missing fraction; null for the truth rows), "
-      "`boundary_edges_per_1000_faces` (edges with one face, per 1000 faces of `mesh`; every row). "
+      "`boundary_edges_per_1000_faces` (edges with one face, per 1000 faces of `mesh`, vertices at one position counting as one so that UV seams are not counted; every row). "
       "The symmetric row has the larger Hausdorff distance, the mean of the two means, and RMS / "
       "95th percentile over both directions' samples pooled. mesh_to_scan distances go to the "
       "nearest scan point.\n\n"

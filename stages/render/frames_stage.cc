@@ -78,12 +78,12 @@ constexpr const char* kSchema = R"({
       "description": "Lambert: the weight of max(0, N.L). ambient + diffuse = 1 shows a surface facing the light at its albedo."
     },
     "background": {
-      "type": "array",
-      "items": { "type": "integer", "minimum": 0, "maximum": 255 },
-      "minItems": 3,
-      "maxItems": 3,
+      "anyOf": [
+        { "type": "array", "items": { "type": "integer", "minimum": 0, "maximum": 255 }, "minItems": 3, "maxItems": 3 },
+        { "type": "string", "pattern": "^[0-9]{1,3},[0-9]{1,3},[0-9]{1,3}$" }
+      ],
       "default": [0, 0, 0],
-      "description": "sRGB color where no geometry is (alpha 0 there)."
+      "description": "sRGB color where no geometry is (alpha 0 there). [R, G, B] or \"R,G,B\" (the form --set and a campaign's set: can give). A non-black background tells missing faces from dark texels."
     }
   }
 })";

@@ -111,6 +111,28 @@ TEST_F(RenderStagesTest, WritesFramesOfATexturedMesh) {
   EXPECT_EQ(ctx.last_progress_, 1.0);
 }
 
+TEST_F(RenderStagesTest, BackgroundAsArrayOrString) {
+  // "R,G,B" is what --set and a campaign's set: can give (scalars only).
+  auto corner = [&](const nlohmann::json& background, const std::string& out) -> std::array<int, 4> {
+    std::filesystem::create_directories(dir_ / out);
+    nlohmann::json params = Params(Viewpoints());
+    params["background"] = background;
+    FakeContext ctx(dir_ / out, params);
+    ctx.AddInput("mesh", "mesh", WriteInputMesh("quad", Quad()), {{"origin", {300000.0, 5000000.0, 100.0}}});
+    const Status status = Run("render.frames", ctx);
+    if (!status.ok()) return {-1, -1, -1, -1};
+    const Expected<FrameSet> frames = Frames(ctx);
+    const Image& front = frames->frames[0].image;
+    return {front.at_u8(0, 0, 0), front.at_u8(0, 0, 1), front.at_u8(0, 0, 2), front.at_u8(0, 0, 3)};
+  };
+  EXPECT_EQ(corner(nlohmann::json::array({255, 0, 255}), "array"), (std::array<int, 4>{255, 0, 255, 0}));
+  EXPECT_EQ(corner("255,0,255", "string"), (std::array<int, 4>{255, 0, 255, 0}));
+  EXPECT_EQ(corner("16,160,192", "string2"), (std::array<int, 4>{16, 160, 192, 0}));
+  EXPECT_EQ(corner("16,160", "two")[0], -1);
+  EXPECT_EQ(corner("16,160,256", "big")[0], -1);
+  EXPECT_EQ(corner("#ff00ff", "hex")[0], -1);
+}
+
 TEST_F(RenderStagesTest, SameBytesForAnyThreadCountAndNormalMapIsUsed) {
   auto render = [&](int threads, const std::string& out, bool tilted) {
     std::filesystem::create_directories(dir_ / out);
@@ -258,9 +280,14 @@ TEST_F(RenderStagesTest, SplatsWriteTheSameFramesAsRenderFramesWouldNameThem) {
     EXPECT_EQ(ctx.counters_["points"], 41 * 41);
     EXPECT_EQ(ctx.meta_["frames"]["render"]["source"], "splats");
     EXPECT_EQ(ctx.meta_["frames"]["render"]["lighting"], "unlit");
-    // Spacing 5 cm, the 8th neighbour a diagonal: radius 0.75 * 7.07 cm.
-    EXPECT_NEAR(ctx.counters_["median_radius_m"], 0.75 * 0.05 * std::sqrt(2.0), 1e-6);
-    EXPECT_TRUE(ctx.phases_.count("spacing") && ctx.phases_.count("compute"));
+    // Grid step 5 cm, the 8th neighbour a diagonal: local spacing 7.07 cm x
+    // sqrt(pi / 8), radius 1.2 spacings.
+    EXPECT_NEAR(ctx.counters_["median_radius_m"], 1.2 * 0.05 * std::sqrt(2.0) * std::sqrt(M_PI / 8), 1e-6);
+    // A flat grid: every disk lies in its plane; the rim of the grid is its border.
+    EXPECT_EQ(ctx.counters_["oriented_points"], 41 * 41);
+    EXPECT_GE(ctx.counters_["border_points"], 4 * 39);
+    EXPECT_LE(ctx.counters_["border_points"], 4 * 41 * 2);
+    EXPECT_TRUE(ctx.phases_.count("spacing") && ctx.phases_.count("surfels") && ctx.phases_.count("compute"));
     return Frames(ctx).value();
   };
   const FrameSet one = render(1, "a"), two = render(2, "b");

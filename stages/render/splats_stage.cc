@@ -13,6 +13,7 @@
 #include "stages/builtin.h"
 #include "stages/geometry/io/frames.h"
 #include "stages/geometry/points/spacing.h"
+#include "stages/geometry/points/surfels.h"
 #include "stages/geometry/render/splat.h"
 #include "stages/params.h"
 #include "stages/points_io.h"
@@ -53,13 +54,42 @@ constexpr const char* kSchema = R"({
       "minimum": 1,
       "maximum": 64,
       "default": 8,
-      "description": "Local spacing of a point: the distance to its k-th nearest other point. 8 reaches the diagonal neighbours of a structured scan's grid (sqrt(2) steps), so the disks close the grid in its sparser direction too."
+      "description": "Local spacing of a point: r_k sqrt(pi / k), r_k the distance to its k-th nearest other point (points/spacing.h; mesh.trim and metrics.geometry use the same). 8 reaches the diagonal neighbours of a structured scan's grid, so the spacing follows the grid's sparser direction too (0.886 steps of a square grid)."
     },
     "radius_scale": {
       "type": "number",
       "exclusiveMinimum": 0,
-      "default": 0.75,
-      "description": "Splat radius = radius_scale * local spacing, meters. 0.75 * sqrt(2) steps covers a square grid without gaps (it needs 0.71 steps) with little blur; larger closes sparser scans and blurs more."
+      "default": 1.2,
+      "description": "Splat radius = radius_scale * local spacing, meters. 1.2 spacings = 1.06 steps of a square grid, which a grid needs 0.71 of to be covered without gaps, with little blur; larger closes sparser scans and blurs more."
+    },
+    "orient": {
+      "type": "boolean",
+      "default": true,
+      "description": "Disks lie in each point's tangent plane (the plane fitted to its `surfel_k` nearest points), as in surface splatting, instead of facing the camera: a camera-facing disk at the silhouette of a curved surface seen from another viewpoint stands out past the surface by its whole radius."
+    },
+    "surfel_k": {
+      "type": "integer",
+      "minimum": 3,
+      "maximum": 64,
+      "default": 16,
+      "description": "Neighbours of a point's plane fit and of its border test (points/surfels.h)."
+    },
+    "max_surface_variation": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.05,
+      "description": "With `orient`: a point whose neighbourhood is no plane (surface variation, the smallest PCA eigenvalue over their sum, above this; points/surfels.h) keeps a camera-facing disk, uncut: on a thin part (a cable, a rod a few spacings thick, whose neighbourhood wraps around it: 0.067 for a 4 mm cable sampled every 2 mm) or a corner the fitted plane means little, and a disk in it could be seen edge-on and leave the part uncovered, hiding a hole of the model there."
+    },
+    "border_clip_spacings": {
+      "type": "number",
+      "minimum": 0,
+      "default": 1,
+      "description": "With `orient`: a point on the border of the scanned surface (half-disc criterion, points/surfels.h) has its disk cut by a line across the outward direction this many local spacings from the point. The surface ends somewhere between the last sample and where the next one would have been, about a spacing out (had it reached that far, that sample would have hit it): 1 is the most the sampling justifies, so the cut never opens a hole the scan does not show. An uncut disk reaches its radius (1.2 spacings) out, or more where the spacing is capped."
+    },
+    "clip_border": {
+      "type": "boolean",
+      "default": true,
+      "description": "With `orient`: cut the disks of border points (`border_clip_spacings`); false draws whole disks."
     },
     "max_radius_spacings": {
       "type": "number",
@@ -80,12 +110,12 @@ constexpr const char* kSchema = R"({
       "description": "Largest splat radius on screen, output pixels (points just in front of the eye would otherwise cover the frame)."
     },
     "background": {
-      "type": "array",
-      "items": { "type": "integer", "minimum": 0, "maximum": 255 },
-      "minItems": 3,
-      "maxItems": 3,
+      "anyOf": [
+        { "type": "array", "items": { "type": "integer", "minimum": 0, "maximum": 255 }, "minItems": 3, "maxItems": 3 },
+        { "type": "string", "pattern": "^[0-9]{1,3},[0-9]{1,3},[0-9]{1,3}$" }
+      ],
       "default": [0, 0, 0],
-      "description": "sRGB color where no splat is (alpha 0 there)."
+      "description": "sRGB color where no splat is (alpha 0 there). [R, G, B] or \"R,G,B\" (the form --set and a campaign's set: can give). A non-black background tells missing faces from dark texels."
     }
   }
 })";
@@ -93,6 +123,11 @@ constexpr const char* kSchema = R"({
 struct Options {
   SplatOptions splat;
   bool depth = false;
+  bool orient = true;
+  bool clip_border = true;
+  int surfel_k = 16;
+  double border_clip_spacings = 1;
+  double max_surface_variation = 0.05;
   double max_radius_spacings = 0;
   int size = 0;
   int k = 0;
@@ -105,6 +140,16 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", {1, 8}));
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 64}));
   PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth"));
+  PB_ASSIGN_OR_RETURN(options.orient, BoolParam(ctx, kId, "orient"));
+  PB_ASSIGN_OR_RETURN(options.clip_border, BoolParam(ctx, kId, "clip_border"));
+  PB_ASSIGN_OR_RETURN(const int64_t surfel_k, IntegerParam(ctx, kId, "surfel_k", {3, 64}));
+  options.surfel_k = int(surfel_k);
+  PB_ASSIGN_OR_RETURN(options.border_clip_spacings, NumberParam(ctx, kId, "border_clip_spacings"));
+  PB_ASSIGN_OR_RETURN(options.max_surface_variation, NumberParam(ctx, kId, "max_surface_variation"));
+  if (!(options.max_surface_variation >= 0))
+    return Status::Invalid(std::string(kId) + ": 'max_surface_variation' must be >= 0");
+  if (!(options.border_clip_spacings >= 0))
+    return Status::Invalid(std::string(kId) + ": 'border_clip_spacings' must be >= 0");
   PB_ASSIGN_OR_RETURN(options.radius_scale, NumberParam(ctx, kId, "radius_scale"));
   PB_ASSIGN_OR_RETURN(options.max_radius_spacings, NumberParam(ctx, kId, "max_radius_spacings"));
   if (!(options.max_radius_spacings > 0))
@@ -129,14 +174,15 @@ Status Run(StageContext& ctx) {
   const PointCloud& cloud = input.cloud;
 
   tbb::task_arena arena(std::max(1, ctx.threads()));
-  std::vector<float> radius;
+  std::vector<float> radius, spacing;
   size_t capped = 0;
   {
     PB_PHASE(ctx, "spacing");
-    Expected<std::vector<float>> spacing = Status::Internal("not run");
-    arena.execute([&] { spacing = LocalSpacing(cloud, options.k); });
-    if (!spacing.ok()) return spacing.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
-    radius = std::move(*spacing);
+    Expected<std::vector<float>> local = Status::Internal("not run");
+    arena.execute([&] { local = LocalSpacing(cloud, options.k); });
+    if (!local.ok()) return local.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
+    spacing = std::move(*local);
+    radius = spacing;
     std::vector<float> sorted = radius;
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
     const double cap = options.max_radius_spacings * double(sorted[sorted.size() / 2]);
@@ -148,6 +194,34 @@ Status Run(StageContext& ctx) {
       r = float(r * options.radius_scale);
     }
   }
+  Surfels surfels;
+  std::vector<float> clip;
+  size_t oriented_points = 0;
+  if (options.orient) {
+    PB_PHASE(ctx, "surfels");
+    Expected<Surfels> estimated = Status::Internal("not run");
+    arena.execute([&] { estimated = EstimateSurfels(cloud, {.k = options.surfel_k}); });
+    if (!estimated.ok())
+      return estimated.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
+    surfels = std::move(*estimated);
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      if (surfels.variation[i] <= options.max_surface_variation) {
+        ++oriented_points;
+        continue;
+      }
+      for (int c = 0; c < 3; ++c) surfels.normal[i * 3 + c] = surfels.outward[i * 3 + c] = 0.0f;
+    }
+    if (options.clip_border) {
+      // The clip line of a border point, border_clip_spacings of its own
+      // spacing out (not the capped one: the cap only keeps stray points small).
+      clip.assign(cloud.size() * 4, 0.0f);
+      for (size_t i = 0; i < cloud.size(); ++i) {
+        for (int c = 0; c < 3; ++c) clip[i * 4 + c] = surfels.outward[i * 3 + c];
+        clip[i * 4 + 3] = float(options.border_clip_spacings * spacing[i]);
+      }
+    }
+  }
+  const SplatShapes shapes{radius, surfels.normal, clip};
   ctx.progress(0.35);
 
   FrameSet frames;
@@ -160,7 +234,7 @@ Status Run(StageContext& ctx) {
       SplatStats stats;
       Image depth;
       arena.execute([&] {
-        image = RenderSplats(cloud, radius, views[i].camera, options.splat, &stats, options.depth ? &depth : nullptr);
+        image = RenderSplats(cloud, shapes, views[i].camera, options.splat, &stats, options.depth ? &depth : nullptr);
       });
       if (!image.ok())
         return image.status().WithContext(std::string(kId) + ": viewpoint '" + views[i].entry.name + "'");
@@ -187,6 +261,8 @@ Status Run(StageContext& ctx) {
                     {"lighting", "unlit"},
                     {"k", options.k},
                     {"radius_scale", options.radius_scale},
+                    {"orient", options.orient},
+                    {"border_points", surfels.border_points},
                     {"median_radius_m", median_radius_m},
                     {"coverage", covered_samples / (pixels * ss * ss)}};
   ctx.set_output_meta("frames", std::move(meta));
@@ -194,6 +270,8 @@ Status Run(StageContext& ctx) {
   ctx.counter("points", double(cloud.size()));
   ctx.counter("splats_drawn", double(drawn));
   ctx.counter("radii_capped", double(capped));
+  ctx.counter("border_points", double(surfels.border_points));
+  ctx.counter("oriented_points", double(oriented_points));
   ctx.counter("median_radius_m", median_radius_m);
   ctx.counter("pixels", pixels);
   ctx.progress(1.0);
@@ -205,12 +283,14 @@ Status Run(StageContext& ctx) {
 StageType SplatsStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;  // 2: tangent disks, clip lines at the border, spacing r_k sqrt(pi / k)
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
-      "Draws every point of `points` as a disk facing the camera, of radius `radius_scale` * its "
-      "local spacing (the distance to its `k`-th nearest other point, at most `max_radius_spacings` "
-      "medians of the cloud's local spacings: isolated points stay small), with the camera, sample grid, "
+      "Draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
+      "(r_k sqrt(pi / k), r_k the distance to its `k`-th nearest other point, at most "
+      "`max_radius_spacings` medians of the cloud's local spacings: isolated points stay small), "
+      "lying in the point's tangent plane (`orient`; else facing the camera), a border point's disk "
+      "cut `border_clip_spacings` past the point (`clip_border`), with the camera, sample grid, "
       "resolve and encoding of render.frames (docs/render.md): `supersample`^2 samples per pixel "
       "averaged in linear light, 8-bit sRGB RGBA, alpha 255 where a splat covers any sample of the "
       "pixel, 0 elsewhere. Per sample the nearest splat wins, and every splat within "
@@ -221,9 +301,9 @@ StageType SplatsStage() {
       "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>), the same names and "
       "files as render.frames with the same viewpoints, so metrics.image compares them; with "
       "`depth`, also <name>.depth.exr (the front splats' view depth in meters, 0 on background).\n\n"
-      "Counters: `frames`, `points`, `splats_drawn` (over all frames), `radii_capped`, "
+      "Counters: `frames`, `points`, `splats_drawn` (over all frames), `radii_capped`, `border_points`, "
       "`median_radius_m`, `pixels`. "
-      "Phases: `io`, `spacing`, `compute`.";
+      "Phases: `io`, `spacing`, `surfels`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);
   type.inputs = {{"points", "points", "The colored scan (points.ply).", false}};
   type.outputs = {{"frames", "frames", "One 8-bit sRGB RGBA PNG per viewpoint, and frames.json.", false}};

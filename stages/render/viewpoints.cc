@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cmath>
 #include <set>
+#include <string>
 #include <utility>
 
 namespace pb {
@@ -102,8 +103,23 @@ Expected<std::vector<View>> ReadViewpoints(const StageContext& ctx, std::string_
 Status ReadBackground(const StageContext& ctx, std::string_view stage_id, std::array<uint8_t, 3>* rgb) {
   if (!ctx.params().contains("background")) return Status::Ok();
   const nlohmann::json& bg = ctx.params()["background"];
-  const Status bad =
-      Status::Invalid(std::string(stage_id) + ": 'background' must be 3 integers in [0, 255]");
+  const Status bad = Status::Invalid(std::string(stage_id) +
+                                     ": 'background' must be 3 integers in [0, 255], as [R, G, B] or \"R,G,B\"");
+  if (bg.is_string()) {  // "R,G,B"
+    const std::string text = bg.get<std::string>();
+    size_t start = 0;
+    for (size_t c = 0; c < 3; ++c) {
+      const size_t end = c < 2 ? text.find(',', start) : text.size();
+      if (end == std::string::npos || end == start || end - start > 3 ||
+          text.find_first_not_of("0123456789", start) < end)
+        return bad;
+      const int value = std::stoi(text.substr(start, end - start));
+      if (value > 255) return bad;
+      (*rgb)[c] = uint8_t(value);
+      start = end + 1;
+    }
+    return Status::Ok();
+  }
   if (!bg.is_array() || bg.size() != 3) return bad;
   for (size_t c = 0; c < 3; ++c) {
     if (!bg[c].is_number_integer() || bg[c].get<int64_t>() < 0 || bg[c].get<int64_t>() > 255) return bad;

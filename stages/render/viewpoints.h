@@ -55,7 +55,8 @@ std::string DepthFileName(const std::string& png_file);
 // the item: "render.frames: viewpoints[1].eye: must be finite").
 Expected<std::vector<View>> ReadViewpoints(const StageContext& ctx, std::string_view stage_id, int size);
 
-// Reads the optional parameter `background` (3 integers in [0, 255]) into
+// Reads the optional parameter `background` (3 integers in [0, 255], or a
+// string "R,G,B", which --set and a campaign's set: can give) into
 // `rgb`, which keeps its value when the parameter is absent.
 Status ReadBackground(const StageContext& ctx, std::string_view stage_id, std::array<uint8_t, 3>* rgb);
 

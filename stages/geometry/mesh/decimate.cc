@@ -244,6 +244,10 @@ void Decimator::BuildQuadrics() {
   // Boundary edges: half-edges (a, b) whose twin (b, a) has no face. Found per
   // vertex from its face list, so no global edge table is needed.
   boundary_.assign(n, 0);
+  struct BorderEdge {
+    uint32_t a, b, f;
+  };
+  std::vector<BorderEdge> border;
   for (uint32_t a = 0; a < n; ++a) {
     for (uint32_t i = 0; i < count_[a]; ++i) {
       const uint32_t f = pool_[offset_[a] + i];
@@ -258,19 +262,80 @@ void Decimator::BuildQuadrics() {
       }
       if (shared != 1) continue;
       boundary_[a] = boundary_[b] = 1;
-      if (options_.boundary_weight <= 0) continue;
-      const Vec3d edge = Sub(positions_[b], positions_[a]);
-      const double len2 = Dot(edge, edge);
-      Vec3d nrm = {face_normal_in_[3 * f], face_normal_in_[3 * f + 1], face_normal_in_[3 * f + 2]};
-      Vec3d perp = Cross(edge, nrm);
-      const double plen = Norm(perp);
-      if (!(plen > 0)) continue;
-      perp = {perp[0] / plen, perp[1] / plen, perp[2] / plen};
-      const Quadric plane =
-          Quadric::Plane(perp, -Dot(perp, positions_[a]), options_.boundary_weight * len2);
-      quadrics_[a].Add(plane);
-      quadrics_[b].Add(plane);
+      border.push_back({a, b, f});
     }
+  }
+  if (options_.boundary_weight <= 0) return;
+  // The border's course, for the smoothed constraint planes: next/previous
+  // vertex along the border where a vertex has exactly one border half-edge
+  // out and one in.
+  constexpr uint32_t kNoVertex = UINT32_MAX;
+  std::vector<uint32_t> next(n, kNoVertex), prev(n, kNoVertex);
+  std::vector<uint8_t> outs(n, 0), ins(n, 0);
+  for (const BorderEdge& e : border) {
+    next[e.a] = e.b;
+    prev[e.b] = e.a;
+    outs[e.a] = static_cast<uint8_t>(std::min(outs[e.a] + 1, 2));
+    ins[e.b] = static_cast<uint8_t>(std::min(ins[e.b] + 1, 2));
+  }
+  const auto simple = [&](uint32_t v) { return outs[v] == 1 && ins[v] == 1; };
+  const size_t face_total = faces_.size() / 3;
+  const int window =
+      options_.smooth_boundary && options_.target_faces > 0 && options_.target_faces < face_total
+          ? static_cast<int>(0.5 * std::sqrt(double(face_total) / double(options_.target_faces)))
+          : 0;
+  // Smoothed border positions, for the planes only (the mesh is not moved):
+  // `window`^2 Laplacian steps (lambda 0.5) along the border's course, which
+  // straighten a staircase (one step removes a one-cell staircase exactly)
+  // and let the border's course diffuse over about `window` edges. A vertex
+  // where the course turns by more than 30 degrees between the chords to the
+  // vertices 2 * window edges before and after it (a corner; a
+  // staircase's alternating steps do not turn the chords) stays put, and so
+  // does a vertex where the border is not a simple course.
+  std::vector<Vec3d> smooth(positions_);
+  if (window > 0) {
+    const int reach = 2 * window;
+    const double corner_cos = std::cos(M_PI / 6);
+    std::vector<uint32_t> course;  // the vertices that move
+    for (const BorderEdge& e : border) {
+      const uint32_t v = e.a;
+      if (!simple(v)) continue;
+      uint32_t first = v, last = v;
+      bool ok = true;
+      for (int k = 0; k < reach && ok; ++k) {
+        ok = simple(first) && simple(last);
+        if (!ok) break;
+        first = prev[first];
+        last = next[last];
+        ok = first != kNoVertex && last != kNoVertex && first != v && last != v;
+      }
+      if (!ok) continue;  // a short loop or the end of a simple course
+      const Vec3d d1 = Sub(positions_[v], positions_[first]), d2 = Sub(positions_[last], positions_[v]);
+      const double l1 = Norm(d1), l2 = Norm(d2);
+      if (l1 > 0 && l2 > 0 && Dot(d1, d2) >= corner_cos * l1 * l2) course.push_back(v);
+    }
+    std::vector<Vec3d> step(n);
+    for (int iteration = 0; iteration < window * window; ++iteration) {
+      for (const uint32_t v : course) {
+        const Vec3d& p = smooth[prev[v]];
+        const Vec3d& q = smooth[next[v]];
+        for (int c = 0; c < 3; ++c) step[v][c] = 0.5 * smooth[v][c] + 0.25 * (p[c] + q[c]);
+      }
+      for (const uint32_t v : course) smooth[v] = step[v];
+    }
+  }
+  for (const BorderEdge& e : border) {
+    const uint32_t a = e.a, b = e.b;
+    const Vec3d edge = Sub(positions_[b], positions_[a]);
+    const double len2 = Dot(edge, edge);
+    const Vec3d nrm = {face_normal_in_[3 * e.f], face_normal_in_[3 * e.f + 1], face_normal_in_[3 * e.f + 2]};
+    Vec3d perp = Cross(Sub(smooth[b], smooth[a]), nrm);
+    const double plen = Norm(perp);
+    if (!(plen > 0)) continue;
+    perp = {perp[0] / plen, perp[1] / plen, perp[2] / plen};
+    const Quadric plane = Quadric::Plane(perp, -Dot(perp, smooth[a]), options_.boundary_weight * len2);
+    quadrics_[a].Add(plane);
+    quadrics_[b].Add(plane);
   }
 }
 

@@ -109,6 +109,42 @@ Mesh Decimate(const Mesh& mesh, size_t target, DecimateReport* report) {
   return out.ok() ? *out : Mesh();
 }
 
+TEST(MeshDecimate, AStaircaseBorderIsSimplifiedToTheOutputsResolution) {
+  // A 64 x 64 grid without the cells above the diagonal: a border of 128
+  // one-cell steps along x + y = 1, as a face-by-face cut leaves it. Planes
+  // through every step hold every step (150 border edges at 300 faces);
+  // planes along the smoothed course let the decimation straighten it (60),
+  // and the border stays within a cell of the diagonal (the axes' borders
+  // and the corners stay exact).
+  const int n = 64;
+  Mesh grid = Grid(n);
+  std::vector<uint32_t> kept;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i)
+      if (i + j < n) kept.insert(kept.end(), &grid.indices[6 * size_t(j * n + i)], &grid.indices[6 * size_t(j * n + i) + 6]);
+  grid.indices = kept;
+  DropUnreferencedVertices(grid);
+  size_t border_edges[2] = {0, 0};
+  for (const bool smooth : {false, true}) {
+    SCOPED_TRACE(smooth);
+    DecimateOptions options;
+    options.target_faces = 300;
+    options.smooth_boundary = smooth;
+    auto out = DecimateMesh(grid, options, nullptr);
+    ASSERT_TRUE(out.ok()) << out.status().message();
+    const Topology topo = Check(*out);
+    EXPECT_EQ(topo.nonmanifold_edges, 0u);
+    border_edges[smooth] = topo.boundary_edges;
+    for (const auto& [a, b] : topo.boundary)
+      for (const uint32_t v : {a, b}) {
+        const float* p = &out->positions[3 * v];
+        const bool on_axis = std::abs(p[0]) < 1e-5 || std::abs(p[1]) < 1e-5;
+        EXPECT_TRUE(on_axis || std::abs(p[0] + p[1] - 1) <= 1.0 / n + 1e-5) << p[0] << " " << p[1];
+      }
+  }
+  EXPECT_LT(border_edges[1], border_edges[0] * 3 / 4) << border_edges[1] << " vs " << border_edges[0];
+}
+
 TEST(MeshDecimate, SphereStaysClosedManifoldAndOriented) {
   const Mesh sphere = Icosphere(5);  // 20480 faces
   ASSERT_EQ(sphere.face_count(), 20480u);

@@ -30,6 +30,12 @@ TEST(ScanAgreementTest, BoundaryEdgesOfAnOpenGridAndAClosedTetrahedron) {
   tetrahedron.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, 1};
   tetrahedron.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 1, 2, 3};
   EXPECT_EQ(CountBoundaryEdges(tetrahedron), 0u);
+  // A UV seam: the face 1-2-3 gets its own copies of its vertices, at the
+  // same positions, as uv.unwrap makes them. Still closed.
+  Mesh seamed = tetrahedron;
+  seamed.positions.insert(seamed.positions.end(), {1, 0, 0, 0, 1, 0, 0, 0, 1});
+  seamed.indices = {0, 2, 1, 0, 1, 3, 0, 3, 2, 4, 5, 6};
+  EXPECT_EQ(CountBoundaryEdges(seamed), 0u);
 }
 
 TEST(ScanAgreementTest, InventedAreaMissingPointsAndBoundary) {

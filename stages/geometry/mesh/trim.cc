@@ -11,11 +11,11 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numbers>
 #include <numeric>
 #include <string>
 
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/spacing.h"
 
 namespace pb {
 namespace {
@@ -66,16 +66,14 @@ Expected<SupportField> BuildField(const Mesh& mesh, const PointCloud& points, in
                            " points for the local spacing, the cloud has " +
                            std::to_string(field.index.size()));
   }
-  field.spacing.resize(field.index.size());
-  const double scale = std::sqrt(std::numbers::pi / k);
-  ParallelRanges(field.index.size(), threads, [&](size_t begin, size_t end) {
-    std::vector<Neighbor> neighbors(static_cast<size_t>(k));
-    for (size_t i = begin; i < end; ++i) {
-      const int found = field.index.QueryPoint(static_cast<uint32_t>(i), k, neighbors);
-      field.spacing[i] =
-          static_cast<float>(std::sqrt(neighbors[found - 1].squared_distance_m2) * scale);
-    }
-  });
+  Expected<std::vector<float>> spacing = Status::Internal("not run");
+  if (threads > 0) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] { spacing = LocalSpacing(field.index, k); });
+  } else {
+    spacing = LocalSpacing(field.index, k);
+  }
+  PB_ASSIGN_OR_RETURN(field.spacing, std::move(spacing));
   for (int c = 0; c < 3; ++c) field.mesh_to_cloud[c] = mesh.origin[c] - points.origin[c];
   return field;
 }
@@ -128,13 +126,6 @@ uint32_t FindRoot(std::vector<uint32_t>& parent, uint32_t x) {
 
 }  // namespace
 
-Expected<std::vector<float>> LocalSpacings(const PointCloud& points, int k, int threads) {
-  PB_RETURN_IF_ERROR(Validate(points));
-  if (k < 1) return Status::Invalid("local spacing: k must be at least 1");
-  PB_ASSIGN_OR_RETURN(SupportField field, BuildField(Mesh(), points, k, threads));
-  return std::move(field.spacing);
-}
-
 double MeanEdgeLength(const Mesh& mesh) {
   if (mesh.face_count() == 0) return 0;
   double sum = 0;
@@ -146,11 +137,37 @@ double MeanEdgeLength(const Mesh& mesh) {
 }
 
 uint64_t CountBoundaryEdges(const Mesh& mesh) {
-  const auto edges = SortedFaceEdges(mesh);
+  // Vertices at one position are one vertex: uv.unwrap splits vertices along
+  // its seams, and a seam is no border of the surface.
+  const size_t nv = mesh.vertex_count();
+  std::vector<uint32_t> order(nv);
+  std::iota(order.begin(), order.end(), 0u);
+  const auto position = [&](uint32_t v) {
+    return std::array<float, 3>{mesh.positions[3 * size_t{v}], mesh.positions[3 * size_t{v} + 1],
+                                mesh.positions[3 * size_t{v} + 2]};
+  };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const auto pa = position(a), pb = position(b);
+    return pa != pb ? pa < pb : a < b;
+  });
+  std::vector<uint32_t> welded(nv);
+  for (size_t i = 0; i < nv; ++i) {
+    welded[order[i]] = i > 0 && position(order[i]) == position(order[i - 1]) ? welded[order[i - 1]] : order[i];
+  }
+  std::vector<uint64_t> edges;
+  edges.reserve(mesh.indices.size());
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    for (int k = 0; k < 3; ++k) {
+      const uint32_t a = welded[t[k]], b = welded[t[(k + 1) % 3]];
+      if (a != b) edges.push_back(EdgeKey(a, b));
+    }
+  }
+  std::sort(edges.begin(), edges.end());
   uint64_t boundary = 0;
   for (size_t i = 0; i < edges.size();) {
     size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    while (j < edges.size() && edges[j] == edges[i]) ++j;
     if (j - i == 1) ++boundary;
     i = j;
   }

@@ -10,10 +10,11 @@
 // across unscanned space whose density is above the quantile.
 //
 // The test, per face:
-//  * Local spacing s(p) of each scan point p: the radius r_k of its k nearest
-//    other points turned into a spacing, s = r_k * sqrt(pi / k) (k points in
-//    a disc of radius r_k on a surface sampled every s). It follows the
-//    density of one-station scans, which changes with range and incidence.
+//  * Local spacing s(p) of each scan point p: LocalSpacing of
+//    points/spacing.h, s = r_k * sqrt(pi / k) with r_k the distance to its
+//    k-th nearest other point, the definition metrics.geometry and
+//    render.splats use too. It follows the density of one-station scans,
+//    which changes with range and incidence.
 //  * The distance of a mesh point x from the scan: |x - p| to the nearest
 //    scan point p; x is unsupported at level t when that distance exceeds
 //    t * max(spacings * s(p), edges * mean edge length of the mesh) (the
@@ -106,12 +107,8 @@ struct SupportReport {
 Expected<SupportReport> MeasureSupport(const Mesh& mesh, const PointCloud& points,
                                        const SupportOptions& options);
 
-// Local spacing of every point (meters): r_k * sqrt(pi / k), r_k the
-// distance to the k-th nearest other point. Status::Invalid if the cloud
-// has at most k points or a non-finite coordinate.
-Expected<std::vector<float>> LocalSpacings(const PointCloud& points, int k, int threads);
-
-// Edges used by exactly one face.
+// Edges used by exactly one face, vertices at the same position counting as
+// one (the copies uv.unwrap makes along its seams), so a UV seam is no border.
 uint64_t CountBoundaryEdges(const Mesh& mesh);
 
 // Mean length of the faces' sides (meters; 0 without faces).

@@ -61,18 +61,24 @@ Expected<double> MedianSpacing(const PointCloud& cloud, const SpacingOptions& op
 Expected<std::vector<float>> LocalSpacing(const PointCloud& cloud, int k) {
   PB_RETURN_IF_ERROR(Validate(cloud));
   if (k < 1) return Status::Invalid("local spacing: k must be >= 1, got " + std::to_string(k));
-  if (cloud.size() <= size_t(k))
-    return Status::Invalid("local spacing: needs more than k = " + std::to_string(k) +
-                           " points, the cloud has " + std::to_string(cloud.size()));
   PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
-  std::vector<float> spacing(cloud.size());
+  return LocalSpacing(index, k);
+}
+
+Expected<std::vector<float>> LocalSpacing(const KnnIndex& index, int k) {
+  if (k < 1) return Status::Invalid("local spacing: k must be >= 1, got " + std::to_string(k));
+  if (index.size() <= size_t(k))
+    return Status::Invalid("local spacing: needs more than k = " + std::to_string(k) +
+                           " points, the cloud has " + std::to_string(index.size()));
+  const double scale = std::sqrt(M_PI / k);
+  std::vector<float> spacing(index.size());
   // Walk the tree's slot order: neighbouring queries share cache lines.
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, cloud.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, index.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<Neighbor> neighbors(static_cast<size_t>(k));
     for (size_t slot = range.begin(); slot < range.end(); ++slot) {
       const uint32_t i = index.PointAtSlot(slot);
       const int found = index.QueryPoint(i, k, neighbors);
-      spacing[i] = float(std::sqrt(neighbors[size_t(found - 1)].squared_distance_m2));
+      spacing[i] = float(std::sqrt(neighbors[size_t(found - 1)].squared_distance_m2) * scale);
     }
   });
   return spacing;

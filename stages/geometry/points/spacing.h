@@ -14,6 +14,7 @@
 
 #include "base/status.h"
 #include "stages/geometry/core/point_cloud.h"
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 
@@ -26,15 +27,22 @@ struct SpacingOptions {
 // has fewer than 2 points or a non-finite coordinate (naming the point).
 Expected<double> MedianSpacing(const PointCloud& cloud, const SpacingOptions& options = {});
 
-// Local spacing: for every point, the distance in meters to its k-th nearest
-// other point (exact k-NN, knn.h; duplicates count at distance 0). Where the
-// scan is denser or sparser the value follows it, unlike the median: what a
-// splat radius or a "near the scan" threshold needs. With a structured scan
-// the k-th neighbour reaches across the sparser of the two scan directions
-// (k = 8 on a square grid of step h gives h * sqrt(2)). Deterministic for any
-// thread count (run inside a tbb::task_arena to limit threads).
-// Status::Invalid if k < 1, the cloud has at most k points or a non-finite
-// coordinate.
+// Local spacing: for every point, an estimate in meters of the distance
+// between neighbouring samples around it, s = r_k * sqrt(pi / k), with r_k
+// the distance to its k-th nearest other point (exact k-NN, knn.h;
+// duplicates count at distance 0): k samples in a disc of radius r_k on a
+// surface sampled every s (pi r_k^2 = k s^2). Where the scan is denser or
+// sparser the value follows it, unlike the median: what a splat radius or a
+// "near the scan" threshold needs. The one definition of the project:
+// mesh.trim, metrics.geometry and render.splats all count in it. On a square
+// grid of step h, k = 8 reaches the diagonal neighbours, r_8 = h sqrt(2),
+// and s = 0.886 h; on a grid's border r_k and s are larger (the neighbours
+// lie on one side). Deterministic for any thread count (run inside a
+// tbb::task_arena to limit threads). Status::Invalid if k < 1, the cloud has
+// at most k points or a non-finite coordinate.
 Expected<std::vector<float>> LocalSpacing(const PointCloud& cloud, int k);
+// The same for the points of `index` (KnnIndex::Build over the cloud's
+// positions), for a caller that keeps the index for its own queries.
+Expected<std::vector<float>> LocalSpacing(const KnnIndex& index, int k);
 
 }  // namespace pb

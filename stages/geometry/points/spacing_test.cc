@@ -16,6 +16,9 @@ PointCloud Grid() {
   return cloud;
 }
 
+// LocalSpacing is r_k sqrt(pi / k).
+double Step(double r_k, int k) { return r_k * std::sqrt(M_PI / k); }
+
 TEST(LocalSpacingTest, KthNeighbourDistanceOnAGrid) {
   const PointCloud cloud = Grid();
   Expected<std::vector<float>> four = LocalSpacing(cloud, 4);
@@ -24,10 +27,11 @@ TEST(LocalSpacingTest, KthNeighbourDistanceOnAGrid) {
   ASSERT_TRUE(four.ok() && eight.ok() && three.ok());
   ASSERT_EQ(four->size(), 100u);
   const size_t interior = 5 * 10 + 5, corner = 0, edge = 5;  // (5, 5), (0, 0), (5, 0)
-  EXPECT_NEAR((*four)[interior], 0.1, 1e-6);                  // the 4 axis neighbours
-  EXPECT_NEAR((*eight)[interior], 0.1 * std::sqrt(2.0), 1e-6);  // and the 4 diagonals
-  EXPECT_NEAR((*three)[corner], 0.1 * std::sqrt(2.0), 1e-6);    // 2 axis neighbours, then the diagonal
-  EXPECT_NEAR((*four)[edge], 0.1 * std::sqrt(2.0), 1e-6);       // 3 axis neighbours, then a diagonal
+  EXPECT_NEAR((*four)[interior], Step(0.1, 4), 1e-6);                   // the 4 axis neighbours
+  EXPECT_NEAR((*eight)[interior], Step(0.1 * std::sqrt(2.0), 8), 1e-6);  // and the 4 diagonals
+  EXPECT_NEAR((*eight)[interior], 0.0886, 1e-4);                          // 0.886 grid steps
+  EXPECT_NEAR((*three)[corner], Step(0.1 * std::sqrt(2.0), 3), 1e-6);    // 2 axis neighbours, then the diagonal
+  EXPECT_NEAR((*four)[edge], Step(0.1 * std::sqrt(2.0), 4), 1e-6);       // 3 axis neighbours, then a diagonal
 }
 
 TEST(LocalSpacingTest, DuplicatesCountAndBadInputIsNamed) {

@@ -88,20 +88,37 @@ struct ScreenSplat {
   bool visible() const { return x0 <= x1 && y0 <= y1; }
 };
 
+// A disk in its tangent plane (SplatShapes::normal): center relative to the
+// eye, unit normal, radius in meters (after the screen cap), and its clip
+// line (direction 0: none). radius_m 0: the point's disk faces the camera.
+struct OrientedSplat {
+  V3 center{}, normal{}, clip{};
+  double radius_m = 0, clip_m = 0;
+};
+
 }  // namespace
 
-Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> radius_m, const RenderCamera& camera,
+Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes, const RenderCamera& camera,
                              const SplatOptions& options, SplatStats* stats, Image* depth_m) {
   PB_RETURN_IF_ERROR(Validate(cloud));
+  const std::span<const float> radius_m = shapes.radius_m;
   if (radius_m.size() != cloud.size())
     return Status::Invalid("splats: " + std::to_string(radius_m.size()) + " radii for " +
                            std::to_string(cloud.size()) + " points");
+  const bool oriented = !shapes.normal.empty();
+  if (oriented && shapes.normal.size() != cloud.size() * 3)
+    return Status::Invalid("splats: " + std::to_string(shapes.normal.size()) + " normal floats for " +
+                           std::to_string(cloud.size()) + " points (3 each)");
+  if (!shapes.clip.empty() && (!oriented || shapes.clip.size() != cloud.size() * 4))
+    return Status::Invalid("splats: clip lines need normals and 4 floats per point, got " +
+                           std::to_string(shapes.clip.size()) + " for " + std::to_string(cloud.size()) + " points");
   if (cloud.size() >= size_t(kNone)) return Status::Invalid("splats: too many points");
   PB_ASSIGN_OR_RETURN(const SplatCamera cam, MakeCamera(camera, cloud.origin, options));
   const size_t n = cloud.size();
   const double max_radius = options.max_radius_px * options.supersample;
 
   std::vector<ScreenSplat> splats(n);
+  std::vector<OrientedSplat> disks(oriented ? n : 0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t i = range.begin(); i < range.end(); ++i) {
       const float* p = &cloud.positions[i * 3];
@@ -114,9 +131,47 @@ Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> rad
       s.y = cam.half - cam.focal * Dot(rel, cam.up) / z;
       s.radius = std::min(cam.focal * r_m / z, max_radius);
       s.depth = float(z);
-      // Samples whose centers (k + 0.5) lie within the radius of the center.
-      const double lo_x = std::ceil(s.x - s.radius - 0.5), hi_x = std::floor(s.x + s.radius - 0.5);
-      const double lo_y = std::ceil(s.y - s.radius - 0.5), hi_y = std::floor(s.y + s.radius - 0.5);
+      double lo_x, hi_x, lo_y, hi_y;
+      const bool tangent = oriented && (shapes.normal[i * 3] != 0 || shapes.normal[i * 3 + 1] != 0 ||
+                                        shapes.normal[i * 3 + 2] != 0);
+      if (!tangent) {
+        // Samples whose centers (k + 0.5) lie within the radius of the center.
+        lo_x = std::ceil(s.x - s.radius - 0.5), hi_x = std::floor(s.x + s.radius - 0.5);
+        lo_y = std::ceil(s.y - s.radius - 0.5), hi_y = std::floor(s.y + s.radius - 0.5);
+      } else {
+        OrientedSplat& d = disks[i];
+        const float* nf = &shapes.normal[i * 3];
+        d.normal = Normalize({double(nf[0]), double(nf[1]), double(nf[2])});
+        if (!Finite(d.normal)) continue;
+        d.center = rel;
+        d.radius_m = s.radius * z / cam.focal;  // the screen cap, in meters at the center's depth
+        if (!shapes.clip.empty()) {
+          const float* c = &shapes.clip[i * 4];
+          d.clip = {double(c[0]), double(c[1]), double(c[2])};
+          d.clip_m = c[3];
+        }
+        // The disk lies in the square center +- r a +- r b (a, b spanning its
+        // plane); the square's projection, the hull of its corners', bounds it.
+        const V3 helper = std::abs(d.normal[0]) < 0.9 ? V3{1, 0, 0} : V3{0, 1, 0};
+        const V3 a = Normalize(Cross(d.normal, helper)), b = Cross(d.normal, a);
+        lo_x = lo_y = HUGE_VAL;
+        hi_x = hi_y = -HUGE_VAL;
+        bool behind = false;
+        for (const double sa : {-1.0, 1.0})
+          for (const double sb : {-1.0, 1.0}) {
+            V3 corner;
+            for (int c = 0; c < 3; ++c) corner[c] = rel[c] + d.radius_m * (sa * a[c] + sb * b[c]);
+            const double cz = Dot(corner, cam.forward);
+            if (!(cz >= kNearPlaneM)) behind = true;
+            const double cx = cam.half + cam.focal * Dot(corner, cam.right) / cz;
+            const double cy = cam.half - cam.focal * Dot(corner, cam.up) / cz;
+            lo_x = std::min(lo_x, cx), hi_x = std::max(hi_x, cx);
+            lo_y = std::min(lo_y, cy), hi_y = std::max(hi_y, cy);
+          }
+        if (behind) continue;  // a disk reaching behind the near plane is not drawn
+        lo_x = std::ceil(lo_x - 0.5), hi_x = std::floor(hi_x - 0.5);
+        lo_y = std::ceil(lo_y - 0.5), hi_y = std::floor(hi_y - 0.5);
+      }
       if (!(hi_x >= 0 && hi_y >= 0 && lo_x <= cam.samples - 1 && lo_y <= cam.samples - 1)) continue;
       s.x0 = int(std::max(lo_x, 0.0));
       s.y0 = int(std::max(lo_y, 0.0));
@@ -184,25 +239,51 @@ Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> rad
       std::fill(front.begin(), front.end(), kNone);
       std::fill(sum.begin(), sum.end(), 0.0);
       // Visits the samples of splat `i` inside this tile and its disk:
-      // visit(local sample index, squared distance / squared radius).
+      // visit(local sample index, squared distance / squared radius, depth).
       auto for_each_sample = [&](uint32_t i, const auto& visit) {
         const ScreenSplat& s = splats[i];
-        const double r2 = s.radius * s.radius;
+        if (!oriented || disks[i].radius_m == 0) {
+          const double r2 = s.radius * s.radius;
+          for (int sy = std::max(s.y0, tile_y0); sy <= std::min(s.y1, tile_y1); ++sy) {
+            const double dy = sy + 0.5 - s.y;
+            for (int sx = std::max(s.x0, tile_x0); sx <= std::min(s.x1, tile_x1); ++sx) {
+              const double dx = sx + 0.5 - s.x;
+              const double d2 = dx * dx + dy * dy;
+              if (d2 > r2) continue;
+              visit(size_t(sy - tile_y0) * kTile + size_t(sx - tile_x0), r2 > 0 ? d2 / r2 : 0.0, s.depth);
+            }
+          }
+          return;
+        }
+        // The sample's ray, eye + t * ray with ray . forward = 1 (t is the
+        // view depth), meets the disk's plane at t = n . center / n . ray.
+        const OrientedSplat& d = disks[i];
+        const double r2 = d.radius_m * d.radius_m;
+        const double height = Dot(d.normal, d.center);
         for (int sy = std::max(s.y0, tile_y0); sy <= std::min(s.y1, tile_y1); ++sy) {
-          const double dy = sy + 0.5 - s.y;
+          const double v = (cam.half - (sy + 0.5)) / cam.focal;
           for (int sx = std::max(s.x0, tile_x0); sx <= std::min(s.x1, tile_x1); ++sx) {
-            const double dx = sx + 0.5 - s.x;
-            const double d2 = dx * dx + dy * dy;
+            const double u = (sx + 0.5 - cam.half) / cam.focal;
+            V3 ray;
+            for (int c = 0; c < 3; ++c) ray[c] = u * cam.right[c] + v * cam.up[c] + cam.forward[c];
+            const double facing = Dot(d.normal, ray);
+            if (facing == 0) continue;  // the disk seen exactly edge-on
+            const double t = height / facing;
+            if (!(t >= kNearPlaneM)) continue;
+            V3 offset;
+            for (int c = 0; c < 3; ++c) offset[c] = t * ray[c] - d.center[c];
+            const double d2 = Dot(offset, offset);
             if (d2 > r2) continue;
-            visit(size_t(sy - tile_y0) * kTile + size_t(sx - tile_x0), r2 > 0 ? d2 / r2 : 0.0);
+            if (Dot(offset, d.clip) > d.clip_m) continue;
+            visit(size_t(sy - tile_y0) * kTile + size_t(sx - tile_x0), r2 > 0 ? d2 / r2 : 0.0, float(t));
           }
         }
       };
       for (size_t e = 0; e < list_size; ++e) {
         const uint32_t i = list[e];
-        for_each_sample(i, [&](size_t local, double) {
-          if (splats[i].depth < depth[local]) {  // strict: ties keep the lower index
-            depth[local] = splats[i].depth;
+        for_each_sample(i, [&](size_t local, double, float z) {
+          if (z < depth[local]) {  // strict: ties keep the lower index
+            depth[local] = z;
             front[local] = i;
           }
         });
@@ -212,9 +293,9 @@ Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> rad
         float rgb[3] = {gray, gray, gray};
         if (cloud.has_colors())
           for (int c = 0; c < 3; ++c) rgb[c] = decode[cloud.colors[size_t(i) * 3 + c]];
-        for_each_sample(i, [&](size_t local, double q) {
+        for_each_sample(i, [&](size_t local, double q, float z) {
           const double limit = double(depth[local]) + options.depth_tolerance * double(radius_m[front[local]]);
-          if (!(double(splats[i].depth) <= limit)) return;
+          if (!(double(z) <= limit)) return;
           const double w = 1.0 - q + 1.0 / 16;
           double* acc = &sum[local * 4];
           for (int c = 0; c < 3; ++c) acc[c] += w * rgb[c];

@@ -9,18 +9,33 @@
 // samples in linear light sRGB-encoded to 8 bits, alpha 255 where any sample
 // was covered, else 0 (background samples count with the background color).
 //
-// Splats. Point i (absolute position origin + positions[i]) is a disk facing
-// the camera (screen aligned) of radius radius_m[i] meters, centered on the
-// point at its view depth z_i (distance along the view axis). It covers the
-// samples within focal * radius_m[i] / z_i samples of its projected center,
-// at most `max_radius_px` output pixels (a point just in front of the eye
-// would otherwise cover the whole frame). Points nearer than kNearPlaneM, and
-// radii that are not positive and finite, are skipped.
+// Splats. Point i (absolute position origin + positions[i]) is a disk of
+// radius radius_m[i] meters centered on the point, at most `max_radius_px`
+// output pixels on screen at the point's view depth z_i (distance along the
+// view axis; a point just in front of the eye would otherwise cover the whole
+// frame). Points nearer than kNearPlaneM, and radii that are not positive and
+// finite, are skipped.
+//  * Without normals the disk faces the camera (screen aligned): it covers
+//    the samples within focal * radius_m[i] / z_i samples of its projected
+//    center, all at depth z_i.
+//  * With normals (SplatShapes::normal) the disk lies in the point's tangent
+//    plane, as in surface splatting: a sample is covered when its ray meets
+//    the plane within the radius of the point, at the depth where it meets
+//    it. Seen obliquely a disk is an ellipse, and at the silhouette of a
+//    curved surface it is seen edge-on, so it does not stand out past the
+//    surface as a camera-facing disk does (by a whole radius). A disk whose
+//    bounding square reaches behind the near plane is skipped.
+//  * A clip line (SplatShapes::clip; Zwicker, Pauly, Knoll and Gross 2002,
+//    "Pointshop 3D", SIGGRAPH, clip lines for sharp edges) cuts the disk:
+//    it keeps the points x of the disk with (x - center) . direction <=
+//    distance. For the border of a scanned surface: the surface ends
+//    somewhere between the last sample and where the next one would have
+//    been, so the disk should not reach farther out than that.
 //
 // Visibility with blending. Per sample, the front splat is the one of least
 // depth (ties: the lower point index). Every splat covering the sample whose
-// depth is at most the front depth + depth_tolerance * (the front splat's
-// radius_m) contributes, weighted by w = 1 - (d / r)^2 + 1/16 with d the
+// depth at the sample is at most the front depth + depth_tolerance * (the
+// front splat's radius_m) contributes, weighted by w = 1 - (d / r)^2 + 1/16 with d the
 // sample's distance from the splat center and r the splat's radius, both in
 // samples (the 1/16 keeps the disk's rim from weighing nothing), so splats of
 // one surface blend into a smooth color instead of fighting, while a surface
@@ -65,12 +80,24 @@ struct SplatStats {
   size_t covered_samples = 0;  // samples covered by at least one splat
 };
 
-// An RGBA kU8 image of camera.size squared. `radius_m` holds one radius per
-// point of `cloud` (meters). Status::Invalid for a bad camera (as RenderMesh),
-// bad options, a cloud failing Validate, or radius_m of the wrong length.
+// The splats' shapes, per point of the cloud, in the cloud's frame.
+struct SplatShapes {
+  std::span<const float> radius_m;  // one per point, meters
+  // 3 per point (unit), or empty: disks face the camera; a point whose
+  // normal is 0 faces the camera too.
+  std::span<const float> normal;
+  // 4 per point, or empty: a unit direction in the disk's plane and a
+  // distance in meters (the clip line); direction 0: the whole disk. Needs
+  // normals.
+  std::span<const float> clip;
+};
+
+// An RGBA kU8 image of camera.size squared. Status::Invalid for a bad camera
+// (as RenderMesh), bad options, a cloud failing Validate, or shapes of the
+// wrong length.
 // `depth_m` (optional): as RenderMesh's, the smallest front-splat depth of
 // the pixel's samples (meters along the view axis), 0 where none.
-Expected<Image> RenderSplats(const PointCloud& cloud, std::span<const float> radius_m,
+Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
                              const RenderCamera& camera, const SplatOptions& options,
                              SplatStats* stats = nullptr, Image* depth_m = nullptr);
 

@@ -53,7 +53,7 @@ TEST(SplatTest, PlaneHeadOnCoversItsExtentWithItsColor) {
   options.supersample = 1;
   SplatStats stats;
   const int size = 64;
-  Expected<Image> image = RenderSplats(cloud, radius, HeadOn(size, cloud.origin), options, &stats);
+  Expected<Image> image = RenderSplats(cloud, {radius}, HeadOn(size, cloud.origin), options, &stats);
   ASSERT_TRUE(image.ok()) << image.status().message();
   EXPECT_EQ(stats.points, cloud.size());
   EXPECT_EQ(stats.drawn, cloud.size());
@@ -92,7 +92,7 @@ TEST(SplatTest, NearerSurfaceWins) {
   SplatOptions options;
   options.supersample = 2;
   const int size = 64;
-  Expected<Image> image = RenderSplats(cloud, radius, HeadOn(size), options);
+  Expected<Image> image = RenderSplats(cloud, {radius}, HeadOn(size), options);
   ASSERT_TRUE(image.ok()) << image.status().message();
   // The center sees the near plane only: pure green despite the red behind.
   const uint8_t* center = &image->at_u8(size / 2, size / 2, 0);
@@ -113,7 +113,7 @@ TEST(SplatTest, NearerSurfaceWins) {
     reversed.colors.insert(reversed.colors.end(), &cloud.colors[i * 3], &cloud.colors[i * 3] + 3);
     reversed_radius.push_back(radius[i]);
   }
-  Expected<Image> again = RenderSplats(reversed, reversed_radius, HeadOn(size), options);
+  Expected<Image> again = RenderSplats(reversed, {reversed_radius}, HeadOn(size), options);
   ASSERT_TRUE(again.ok());
   EXPECT_EQ(again->at_u8(size / 2, size / 2, 1), 200);
   EXPECT_EQ(again->at_u8(size / 2 + 6, size / 2, 0), 220);
@@ -129,13 +129,13 @@ TEST(SplatTest, SplatsOfOneSurfaceBlendWithinTheDepthTolerance) {
   SplatOptions options;
   options.supersample = 1;
   const int size = 32;
-  Expected<Image> blended = RenderSplats(cloud, radius, HeadOn(size), options);
+  Expected<Image> blended = RenderSplats(cloud, {radius}, HeadOn(size), options);
   ASSERT_TRUE(blended.ok());
   const uint8_t* p = &blended->at_u8(size / 2, size / 2, 0);
   EXPECT_GT(p[0], 100);
   EXPECT_GT(p[2], 100);
   options.depth_tolerance = 0;
-  Expected<Image> front = RenderSplats(cloud, radius, HeadOn(size), options);
+  Expected<Image> front = RenderSplats(cloud, {radius}, HeadOn(size), options);
   ASSERT_TRUE(front.ok());
   EXPECT_EQ(front->at_u8(size / 2, size / 2, 0), 255);
   EXPECT_EQ(front->at_u8(size / 2, size / 2, 2), 0);
@@ -162,7 +162,7 @@ TEST(SplatTest, SameBytesForAnyThreadCount) {
   for (int threads : {1, 2, 4}) {
     tbb::task_arena arena(threads);
     Expected<Image> image = Status::Internal("not run");
-    arena.execute([&] { image = RenderSplats(cloud, radius, camera, options); });
+    arena.execute([&] { image = RenderSplats(cloud, {radius}, camera, options); });
     ASSERT_TRUE(image.ok());
     images.push_back(std::move(*image));
   }
@@ -183,7 +183,7 @@ TEST(SplatTest, CoversWhatTheMeshRendererCovers) {
   SplatOptions splat_options;
   RenderOptions mesh_options;
   mesh_options.lighting = RenderLighting::kUnlit;
-  Expected<Image> splats = RenderSplats(cloud, radius, HeadOn(size), splat_options);
+  Expected<Image> splats = RenderSplats(cloud, {radius}, HeadOn(size), splat_options);
   Expected<Image> mesh = RenderMesh(quad, {}, HeadOn(size), mesh_options);
   ASSERT_TRUE(splats.ok() && mesh.ok());
   int differ = 0, covered = 0;
@@ -196,21 +196,110 @@ TEST(SplatTest, CoversWhatTheMeshRendererCovers) {
   EXPECT_LE(differ, 4 * 34);  // at most the one-pixel ring around the quad
 }
 
+// A grid of step `step` over [-h, h]^2 tilted by `tilt` radians about the x
+// axis (toward the eye at -y): z' = z cos, y' = -z sin; and the quad it samples.
+void AddTiltedPlane(PointCloud& cloud, std::vector<float>& normals, double h, double step, double tilt) {
+  const int count = int(std::lround(2 * h / step));
+  for (int j = 0; j <= count; ++j)
+    for (int i = 0; i <= count; ++i) {
+      const double z = -h + j * step;
+      cloud.positions.insert(cloud.positions.end(),
+                             {float(-h + i * step), float(-z * std::sin(tilt)), float(z * std::cos(tilt))});
+      normals.insert(normals.end(), {0.0f, float(std::cos(tilt)), float(std::sin(tilt))});
+    }
+}
+
+Mesh TiltedQuad(double h, double tilt) {
+  Mesh quad;
+  const float s = float(h * std::sin(tilt)), c = float(h * std::cos(tilt)), x = float(h);
+  quad.positions = {-x, s, -c, x, s, -c, x, -s, c, -x, -s, c};
+  quad.indices = {0, 1, 2, 0, 2, 3};
+  return quad;
+}
+
+// Pixels covered by exactly one of the two frames.
+int CoverageDifference(const Image& a, const Image& b) {
+  int differ = 0;
+  for (int y = 0; y < a.height; ++y)
+    for (int x = 0; x < a.width; ++x) differ += (a.at_u8(x, y, 3) == 255) != (b.at_u8(x, y, 3) == 255);
+  return differ;
+}
+
+TEST(SplatTest, TangentDisksFollowAnObliqueSurfaceCameraFacingOnesOverhangIt) {
+  // A plane seen at 75 degrees from head-on: its top and bottom edges are
+  // where a camera-facing disk stands out by its whole radius, a tangent disk
+  // by its radius foreshortened (x cos 75 = 0.26).
+  PointCloud cloud;
+  std::vector<float> normals;
+  const double tilt = 75 * M_PI / 180, step = 0.02;
+  AddTiltedPlane(cloud, normals, 1.0, step, tilt);
+  const std::vector<float> radius(cloud.size(), float(2.5 * step));
+  const int size = 128;
+  RenderOptions mesh_options;
+  mesh_options.lighting = RenderLighting::kUnlit;
+  Expected<Image> mesh = RenderMesh(TiltedQuad(1.0, tilt), {}, HeadOn(size), mesh_options);
+  Expected<Image> facing = RenderSplats(cloud, {radius}, HeadOn(size), {});
+  Expected<Image> tangent = RenderSplats(cloud, {radius, normals}, HeadOn(size), {});
+  ASSERT_TRUE(mesh.ok() && facing.ok() && tangent.ok()) << tangent.status().message();
+  const int facing_differ = CoverageDifference(*mesh, *facing);
+  const int tangent_differ = CoverageDifference(*mesh, *tangent);
+  EXPECT_LT(tangent_differ, facing_differ / 2) << tangent_differ << " vs " << facing_differ;
+  // What is left: the sides (left, right), where both stand out by a radius
+  // (1.1 px x 11.5 px each), and the edges' anti-aliased rim.
+  EXPECT_LT(tangent_differ, 100);
+}
+
+TEST(SplatTest, ClipLinesCutTheDisksAtTheBorder) {
+  // The right-hand column's disks are clipped at their centers: the covered
+  // area ends at x = h, where the quad ends, instead of a radius beyond.
+  PointCloud cloud;
+  std::vector<float> normals;
+  const double h = 1.0, step = 0.02;
+  AddTiltedPlane(cloud, normals, h, step, 0.0);
+  const std::vector<float> radius(cloud.size(), float(3 * step));
+  std::vector<float> clip(cloud.size() * 4, 0.0f);
+  for (size_t p = 0; p < cloud.size(); ++p)
+    if (cloud.positions[p * 3] > float(h - 3.5 * step)) {
+      clip[p * 4] = 1.0f;  // outward +x, cut at x = h
+      clip[p * 4 + 3] = float(h) - cloud.positions[p * 3];
+    }
+  const int size = 96;
+  Expected<Image> whole = RenderSplats(cloud, {radius, normals}, HeadOn(size), {});
+  Expected<Image> clipped = RenderSplats(cloud, {radius, normals, clip}, HeadOn(size), {});
+  ASSERT_TRUE(whole.ok() && clipped.ok()) << clipped.status().message();
+  const auto last_covered_column = [&](const Image& image) {
+    int last = -1;
+    for (int x = 0; x < size; ++x)
+      if (image.at_u8(x, size / 2, 3) == 255) last = x;
+    return last;
+  };
+  // x = h is at pixel 48 + focal * h / 5 = 48 + 83.1 / 5 = 64.6: pixel 64 is
+  // the last one it reaches (its samples at 64.25 and 64.75 with 2x2).
+  EXPECT_EQ(last_covered_column(*clipped), 64);
+  EXPECT_GE(last_covered_column(*whole), 65);  // 3 steps = 0.5 px farther
+  // The left side, not clipped, is the same in both.
+  for (int x = 0; x < size / 2; ++x) EXPECT_EQ(whole->at_u8(x, size / 2, 3), clipped->at_u8(x, size / 2, 3)) << x;
+}
+
 TEST(SplatTest, RejectsBadInput) {
   PointCloud cloud;
   AddPlane(cloud, 0.1, 0.05, 0.0f, {1, 2, 3});
   const std::vector<float> radius(cloud.size(), 0.05f);
-  EXPECT_FALSE(RenderSplats(cloud, std::span<const float>(radius).first(2), HeadOn(16), {}).ok());
+  EXPECT_FALSE(RenderSplats(cloud, {std::span<const float>(radius).first(2)}, HeadOn(16), {}).ok());
   RenderCamera same = HeadOn(16);
   same.target = same.eye;
-  EXPECT_FALSE(RenderSplats(cloud, radius, same, {}).ok());
+  EXPECT_FALSE(RenderSplats(cloud, {radius}, same, {}).ok());
   SplatOptions options;
   options.depth_tolerance = -1;
-  EXPECT_FALSE(RenderSplats(cloud, radius, HeadOn(16), options).ok());
+  EXPECT_FALSE(RenderSplats(cloud, {radius}, HeadOn(16), options).ok());
   // Points behind the eye are skipped, not an error: an empty frame.
   RenderCamera away = HeadOn(16);
   away.target = {0, -10, 0};
-  Expected<Image> empty = RenderSplats(cloud, radius, away, {});
+  const std::vector<float> normals(cloud.size() * 3, 1.0f), clip(cloud.size() * 4, 0.0f);
+  EXPECT_FALSE(RenderSplats(cloud, {radius, std::span<const float>(normals).first(3)}, HeadOn(16), {}).ok());
+  EXPECT_FALSE(RenderSplats(cloud, {radius, {}, clip}, HeadOn(16), {}).ok());  // clip lines need normals
+  EXPECT_TRUE(RenderSplats(cloud, {radius, normals, clip}, HeadOn(16), {}).ok());
+  Expected<Image> empty = RenderSplats(cloud, {radius}, away, {});
   ASSERT_TRUE(empty.ok());
   for (int y = 0; y < 16; ++y)
     for (int x = 0; x < 16; ++x) EXPECT_EQ(empty->at_u8(x, y, 3), 0);
