@@ -284,7 +284,11 @@ class LasReader {
       }
       if (std::memcmp(vlr_header + 2, "laszip encoded", 14) == 0 && record_id == kLaszipRecordId) {
         std::vector<uint8_t> payload(payload_bytes);
-        if (!in_.Read(payload.data(), payload.size())) return in_.error();
+        if (!in_.Read(payload.data(), payload.size())) {
+          PB_RETURN_IF_ERROR(in_.error());
+          return Status::Corrupt(path_ + ": truncated: laszip VLR at byte " + std::to_string(offset) +
+                                 " (file has " + std::to_string(file_bytes_) + " bytes)");
+        }
         LazPointLayout layout{h.point_offset, h.point_count, h.point_format, h.record_bytes};
         auto laz = LazReader::Open(&in_, path_, layout, payload, payload_offset, {});
         if (!laz.ok()) return laz.status();

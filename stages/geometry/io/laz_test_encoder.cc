@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cassert>
 #include <cstring>
+#include <random>
 
 #include "stages/geometry/io/laz_chunk_codec.h"
 
@@ -207,6 +208,11 @@ std::string EncodeChunk(const std::vector<Item>& items, const uint8_t* records, 
   return out;
 }
 
+size_t StandardBytes(int format) {
+  static constexpr size_t kSizes[] = {20, 28, 26, 34, 57, 63, 30, 36, 38};
+  return kSizes[format];
+}
+
 }  // namespace
 
 std::string CompressLas(const std::string& las, const LazWriteOptions& options) {
@@ -337,6 +343,108 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
     Set<uint64_t>(&out, info + 48, page.size());
   }
   return out;
+}
+
+std::string SyntheticAirborneLas(int format, size_t points, size_t extra_bytes, uint32_t seed,
+                                int scanner_channels) {
+  const int minor = format >= 6 ? 4 : 2;
+  const size_t header_bytes = minor == 4 ? 375 : 227;
+  const size_t record_bytes = StandardBytes(format) + extra_bytes;
+  std::string las(header_bytes + record_bytes * points, '\0');
+  std::memcpy(las.data(), "LASF", 4);
+  las[24] = 1;
+  las[25] = static_cast<char>(minor);
+  Set<uint16_t>(&las, 94, static_cast<uint16_t>(header_bytes));
+  Set<uint32_t>(&las, 96, static_cast<uint32_t>(header_bytes));
+  las[104] = static_cast<char>(format);
+  Set<uint16_t>(&las, 105, static_cast<uint16_t>(record_bytes));
+  Set<uint32_t>(&las, 107, minor == 4 ? 0 : static_cast<uint32_t>(points));
+  if (minor == 4) Set<uint64_t>(&las, 247, points);
+  const double scale = 0.01;
+  const double offsets[3] = {652000, 5412000, 0};
+  for (int axis = 0; axis < 3; ++axis) {
+    Set<double>(&las, 131 + 8 * axis, scale);
+    Set<double>(&las, 155 + 8 * axis, offsets[axis]);
+  }
+  std::mt19937 random(seed);
+  auto uniform = [&](int lo, int hi) { return std::uniform_int_distribution<int>(lo, hi)(random); };
+  int32_t x = 30000, y = 40000, z = 2000;
+  int32_t min[3] = {INT32_MAX, INT32_MAX, INT32_MAX}, max[3] = {INT32_MIN, INT32_MIN, INT32_MIN};
+  double times[2] = {1000.0, 90000.0};
+  int line = 0, returns = 1, return_number = 1, channel = 0;
+  uint16_t rgb[3] = {1000, 2000, 3000};
+  int16_t scan_angle = 0;
+  uint16_t point_source = 7;
+  uint8_t classification = 2;
+  for (size_t i = 0; i < points; ++i) {
+    if (return_number >= returns) {  // a new pulse
+      return_number = 1;
+      returns = uniform(0, 99) < 70 ? 1 : uniform(0, 99) < 90 ? uniform(2, 3) : uniform(4, format >= 6 ? 15 : 7);
+      if (uniform(0, 199) == 0) line ^= 1;
+      times[line] += uniform(0, 99) < 95 ? 1.0e-5 : uniform(0, 99) < 50 ? 3.0e-5 : 7.5;
+      x += uniform(5, 60);
+      if (uniform(0, 299) == 0) y += uniform(-5000, 5000);
+      scan_angle = static_cast<int16_t>(scan_angle + uniform(-2, 2));
+      if (uniform(0, 999) == 0) point_source = static_cast<uint16_t>(uniform(0, 65535));
+      if (format >= 6 && uniform(0, 49) == 0) channel = uniform(0, scanner_channels - 1);
+    } else {
+      ++return_number;
+    }
+    y += uniform(-20, 20);
+    z += uniform(-30, 30) - (return_number - 1) * 50;
+    if (uniform(0, 9) == 0) classification = static_cast<uint8_t>(uniform(0, 99) < 80 ? uniform(1, 6) : uniform(0, 255));
+    if (uniform(0, 2) == 0) {
+      if (uniform(0, 3) == 0) {  // grey
+        rgb[0] = rgb[1] = rgb[2] = static_cast<uint16_t>(uniform(0, 255) * 257);
+      } else {
+        for (uint16_t& c : rgb) c = static_cast<uint16_t>(std::clamp(c + uniform(-900, 900), 0, 65535));
+      }
+    }
+    const int32_t xyz[3] = {x, y, z};
+    for (int axis = 0; axis < 3; ++axis) {
+      min[axis] = std::min(min[axis], xyz[axis]);
+      max[axis] = std::max(max[axis], xyz[axis]);
+    }
+    const size_t at = header_bytes + i * record_bytes;
+    uint8_t* r = reinterpret_cast<uint8_t*>(las.data() + at);
+    Set<int32_t>(&las, at, x);
+    Set<int32_t>(&las, at + 4, y);
+    Set<int32_t>(&las, at + 8, z);
+    Set<uint16_t>(&las, at + 12, static_cast<uint16_t>(uniform(0, 99) < 10 ? 0 : uniform(0, 4000)));
+    const int edge = uniform(0, 99) == 0, direction = (i / 500) & 1;
+    size_t gps_at, rgb_at = 0;
+    if (format < 6) {
+      r[14] = static_cast<uint8_t>((return_number & 7) | ((returns & 7) << 3) | (direction << 6) | (edge << 7));
+      r[15] = classification;
+      r[16] = static_cast<uint8_t>(static_cast<int8_t>(std::clamp(scan_angle / 100, -90, 90)));
+      r[17] = static_cast<uint8_t>(uniform(0, 9) == 0 ? uniform(0, 255) : 0);
+      Set<uint16_t>(&las, at + 18, point_source);
+      gps_at = 20;
+      if (format >= 2) rgb_at = format == 2 ? 20 : 28;
+    } else {
+      r[14] = static_cast<uint8_t>(return_number | (returns << 4));
+      r[15] = static_cast<uint8_t>((uniform(0, 49) == 0 ? uniform(0, 15) : 0) | (channel << 4) | (direction << 6) | (edge << 7));
+      r[16] = classification;
+      r[17] = static_cast<uint8_t>(uniform(0, 9) == 0 ? uniform(0, 255) : 0);
+      Set<int16_t>(&las, at + 18, scan_angle);
+      Set<uint16_t>(&las, at + 20, point_source);
+      gps_at = 22;
+      if (format >= 7) rgb_at = 30;
+    }
+    if (format != 0 && format != 2) Set<double>(&las, at + gps_at, times[line]);
+    if (rgb_at != 0) {
+      for (int c = 0; c < 3; ++c) Set<uint16_t>(&las, at + rgb_at + 2 * c, rgb[c]);
+    }
+    if (format == 8) Set<uint16_t>(&las, at + 36, static_cast<uint16_t>(uniform(0, 65535)));
+    for (size_t b = 0; b < extra_bytes; ++b) {
+      r[StandardBytes(format) + b] = static_cast<uint8_t>(b == 0 ? i & 0xFF : uniform(0, 3));
+    }
+  }
+  for (int axis = 0; axis < 3; ++axis) {
+    Set<double>(&las, 179 + 16 * axis, max[axis] * scale + offsets[axis]);
+    Set<double>(&las, 187 + 16 * axis, min[axis] * scale + offsets[axis]);
+  }
+  return las;
 }
 
 }  // namespace pb::laz

@@ -1,4 +1,5 @@
-// A LAZ writer for tests and benchmarks only: the arithmetic encoder that
+// LAZ test support, for tests and benchmarks only: synthetic airborne LAS
+// files, and a LAZ writer: the arithmetic encoder that
 // mirrors laz::ArithmeticDecoder (Said 2003, as LAZ uses it) and
 // CompressLas, which turns an uncompressed LAS file's bytes into LAZ with
 // the item codecs of laz_items.h in encoding mode. The reader does not need
@@ -75,5 +76,13 @@ struct LazWriteOptions {
 // `las` is an uncompressed LAS 1.0-1.4 file (formats 0-3, 6-8); returns the
 // same file compressed. Aborts (assert) on input it was not written for.
 std::string CompressLas(const std::string& las, const LazWriteOptions& options = {});
+
+// An uncompressed LAS file (LAS 1.2 for formats 0-3, 1.4 for 6-8) whose
+// every field varies the way airborne scans do: pulses of 1-3 returns (up
+// to 7 or 15 now and then), two interleaved flight lines (GPS time jumps
+// between sequences), up to `scanner_channels` channels switching (formats
+// 6-8), grey and colored points, `extra_bytes` extra bytes per record.
+std::string SyntheticAirborneLas(int format, size_t points, size_t extra_bytes = 0,
+                                 uint32_t seed = 1, int scanner_channels = 4);
 
 }  // namespace pb::laz
