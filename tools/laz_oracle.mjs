@@ -11,8 +11,9 @@
 //   laz_oracle.mjs decode IN.laz OUT.bin
 //       writes the decoded records, concatenated, to OUT.bin.
 //   laz_oracle.mjs time IN.laz [REPEATS]
-//       decodes the file REPEATS times (default 3) and prints the best
-//       points per second, for bench/laz_decode.sh.
+//       decodes the file REPEATS times (default 3) and prints the best run's
+//       wall and CPU seconds and points per second as a Markdown table row
+//       (bench/laz_decode.sh).
 // Exits 2 on bad usage or an unreadable file, 77 (ctest's "skipped") when
 // laz-perf is not installed and CI is not set; in CI that is an error.
 import { readFile, writeFile } from 'node:fs/promises';
@@ -120,13 +121,22 @@ if (command === 'compare') {
   const bytes = await load(args[0]);
   const repeats = Number(args[1] || 3);
   let best = Infinity;
+  let bestCpu = 0;
   let count = 0;
   for (let r = 0; r < repeats; ++r) {
     const start = process.hrtime.bigint();
+    const cpu = process.cpuUsage();
     count = decode(bytes, null).count;
-    best = Math.min(best, Number(process.hrtime.bigint() - start) / 1e9);
+    const wall = Number(process.hrtime.bigint() - start) / 1e9;
+    if (wall < best) {
+      best = wall;
+      const used = process.cpuUsage(cpu);
+      bestCpu = (used.user + used.system) / 1e6;
+    }
   }
-  console.log(`laz-perf ${args[0]}: ${count} points, best of ${repeats}: ${best.toFixed(3)} s, ${(count / best / 1e6).toFixed(2)} Mpoints/s`);
+  // The same columns as bench/laz_bench's table.
+  console.log(`| ${args[0].split('/').pop()} | npm laz-perf (WebAssembly, node) | 1 | ${best.toFixed(3)} | ` +
+              `${bestCpu.toFixed(3)} | ${(count / best / 1e6).toFixed(2)} | ${(count / bestCpu / 1e6).toFixed(2)} |`);
 } else {
   usage();
 }
