@@ -5,12 +5,14 @@
 // on 1 and on 2 threads; best of 3. Writes the .laz files and their .las
 // twins to FOLDER so bench/laz_decode.sh can time the npm laz-perf decoder
 // on the same files and check that it decodes the same points.
-// Usage: laz_bench [FOLDER] [POINTS]   (default /tmp, 5000000)
+// Usage: laz_bench [FOLDER] [POINTS]   (default /tmp, 5000000); with
+// PB_LAZ_BENCH_REUSE set, files already in FOLDER are decoded, not rewritten.
 #include <tbb/task_arena.h>
 
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 
@@ -88,11 +90,17 @@ int main(int argc, char** argv) {
   for (int format : {7, 3}) {
     const std::string name = format == 7 ? "layered_f7" : "pointwise_f3";
     const std::string path = folder + "/laz_bench_" + name + ".laz";
-    const std::string las = pb::laz::SyntheticAirborneLas(format, points, 0, 7, 1);
-    const std::string laz = pb::laz::CompressLas(las, {});
-    std::ofstream(path, std::ios::binary) << laz;
-    // The uncompressed twin, for the oracle's comparison.
-    std::ofstream(folder + "/laz_bench_" + name + ".las", std::ios::binary) << las;
+    std::string laz;
+    if (std::getenv("PB_LAZ_BENCH_REUSE") && std::filesystem::exists(path)) {  // decoding only
+      std::ifstream in(path, std::ios::binary);
+      laz.assign(std::istreambuf_iterator<char>(in), {});
+    } else {
+      const std::string las = pb::laz::SyntheticAirborneLas(format, points, 0, 7, 1);
+      laz = pb::laz::CompressLas(las, {});
+      std::ofstream(path, std::ios::binary) << laz;
+      // The uncompressed twin, for the oracle's comparison.
+      std::ofstream(folder + "/laz_bench_" + name + ".las", std::ios::binary) << las;
+    }
     for (int threads : {1, 2}) {
       uint64_t decoded = 0;
       const Timing all = Best(threads, [&] { decoded = DecodeAll(path, laz); });
