@@ -93,7 +93,7 @@ Status LazReader::ParseVlr(std::span<const uint8_t> vlr, uint64_t vlr_offset) {
     return Status::Unsupported(path_ + ": LAZ coder " + std::to_string(coder) +
                                " is unknown (only 0, arithmetic, exists)" + where);
   }
-  if (chunk_size_ == 0) return Status::Corrupt(path_ + ": LAZ chunk size 0" + where);
+  if (chunk_size_ == 0 && compressor_ != 1) return Status::Corrupt(path_ + ": LAZ chunk size 0" + where);
   if (vlr.size() < 34 + 6 * size_t{item_count}) {
     return Status::Corrupt(path_ + ": laszip VLR lists " + std::to_string(item_count) +
                            " items but has room for " + std::to_string((vlr.size() - 34) / 6) + where);

@@ -130,6 +130,12 @@ TEST_F(LazTest, VariableChunksAndTableOffsetAtTheEnd) {
   ExpectRoundTrip(1, 8002, 0, options);
 }
 
+TEST_F(LazTest, NotChunkedPointwise) {
+  laz::LazWriteOptions options;
+  options.not_chunked = true;
+  ExpectRoundTrip(1, 6000, 0, options);
+}
+
 TEST_F(LazTest, CopcFileReads) {
   laz::LazWriteOptions options;
   options.copc = true;

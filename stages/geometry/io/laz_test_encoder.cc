@@ -227,20 +227,23 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
   assert(!options.copc || (minor == 4 && format >= 6));
   const std::vector<Item> items = ItemsFor(format, record_bytes);
   const bool variable = !options.chunk_points.empty() || options.copc;
+  assert(!options.not_chunked || format <= 3);
   std::vector<uint32_t> chunk_points = options.chunk_points;
-  if (chunk_points.empty()) {
+  if (options.not_chunked) {
+    chunk_points = {static_cast<uint32_t>(count)};
+  } else if (chunk_points.empty()) {
     const uint32_t size = options.copc ? 1000 : options.chunk_size;
     for (uint64_t done = 0; done < count; done += size) chunk_points.push_back(static_cast<uint32_t>(std::min<uint64_t>(size, count - done)));
   }
 
   // The laszip VLR.
   std::string laszip;
-  Append<uint16_t>(&laszip, format <= 3 ? 2 : 3);
+  Append<uint16_t>(&laszip, options.not_chunked ? 1 : format <= 3 ? 2 : 3);
   Append<uint16_t>(&laszip, 0);
   laszip += std::string{3, 4};
   Append<uint16_t>(&laszip, 0);
   Append<uint32_t>(&laszip, 0);
-  Append<uint32_t>(&laszip, variable ? 0xFFFFFFFFu : options.chunk_size);
+  Append<uint32_t>(&laszip, options.not_chunked ? 0 : variable ? 0xFFFFFFFFu : options.chunk_size);
   Append<int64_t>(&laszip, -1);
   Append<int64_t>(&laszip, -1);
   Append<uint16_t>(&laszip, static_cast<uint16_t>(items.size()));
@@ -267,9 +270,13 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
   Set<uint32_t>(&out, 96, static_cast<uint32_t>(out.size()));
   Set<uint32_t>(&out, 100, vlr_count);
 
+  const auto* records = reinterpret_cast<const uint8_t*>(las.data() + point_offset);
+  if (options.not_chunked) {
+    out += EncodeChunk(items, records, record_bytes, count);
+    return out;
+  }
   const size_t table_offset_at = out.size();
   Append<int64_t>(&out, -1);
-  const auto* records = reinterpret_cast<const uint8_t*>(las.data() + point_offset);
   std::vector<uint32_t> chunk_bytes;
   std::vector<uint64_t> chunk_offsets;
   uint64_t first = 0;

@@ -68,6 +68,9 @@ struct LazWriteOptions {
   // file's), chunk size 0xFFFFFFFF in the VLR, as COPC writes.
   std::vector<uint32_t> chunk_points;
   bool table_offset_at_end = false;  // -1 at the point data, as streaming writers do
+  // Compressor 1: one pointwise stream, no chunks, no chunk table (formats
+  // 0-3 only), as the first LASzip versions wrote.
+  bool not_chunked = false;
   // COPC layout: the "copc" info VLR first, variable chunks as octree
   // nodes listed in a hierarchy EVLR. Needs LAS 1.4 and format 6-8.
   bool copc = false;
