@@ -136,7 +136,7 @@ if (command === 'compare') {
   }
   // The same columns as bench/laz_bench's table.
   console.log(`| ${args[0].split('/').pop()} | npm laz-perf (WebAssembly, node) | 1 | ${best.toFixed(3)} | ` +
-              `${bestCpu.toFixed(3)} | ${(count / best / 1e6).toFixed(2)} | ${(count / bestCpu / 1e6).toFixed(2)} |`);
+              `${bestCpu.toFixed(3)} | ${bestCpu.toFixed(3)} | ${(count / best / 1e6).toFixed(2)} | ${(count / bestCpu / 1e6).toFixed(2)} |`);
 } else {
   usage();
 }
