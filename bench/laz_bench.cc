@@ -62,7 +62,11 @@ uint64_t DecodeAll(const std::string& path, const std::string& bytes) {
   uint64_t points = 0;
   for (;;) {
     std::span<const uint8_t> records;
-    if (!(*reader)->Next(&records).ok()) std::abort();
+    const pb::Status status = (*reader)->Next(&records);
+    if (!status.ok()) {
+      std::fprintf(stderr, "%s\n", status.message().c_str());
+      std::exit(1);
+    }
     if (records.empty()) break;
     points += records.size() / layout.record_bytes;
   }
@@ -151,12 +155,16 @@ int main(int argc, char** argv) {
       // The uncompressed twin, for the oracle's comparison.
       std::ofstream(folder + "/laz_bench_" + name + ".las", std::ios::binary) << las;
     }
+
     for (int threads : {1, 2}) {
       uint64_t decoded = 0;
       const Timing all = Best(threads, [&] { decoded = DecodeAll(path, laz); });
       const Timing read = Best(threads, [&] {
         auto cloud = pb::ReadLas(path, {});
-        if (!cloud.ok()) std::abort();
+        if (!cloud.ok()) {
+          std::fprintf(stderr, "%s\n", cloud.status().message().c_str());
+          std::exit(1);
+        }
         decoded = cloud->points.size();
       });
       for (const auto& [what, t] : {std::pair{"LazReader, every field", all},

@@ -25,9 +25,12 @@ SymbolModel::SymbolModel(uint32_t symbols)
   if (symbols > 16) {
     // The table only speeds up decoding (the distribution alone defines
     // the code); LASzip sizes it at about symbols / 4 entries, we at about
-    // symbols, which saves bisection steps for a larger Update().
+    // symbols, which saves bisection steps for a larger Update(). At most
+    // 2^9 entries: value / (length >> 15) can exceed 2^15 by up to 63
+    // (length >= 2^24), which a shift of at least 6 keeps inside the
+    // table's one spare entry; a 516-symbol table of 2^10 read past its end.
     uint32_t table_bits = 5;
-    while (symbols > (1u << table_bits)) ++table_bits;
+    while (symbols > (1u << table_bits) && table_bits < 9) ++table_bits;
     table_size_ = 1u << table_bits;
     table_shift_ = kSymbolLengthShift - table_bits;
     decoder_table_.resize(table_size_ + 2);

@@ -211,6 +211,12 @@ class ArithmeticDecoder {
   }
 
   void Renormalize() {
+    if (length_ == 0) {  // only damaged data gets here; shifting 0 never ends
+      Corrupt();
+      length_ = kMaxLength;
+      value_ = 0;
+      return;
+    }
     do {
       value_ = (value_ << 8) | NextByte();
     } while ((length_ <<= 8) < kMinLength);

@@ -298,3 +298,90 @@ TEST_F(LazErrorTest, VlrErrorsNameTheVlr) {
 
 }  // namespace
 }  // namespace pb
+
+namespace pb {
+namespace {
+
+// value / (length >> 15) reaches 2^15 + 63 (length >= 2^24): the lookup at
+// that index and the next must stay inside every model's decoder table.
+TEST(LazCodecTest, DecoderTableCoversEveryScaledValue) {
+  for (uint32_t symbols : {17u, 33u, 64u, 128u, 256u, 257u, 515u, 516u, 1024u}) {
+    laz::SymbolModel model(symbols);
+    ASSERT_FALSE(model.decoder_table_.empty());
+    const uint32_t max_scaled = (1u << 15) + 63;
+    EXPECT_LE((max_scaled >> model.table_shift_) + 1, model.decoder_table_.size() - 1) << symbols;
+  }
+}
+
+// Random symbols, bits, raw bits and integers through the encoder and
+// back, for the model sizes LAZ uses.
+TEST(LazCodecTest, EncoderAndDecoderRoundTrip) {
+  std::mt19937 random(3);
+  const std::vector<uint32_t> sizes = {2, 3, 4, 5, 6, 13, 16, 64, 128, 256, 515, 516};
+  std::vector<laz::SymbolModel> encode_models, decode_models;
+  for (uint32_t s : sizes) {
+    encode_models.emplace_back(s);
+    decode_models.emplace_back(s);
+  }
+  laz::BitModel encode_bit, decode_bit;
+  laz::IntegerModel encode_int(32, 3), decode_int(32, 3);
+  laz::IntegerModel encode_short(16, 2), decode_short(16, 2);
+  laz::ArithmeticEncoder encoder;
+  struct Step {
+    int kind;
+    uint32_t model;
+    int32_t prediction;
+    int64_t value;
+  };
+  std::vector<Step> steps;
+  for (int i = 0; i < 200000; ++i) {
+    const int kind = static_cast<int>(random() % 5);
+    const uint32_t m = static_cast<uint32_t>(random() % sizes.size());
+    // Mostly small values, so the models adapt away from uniform.
+    const uint32_t skew = random() % 8 == 0 ? static_cast<uint32_t>(random()) : random() % 4;
+    Step step{kind, m, static_cast<int32_t>(random() % 1000), 0};
+    switch (kind) {
+      case 0:
+        step.value = skew % sizes[m];
+        encoder.EncodeSymbol(encode_models[m], static_cast<uint32_t>(step.value));
+        break;
+      case 1:
+        step.value = skew & 1;
+        encoder.EncodeBit(encode_bit, static_cast<uint32_t>(step.value));
+        break;
+      case 2:
+        step.value = static_cast<int32_t>(step.prediction + static_cast<int32_t>(skew));
+        encoder.EncodeInt(encode_int, step.prediction, static_cast<int32_t>(step.value), m % 3);
+        break;
+      case 3:
+        step.value = (step.prediction + skew) % 65536;
+        encoder.EncodeInt(encode_short, step.prediction, static_cast<int32_t>(step.value), m % 2);
+        break;
+      default:
+        step.value = skew & ((2u << m) - 1);
+        encoder.WriteBits(1 + m, static_cast<uint32_t>(step.value));
+        break;
+    }
+    steps.push_back(step);
+  }
+  const std::vector<uint8_t> bytes = encoder.Done();
+  laz::ArithmeticDecoder decoder;
+  decoder.Init(bytes.data(), bytes.data() + bytes.size());
+  for (size_t i = 0; i < steps.size(); ++i) {
+    const Step& step = steps[i];
+    int64_t got = 0;
+    switch (step.kind) {
+      case 0: got = decoder.DecodeSymbol(decode_models[step.model]); break;
+      case 1: got = decoder.DecodeBit(decode_bit); break;
+      case 2: got = decoder.DecodeInt(decode_int, step.prediction, step.model % 3); break;
+      case 3: got = decoder.DecodeInt(decode_short, step.prediction, step.model % 2); break;
+      default: got = decoder.ReadBits(1 + step.model); break;
+    }
+    ASSERT_EQ(got, step.value) << "step " << i << " kind " << step.kind;
+  }
+  EXPECT_EQ(decoder.overrun_bytes(), 0u);
+  EXPECT_FALSE(decoder.corrupt());
+}
+
+}  // namespace
+}  // namespace pb
