@@ -12,17 +12,16 @@
 #include <tbb/task_scheduler_observer.h>
 
 #include <algorithm>
-#include <ctime>
-#include <map>
-#include <mutex>
-#include <thread>
-
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <filesystem>
 #include <fstream>
+#include <map>
+#include <mutex>
 #include <string>
+#include <thread>
 
 #include "bench/bench_clock.h"
 #include "stages/geometry/io/las.h"
@@ -54,7 +53,8 @@ uint64_t DecodeAll(const std::string& path, const std::string& bytes) {
   options.all_layers = true;
   auto reader = pb::LazReader::Open(
       &in, path, layout,
-      {reinterpret_cast<const uint8_t*>(bytes.data()) + vlr, layout.point_offset - vlr}, vlr, options);
+      {reinterpret_cast<const uint8_t*>(bytes.data()) + vlr, layout.point_offset - vlr}, vlr,
+      options);
   if (!reader.ok()) {
     std::fprintf(stderr, "%s\n", reader.status().message().c_str());
     std::exit(1);
@@ -91,7 +91,9 @@ double ThreadCpuSeconds() {
 // time would be that half.
 class ThreadCpu : public tbb::task_scheduler_observer {
  public:
-  explicit ThreadCpu(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) { observe(true); }
+  explicit ThreadCpu(tbb::task_arena& arena) : tbb::task_scheduler_observer(arena) {
+    observe(true);
+  }
   ~ThreadCpu() override { observe(false); }
   void on_scheduler_entry(bool) override {
     std::lock_guard lock(mutex_);
@@ -139,7 +141,9 @@ Timing Best(int threads, F run) {
 int main(int argc, char** argv) {
   const std::string folder = argc > 1 ? argv[1] : "/tmp";
   const size_t points = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 5000000;
-  std::printf("| file | decoder | threads | wall s | CPU s | busiest thread CPU s | Mpoints/s | Mpoints/s per CPU-second |\n");
+  std::printf(
+      "| file | decoder | threads | wall s | CPU s | busiest thread CPU s | Mpoints/s | Mpoints/s "
+      "per CPU-second |\n");
   std::printf("|---|---|---|---|---|---|---|---|\n");
   for (int format : {7, 3}) {
     const std::string name = format == 7 ? "layered_f7" : "pointwise_f3";

@@ -253,8 +253,9 @@ class LasReader {
         PB_RETURN_IF_ERROR(in_.error());
         return Truncated(i);
       }
-      PB_RETURN_IF_ERROR(AppendRecord(record_bytes.data(), i,
-                                      " at byte " + std::to_string(h.point_offset + i * h.record_bytes)));
+      PB_RETURN_IF_ERROR(
+          AppendRecord(record_bytes.data(), i,
+                       " at byte " + std::to_string(h.point_offset + i * h.record_bytes)));
     }
     return Status::Ok();
   }
@@ -277,8 +278,8 @@ class LasReader {
       const uint16_t payload_bytes = Load<uint16_t>(vlr_header + 20);
       const uint64_t payload_offset = offset + kVlrHeaderBytes;
       if (payload_offset + payload_bytes > h.point_offset) {
-        return Status::Corrupt(path_ + ": VLR " + std::to_string(i) + " at byte " + std::to_string(offset) +
-                               " has " + std::to_string(payload_bytes) +
+        return Status::Corrupt(path_ + ": VLR " + std::to_string(i) + " at byte " +
+                               std::to_string(offset) + " has " + std::to_string(payload_bytes) +
                                " bytes, more than lie before the point data at byte " +
                                std::to_string(h.point_offset));
       }
@@ -286,8 +287,9 @@ class LasReader {
         std::vector<uint8_t> payload(payload_bytes);
         if (!in_.Read(payload.data(), payload.size())) {
           PB_RETURN_IF_ERROR(in_.error());
-          return Status::Corrupt(path_ + ": truncated: laszip VLR at byte " + std::to_string(offset) +
-                                 " (file has " + std::to_string(file_bytes_) + " bytes)");
+          return Status::Corrupt(path_ + ": truncated: laszip VLR at byte " +
+                                 std::to_string(offset) + " (file has " +
+                                 std::to_string(file_bytes_) + " bytes)");
         }
         LazPointLayout layout{h.point_offset, h.point_count, h.point_format, h.record_bytes};
         auto laz = LazReader::Open(&in_, path_, layout, payload, payload_offset, {});
@@ -298,7 +300,8 @@ class LasReader {
       offset = payload_offset + payload_bytes;
     }
     return Status::Corrupt(path_ + ": compressed point format " + std::to_string(h.point_format) +
-                           " (byte 104 has a compression bit, 0x80 or 0x40, set) but none of the " + std::to_string(h.vlr_count) +
+                           " (byte 104 has a compression bit, 0x80 or 0x40, set) but none of the " +
+                           std::to_string(h.vlr_count) +
                            " VLRs is the laszip VLR (user id \"laszip encoded\", record id 22204)");
   }
 

@@ -1,6 +1,5 @@
 #include "stages/geometry/io/las.h"
 
-#include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+
+#include "stages/geometry/testing/test_data.h"
 
 namespace pb {
 namespace {
@@ -158,7 +159,6 @@ class LasTest : public pb::testing::TempDirTest {
     }
     EXPECT_TRUE(Validate(cloud).ok());
   }
-
 };
 
 // --- Valid files --------------------------------------------------------------
@@ -311,7 +311,8 @@ TEST_F(LasTest, CompressionBitWithoutLaszipVlr) {
     ASSERT_FALSE(read.ok());
     EXPECT_EQ(read.status().code(), Status::Code::kCorrupt);
     EXPECT_THAT(read.status().message(),
-                HasSubstr("compressed.las: compressed point format 3 (byte 104 has a compression bit, 0x80 or 0x40, set) but "
+                HasSubstr("compressed.las: compressed point format 3 (byte 104 has a compression "
+                          "bit, 0x80 or 0x40, set) but "
                           "none of the 1 VLRs is the laszip VLR"));
   }
 }

@@ -18,43 +18,69 @@ constexpr size_t kMaxOverrunBytes = 4;
 
 std::string ItemName(uint16_t type) {
   switch (type) {
-    case Item::kByte: return "BYTE";
-    case Item::kPoint10: return "POINT10";
-    case Item::kGpsTime11: return "GPSTIME11";
-    case Item::kRgb12: return "RGB12";
-    case 9: return "WAVEPACKET13";
-    case Item::kPoint14: return "POINT14";
-    case Item::kRgb14: return "RGB14";
-    case Item::kRgbNir14: return "RGBNIR14";
-    case 13: return "WAVEPACKET14";
-    case Item::kByte14: return "BYTE14";
-    default: return "type " + std::to_string(type);
+    case Item::kByte:
+      return "BYTE";
+    case Item::kPoint10:
+      return "POINT10";
+    case Item::kGpsTime11:
+      return "GPSTIME11";
+    case Item::kRgb12:
+      return "RGB12";
+    case 9:
+      return "WAVEPACKET13";
+    case Item::kPoint14:
+      return "POINT14";
+    case Item::kRgb14:
+      return "RGB14";
+    case Item::kRgbNir14:
+      return "RGBNIR14";
+    case 13:
+      return "WAVEPACKET14";
+    case Item::kByte14:
+      return "BYTE14";
+    default:
+      return "type " + std::to_string(type);
   }
 }
 
 // The items a point format is made of, as LASzip writes them.
 std::vector<uint16_t> ExpectedItems(int format) {
   switch (format) {
-    case 0: return {Item::kPoint10};
-    case 1: return {Item::kPoint10, Item::kGpsTime11};
-    case 2: return {Item::kPoint10, Item::kRgb12};
-    case 3: return {Item::kPoint10, Item::kGpsTime11, Item::kRgb12};
-    case 6: return {Item::kPoint14};
-    case 7: return {Item::kPoint14, Item::kRgb14};
-    case 8: return {Item::kPoint14, Item::kRgbNir14};
-    default: return {};
+    case 0:
+      return {Item::kPoint10};
+    case 1:
+      return {Item::kPoint10, Item::kGpsTime11};
+    case 2:
+      return {Item::kPoint10, Item::kRgb12};
+    case 3:
+      return {Item::kPoint10, Item::kGpsTime11, Item::kRgb12};
+    case 6:
+      return {Item::kPoint14};
+    case 7:
+      return {Item::kPoint14, Item::kRgb14};
+    case 8:
+      return {Item::kPoint14, Item::kRgbNir14};
+    default:
+      return {};
   }
 }
 
 uint16_t ItemSize(uint16_t type) {
   switch (type) {
-    case Item::kPoint10: return 20;
-    case Item::kGpsTime11: return 8;
-    case Item::kRgb12: return 6;
-    case Item::kPoint14: return 30;
-    case Item::kRgb14: return 6;
-    case Item::kRgbNir14: return 8;
-    default: return 0;
+    case Item::kPoint10:
+      return 20;
+    case Item::kGpsTime11:
+      return 8;
+    case Item::kRgb12:
+      return 6;
+    case Item::kPoint14:
+      return 30;
+    case Item::kRgb14:
+      return 6;
+    case Item::kRgbNir14:
+      return 8;
+    default:
+      return 0;
   }
 }
 
@@ -63,7 +89,8 @@ uint16_t ItemSize(uint16_t type) {
 Expected<std::unique_ptr<LazReader>> LazReader::Open(BufferedInput* in, const std::string& path,
                                                      const LazPointLayout& layout,
                                                      std::span<const uint8_t> vlr,
-                                                     uint64_t vlr_offset, const LazOptions& options) {
+                                                     uint64_t vlr_offset,
+                                                     const LazOptions& options) {
   std::unique_ptr<LazReader> reader(new LazReader(in, path, layout, options));
   PB_RETURN_IF_ERROR(reader->ParseVlr(vlr, vlr_offset));
   PB_RETURN_IF_ERROR(reader->ReadChunkTable());
@@ -85,18 +112,20 @@ Status LazReader::ParseVlr(std::span<const uint8_t> vlr, uint64_t vlr_offset) {
   chunk_size_ = laz::LoadLe<uint32_t>(vlr.data() + 12);
   const uint16_t item_count = laz::LoadLe<uint16_t>(vlr.data() + 32);
   if (compressor_ < 1 || compressor_ > 3) {
-    return Status::Unsupported(path_ + ": LAZ compressor " + std::to_string(compressor_) +
-                               " is unknown (expected 1 pointwise, 2 pointwise chunked or 3 layered)" +
-                               where);
+    return Status::Unsupported(
+        path_ + ": LAZ compressor " + std::to_string(compressor_) +
+        " is unknown (expected 1 pointwise, 2 pointwise chunked or 3 layered)" + where);
   }
   if (coder != 0) {
     return Status::Unsupported(path_ + ": LAZ coder " + std::to_string(coder) +
                                " is unknown (only 0, arithmetic, exists)" + where);
   }
-  if (chunk_size_ == 0 && compressor_ != 1) return Status::Corrupt(path_ + ": LAZ chunk size 0" + where);
+  if (chunk_size_ == 0 && compressor_ != 1)
+    return Status::Corrupt(path_ + ": LAZ chunk size 0" + where);
   if (vlr.size() < 34 + 6 * size_t{item_count}) {
     return Status::Corrupt(path_ + ": laszip VLR lists " + std::to_string(item_count) +
-                           " items but has room for " + std::to_string((vlr.size() - 34) / 6) + where);
+                           " items but has room for " + std::to_string((vlr.size() - 34) / 6) +
+                           where);
   }
   const int format = layout_.point_format;
   const std::vector<uint16_t> expected = ExpectedItems(format);
@@ -125,8 +154,9 @@ Status LazReader::ParseVlr(std::span<const uint8_t> vlr, uint64_t vlr_offset) {
                              std::to_string(format) + where);
     }
     if (!is_extra && item.size != ItemSize(item.type)) {
-      return Status::Corrupt(path_ + ": laszip VLR " + name + " has size " + std::to_string(item.size) +
-                             ", expected " + std::to_string(ItemSize(item.type)) + where);
+      return Status::Corrupt(path_ + ": laszip VLR " + name + " has size " +
+                             std::to_string(item.size) + ", expected " +
+                             std::to_string(ItemSize(item.type)) + where);
     }
     const uint16_t version = layered ? 3 : 2;
     if (item.version != version) {
@@ -154,7 +184,8 @@ Status LazReader::ParseVlr(std::span<const uint8_t> vlr, uint64_t vlr_offset) {
         wanted_layers_.push_back(true);
         wanted_layers_.push_back(options_.all_layers);
       }
-      if (item.type == Item::kByte14) wanted_layers_.resize(wanted_layers_.size() + item.size, options_.all_layers);
+      if (item.type == Item::kByte14)
+        wanted_layers_.resize(wanted_layers_.size() + item.size, options_.all_layers);
     }
   }
   return Status::Ok();
@@ -177,8 +208,9 @@ Status LazReader::ReadChunkTable() {
   uint8_t word[8];
   if (!in_->Seek(layout_.point_offset) || !in_->Read(word, 8)) {
     PB_RETURN_IF_ERROR(in_->error());
-    return corrupt("truncated: no LAZ chunk table offset at byte " + std::to_string(layout_.point_offset) +
-                   " (file has " + std::to_string(file_bytes) + " bytes)");
+    return corrupt("truncated: no LAZ chunk table offset at byte " +
+                   std::to_string(layout_.point_offset) + " (file has " +
+                   std::to_string(file_bytes) + " bytes)");
   }
   int64_t table_offset = laz::LoadLe<int64_t>(word);
   uint64_t table_offset_at = layout_.point_offset;
@@ -208,8 +240,8 @@ Status LazReader::ReadChunkTable() {
   const std::string table = "LAZ chunk table at byte " + std::to_string(table_offset);
   if (version != 0) return corrupt(table + ": version " + std::to_string(version) + ", expected 0");
   if (chunk_count == 0 || chunk_count > count) {
-    return corrupt(table + ": " + std::to_string(chunk_count) + " chunks for " + std::to_string(count) +
-                   " points");
+    return corrupt(table + ": " + std::to_string(chunk_count) + " chunks for " +
+                   std::to_string(count) + " points");
   }
   // Each entry takes a few bytes; never read more than the file has.
   const uint64_t table_bytes =
@@ -239,10 +271,11 @@ Status LazReader::ReadChunkTable() {
     if (decoder.overrun_bytes() > kMaxOverrunBytes || decoder.corrupt()) {
       return corrupt(table + ": damaged at entry " + std::to_string(i));
     }
-    if (points == 0 || bytes < layout_.record_bytes || offset + bytes > static_cast<uint64_t>(table_offset)) {
+    if (points == 0 || bytes < layout_.record_bytes ||
+        offset + bytes > static_cast<uint64_t>(table_offset)) {
       return corrupt(table + ": chunk " + std::to_string(i) + " (" + std::to_string(points) +
-                     " points, " + std::to_string(bytes) + " bytes from byte " + std::to_string(offset) +
-                     ") does not fit before the table");
+                     " points, " + std::to_string(bytes) + " bytes from byte " +
+                     std::to_string(offset) + ") does not fit before the table");
     }
     chunks_.push_back({offset, bytes, first_point, points});
     offset += bytes;
@@ -258,11 +291,13 @@ Status LazReader::ReadChunkTable() {
 std::string LazReader::ChunkPlace(size_t chunk) const {
   const Chunk& c = chunks_[chunk];
   return path_ + ": LAZ chunk " + std::to_string(chunk) + " of " + std::to_string(chunks_.size()) +
-         " (points " + std::to_string(c.first_point) + "-" + std::to_string(c.first_point + c.points - 1) +
-         ", bytes " + std::to_string(c.offset) + "-" + std::to_string(c.offset + c.bytes - 1) + ")";
+         " (points " + std::to_string(c.first_point) + "-" +
+         std::to_string(c.first_point + c.points - 1) + ", bytes " + std::to_string(c.offset) +
+         "-" + std::to_string(c.offset + c.bytes - 1) + ")";
 }
 
-Status LazReader::DecodeChunk(size_t chunk, std::span<const uint8_t> bytes, uint8_t* records) const {
+Status LazReader::DecodeChunk(size_t chunk, std::span<const uint8_t> bytes,
+                              uint8_t* records) const {
   const Chunk& c = chunks_[chunk];
   const size_t record_bytes = layout_.record_bytes;
   std::memcpy(records, bytes.data(), record_bytes);  // the first point is raw
@@ -329,7 +364,8 @@ Status LazReader::Next(std::span<const uint8_t>* records) {
   size_t end = next_chunk_;
   uint64_t points = 0;
   while (end < chunks_.size() && end - next_chunk_ < max_chunks &&
-         (end == next_chunk_ || (points + chunks_[end].points) * record_bytes <= options_.max_batch_bytes)) {
+         (end == next_chunk_ ||
+          (points + chunks_[end].points) * record_bytes <= options_.max_batch_bytes)) {
     points += chunks_[end].points;
     ++end;
   }

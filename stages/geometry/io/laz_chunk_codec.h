@@ -74,7 +74,8 @@ struct Point14 {
     StoreLe(r + 8, z);
     StoreLe(r + 12, intensity);
     r[14] = static_cast<uint8_t>(return_number | (number_of_returns << 4));
-    r[15] = static_cast<uint8_t>(class_flags | (channel << 4) | (scan_direction << 6) | (edge << 7));
+    r[15] =
+        static_cast<uint8_t>(class_flags | (channel << 4) | (scan_direction << 6) | (edge << 7));
     r[16] = static_cast<uint8_t>(classification);
     r[17] = static_cast<uint8_t>(user_data);
     StoreLe(r + 18, scan_angle);
@@ -86,7 +87,18 @@ struct Point14 {
 template <class C>
 class Point14Codec {
  public:
-  enum Layer { kXY, kZ, kClassification, kFlags, kIntensity, kScanAngle, kUserData, kPointSource, kGpsTime, kLayers };
+  enum Layer {
+    kXY,
+    kZ,
+    kClassification,
+    kFlags,
+    kIntensity,
+    kScanAngle,
+    kUserData,
+    kPointSource,
+    kGpsTime,
+    kLayers
+  };
 
   explicit Point14Codec(const uint8_t* first) {
     const Point14 p = Point14::Unpack(first);
@@ -115,9 +127,8 @@ class Point14Codec {
                          (previous.gps_time_change ? 4u : 0u);
     uint32_t changed = 0;
     if constexpr (C::kEncoding) {
-      const Point14& ref = t.channel != current_ && contexts_[t.channel]
-                               ? contexts_[t.channel]->last
-                               : previous;
+      const Point14& ref =
+          t.channel != current_ && contexts_[t.channel] ? contexts_[t.channel]->last : previous;
       const uint32_t last_r = ref.return_number;
       const uint32_t r_code = t.return_number == last_r                 ? 0
                               : t.return_number == ((last_r + 1) & 15)  ? 1
@@ -151,14 +162,21 @@ class Point14Codec {
     }
     uint32_t r;
     switch (changed & 3) {
-      case 0: r = last_r; break;
-      case 1: r = (last_r + 1) & 15; break;
-      case 2: r = (last_r + 15) & 15; break;
+      case 0:
+        r = last_r;
+        break;
+      case 1:
+        r = (last_r + 1) & 15;
+        break;
+      case 2:
+        r = (last_r + 15) & 15;
+        break;
       default:
         if (gps_change) {
           r = xy.Symbol(ctx->return_number[last_r], t.return_number);
         } else {
-          const uint32_t step = xy.Symbol(ctx->return_gps_same, (t.return_number - last_r - 2) & 15);
+          const uint32_t step =
+              xy.Symbol(ctx->return_gps_same, (t.return_number - last_r - 2) & 15);
           r = (last_r + step + 2) & 15;
         }
     }
@@ -169,7 +187,8 @@ class Point14Codec {
     const uint32_t single = n == 1;
 
     const uint32_t median_index = (m << 1) | gps_change;
-    const int32_t dx = xy.Int(ctx->ic_dx, ctx->x_median[median_index].Get(), WrapSub(t.x, p.x), single);
+    const int32_t dx =
+        xy.Int(ctx->ic_dx, ctx->x_median[median_index].Get(), WrapSub(t.x, p.x), single);
     p.x = WrapAdd(p.x, dx);
     ctx->x_median[median_index].Add(dx);
     uint32_t k = ctx->ic_dx.k;
@@ -184,7 +203,8 @@ class Point14Codec {
     }
     if (active_[kClassification]) {
       const uint32_t context = ((p.classification & 0x1F) << 1) + (cpr == 3 ? 1 : 0);
-      p.classification = layers_[kClassification].Symbol(ctx->classification[context], t.classification);
+      p.classification =
+          layers_[kClassification].Symbol(ctx->classification[context], t.classification);
     }
     if (active_[kFlags]) {
       const uint32_t last_flags = (p.edge << 5) | (p.scan_direction << 4) | p.class_flags;
@@ -228,9 +248,9 @@ class Point14Codec {
     std::array<Median5, 12> x_median{};
     std::array<Median5, 12> y_median{};
     std::array<int32_t, 8> last_z;
-    std::array<SymbolModel, 8> changed_values{
-        SymbolModel(128), SymbolModel(128), SymbolModel(128), SymbolModel(128),
-        SymbolModel(128), SymbolModel(128), SymbolModel(128), SymbolModel(128)};
+    std::array<SymbolModel, 8> changed_values{SymbolModel(128), SymbolModel(128), SymbolModel(128),
+                                              SymbolModel(128), SymbolModel(128), SymbolModel(128),
+                                              SymbolModel(128), SymbolModel(128)};
     SymbolModel scanner_channel{3};
     LazySymbolModels number_of_returns{16, 16};
     LazySymbolModels return_number{16, 16};
@@ -263,7 +283,8 @@ class Point14Codec {
 template <class Codec>
 class PerChannel {
  public:
-  PerChannel(uint32_t channel, const uint8_t* first, size_t bytes) : bytes_(bytes), current_(channel) {
+  PerChannel(uint32_t channel, const uint8_t* first, size_t bytes)
+      : bytes_(bytes), current_(channel) {
     contexts_[channel] = std::make_unique<Codec>(first, bytes);
   }
 
@@ -301,20 +322,32 @@ class ChunkCodec {
       Part part{item.type, offset, item.size};
       const uint8_t* bytes = first + offset;
       switch (item.type) {
-        case Item::kPoint10: point10_ = std::make_unique<Point10Codec<C>>(bytes); break;
-        case Item::kGpsTime11: gps_ = std::make_unique<GpsTimeCodec<C>>(false, LoadLe<uint64_t>(bytes)); break;
-        case Item::kRgb12: rgb12_ = std::make_unique<RgbCodec<C>>(bytes); break;
-        case Item::kByte: bytes10_ = std::make_unique<ExtraBytesCodec<C>>(bytes, item.size); break;
-        case Item::kPoint14: point14_ = std::make_unique<Point14Codec<C>>(bytes); break;
+        case Item::kPoint10:
+          point10_ = std::make_unique<Point10Codec<C>>(bytes);
+          break;
+        case Item::kGpsTime11:
+          gps_ = std::make_unique<GpsTimeCodec<C>>(false, LoadLe<uint64_t>(bytes));
+          break;
+        case Item::kRgb12:
+          rgb12_ = std::make_unique<RgbCodec<C>>(bytes);
+          break;
+        case Item::kByte:
+          bytes10_ = std::make_unique<ExtraBytesCodec<C>>(bytes, item.size);
+          break;
+        case Item::kPoint14:
+          point14_ = std::make_unique<Point14Codec<C>>(bytes);
+          break;
         case Item::kRgb14:
         case Item::kRgbNir14: {
           const uint32_t channel = point14_->channel();
           rgb14_ = std::make_unique<PerChannel<RgbCodec<C>>>(channel, bytes, 6);
-          if (item.type == Item::kRgbNir14) nir14_ = std::make_unique<PerChannel<NirCodec<C>>>(channel, bytes + 6, 2);
+          if (item.type == Item::kRgbNir14)
+            nir14_ = std::make_unique<PerChannel<NirCodec<C>>>(channel, bytes + 6, 2);
           break;
         }
         case Item::kByte14:
-          bytes14_ = std::make_unique<PerChannel<ExtraBytesCodec<C>>>(point14_->channel(), bytes, item.size);
+          bytes14_ = std::make_unique<PerChannel<ExtraBytesCodec<C>>>(point14_->channel(), bytes,
+                                                                      item.size);
           break;
       }
       parts_.push_back(part);
@@ -346,23 +379,27 @@ class ChunkCodec {
     active_[layer] = active;
     if (layer < Point14Codec<C>::kLayers) point14_->set_active(static_cast<int>(layer), active);
   }
-  bool damaged() const {
-    return (gps_ && gps_->damaged()) || (point14_ && point14_->damaged());
-  }
+  bool damaged() const { return (gps_ && gps_->damaged()) || (point14_ && point14_->damaged()); }
 
   void Code(uint8_t* record) {
     if (!layered_) {
       for (const Part& part : parts_) {
         uint8_t* bytes = record + part.offset;
         switch (part.type) {
-          case Item::kPoint10: point10_->Code(stream_, bytes); break;
+          case Item::kPoint10:
+            point10_->Code(stream_, bytes);
+            break;
           case Item::kGpsTime11: {
             const uint64_t time = gps_->Code(stream_, C::kEncoding ? LoadLe<uint64_t>(bytes) : 0);
             if constexpr (!C::kEncoding) StoreLe(bytes, time);
             break;
           }
-          case Item::kRgb12: rgb12_->Code(stream_, bytes); break;
-          case Item::kByte: bytes10_->Code(stream_, bytes); break;
+          case Item::kRgb12:
+            rgb12_->Code(stream_, bytes);
+            break;
+          case Item::kByte:
+            bytes10_->Code(stream_, bytes);
+            break;
         }
       }
       return;

@@ -93,10 +93,10 @@ struct IntegerModel {
   int32_t corr_min;
   int32_t corr_max;
   uint32_t bits_high;
-  std::vector<SymbolModel> k_models;  // per context: k in [0, corr_bits]
-  BitModel corrector_0;               // k = 0: the corrector is 0 or 1
+  std::vector<SymbolModel> k_models;    // per context: k in [0, corr_bits]
+  BitModel corrector_0;                 // k = 0: the corrector is 0 or 1
   std::vector<SymbolModel> correctors;  // [k - 1] for k in [1, corr_bits]
-  uint32_t k = 0;  // the last corrector's bit length; later contexts use it
+  uint32_t k = 0;                       // the last corrector's bit length; later contexts use it
 };
 
 // Reads one arithmetic-coded stream held in [begin, end).

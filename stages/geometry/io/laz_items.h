@@ -41,7 +41,8 @@ template <typename T>
 inline T LoadLe(const uint8_t* bytes) {
   T value;
   std::memcpy(&value, bytes, sizeof(T));
-  static_assert(std::endian::native == std::endian::little, "LAZ codecs assume a little-endian host");
+  static_assert(std::endian::native == std::endian::little,
+                "LAZ codecs assume a little-endian host");
   return value;
 }
 template <typename T>
@@ -58,7 +59,9 @@ inline int32_t WrapSub(int32_t a, int32_t b) {
 inline int32_t WrapMul(int32_t a, int32_t b) {
   return static_cast<int32_t>(static_cast<uint32_t>(a) * static_cast<uint32_t>(b));
 }
-inline uint8_t ClampByte(int32_t n) { return static_cast<uint8_t>(n < 0 ? 0 : (n > 255 ? 255 : n)); }
+inline uint8_t ClampByte(int32_t n) {
+  return static_cast<uint8_t>(n < 0 ? 0 : (n > 255 ? 255 : n));
+}
 
 // The running median of the last five values (the X/Y delta predictor).
 class Median5 {
@@ -340,7 +343,8 @@ class RgbCodec {
     } else {
       out[1] = out[2] = out[0];
     }
-    for (int i = 0; i < 3; ++i) StoreLe<uint16_t>(last_bytes + 2 * i, static_cast<uint16_t>(out[i]));
+    for (int i = 0; i < 3; ++i)
+      StoreLe<uint16_t>(last_bytes + 2 * i, static_cast<uint16_t>(out[i]));
     if constexpr (!C::kEncoding) std::memcpy(record, last_bytes, 6);
   }
 
@@ -465,17 +469,18 @@ class Point10Codec {
             c.Int(ic_intensity_, last_intensity_[m], LoadLe<uint16_t>(record + 12), m < 3 ? m : 3));
       }
       StoreLe<uint16_t>(last + 12, last_intensity_[m]);
-      if (changed & 8) last[15] = static_cast<uint8_t>(c.Symbol(classification_[last[15]], record[15]));
+      if (changed & 8)
+        last[15] = static_cast<uint8_t>(c.Symbol(classification_[last[15]], record[15]));
       if (changed & 4) {
-        const uint32_t diff = c.Symbol(scan_angle_[(last[14] >> 6) & 1],
-                                       static_cast<uint8_t>(record[16] - last[16]));
+        const uint32_t diff =
+            c.Symbol(scan_angle_[(last[14] >> 6) & 1], static_cast<uint8_t>(record[16] - last[16]));
         last[16] = static_cast<uint8_t>(diff + last[16]);
       }
       if (changed & 2) last[17] = static_cast<uint8_t>(c.Symbol(user_data_[last[17]], record[17]));
       if (changed & 1) {
-        StoreLe<uint16_t>(last + 18, static_cast<uint16_t>(c.Int(ic_point_source_,
-                                                                LoadLe<uint16_t>(last + 18),
-                                                                LoadLe<uint16_t>(record + 18), 0)));
+        StoreLe<uint16_t>(last + 18,
+                          static_cast<uint16_t>(c.Int(ic_point_source_, LoadLe<uint16_t>(last + 18),
+                                                      LoadLe<uint16_t>(record + 18), 0)));
       }
     }
     const bool single = n == 1;

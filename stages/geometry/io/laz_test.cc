@@ -78,21 +78,24 @@ class LazTest : public pb::testing::TempDirTest {
     std::memcpy(&value, bytes.data() + offset, sizeof(T));
     return value;
   }
-  static std::string Records(const std::string& las) {
-    return las.substr(Get<uint32_t>(las, 96));
-  }
+  static std::string Records(const std::string& las) { return las.substr(Get<uint32_t>(las, 96)); }
 
-  void ExpectRoundTrip(int format, size_t points, size_t extra_bytes, const laz::LazWriteOptions& options) {
+  void ExpectRoundTrip(int format, size_t points, size_t extra_bytes,
+                       const laz::LazWriteOptions& options) {
     SCOPED_TRACE("format " + std::to_string(format) + ", " + std::to_string(points) + " points, " +
                  std::to_string(extra_bytes) + " extra bytes");
-    const std::string las = laz::SyntheticAirborneLas(format, points, extra_bytes, static_cast<uint32_t>(format + 10 * extra_bytes));
-    const std::string laz_path = Write("p" + std::to_string(format) + ".laz", laz::CompressLas(las, options));
+    const std::string las = laz::SyntheticAirborneLas(
+        format, points, extra_bytes, static_cast<uint32_t>(format + 10 * extra_bytes));
+    const std::string laz_path =
+        Write("p" + std::to_string(format) + ".laz", laz::CompressLas(las, options));
     const std::string decoded = DecodeAll(laz_path);
     ASSERT_EQ(decoded.size(), Records(las).size()) << decoded.substr(0, 300);
     const std::string expected = Records(las);
     const size_t record_bytes = Get<uint16_t>(las, 105);
     for (size_t i = 0; i < points; ++i) {
-      ASSERT_EQ(decoded.compare(i * record_bytes, record_bytes, expected, i * record_bytes, record_bytes), 0)
+      ASSERT_EQ(
+          decoded.compare(i * record_bytes, record_bytes, expected, i * record_bytes, record_bytes),
+          0)
           << "first different record: " << i;
     }
     // The scan reader (selected layers) gives the points of the LAS file.
@@ -171,18 +174,23 @@ TEST_F(LazTest, OracleSamples) {
   laz::LazWriteOptions variable;
   variable.chunk_points = {1, 7000, 3, 4996};
   const Sample samples[] = {
-      {"pointwise_f0", 0, 12000, 0, small_chunks},  {"pointwise_f1", 1, 12000, 0, small_chunks},
-      {"pointwise_f2_rgb", 2, 12000, 0, small_chunks}, {"pointwise_f3_rgb", 3, 12000, 0, small_chunks},
-      {"pointwise_f3_extra", 3, 12000, 4, small_chunks}, {"layered_f6_channels", 6, 12000, 0, small_chunks, 4},
-      {"layered_f7_rgb", 7, 12000, 0, small_chunks},  {"layered_f8_rgbnir", 8, 12000, 0, small_chunks},
-      {"layered_f7_extra", 7, 12000, 2, small_chunks}, {"layered_f7_variable", 7, 12000, 0, variable},
+      {"pointwise_f0", 0, 12000, 0, small_chunks},
+      {"pointwise_f1", 1, 12000, 0, small_chunks},
+      {"pointwise_f2_rgb", 2, 12000, 0, small_chunks},
+      {"pointwise_f3_rgb", 3, 12000, 0, small_chunks},
+      {"pointwise_f3_extra", 3, 12000, 4, small_chunks},
+      {"layered_f6_channels", 6, 12000, 0, small_chunks, 4},
+      {"layered_f7_rgb", 7, 12000, 0, small_chunks},
+      {"layered_f8_rgbnir", 8, 12000, 0, small_chunks},
+      {"layered_f7_extra", 7, 12000, 2, small_chunks},
+      {"layered_f7_variable", 7, 12000, 0, variable},
       {"copc_f7", 7, 8200, 0, copc},
   };
   for (const Sample& sample : samples) {
     SCOPED_TRACE(sample.name);
-    const std::string las = laz::SyntheticAirborneLas(sample.format, sample.points, sample.extra_bytes,
-                                        static_cast<uint32_t>(sample.points + sample.format),
-                                        sample.scanner_channels);
+    const std::string las = laz::SyntheticAirborneLas(
+        sample.format, sample.points, sample.extra_bytes,
+        static_cast<uint32_t>(sample.points + sample.format), sample.scanner_channels);
     const std::string stem = dir + "/" + sample.name;
     { std::ofstream(stem + ".las", std::ios::binary) << las; }
     { std::ofstream(stem + ".laz", std::ios::binary) << laz::CompressLas(las, sample.options); }
@@ -234,9 +242,10 @@ TEST_F(LazErrorTest, TruncatedFilesNameFileAndPlace) {
     const std::string error = ErrorOf(laz.substr(0, cut));
     ASSERT_THAT(error, StartsWith(Path("bad.laz") + ": "));
   }
-  EXPECT_THAT(ErrorOf(laz.substr(0, laz.size() - 20)),
-              ContainsRegex("bad.laz: LAZ chunk table offset [0-9]+ \\(byte [0-9]+\\) is outside the "
-                            "file's [0-9]+\\.\\.[0-9]+ bytes; truncated file\\?"));
+  EXPECT_THAT(
+      ErrorOf(laz.substr(0, laz.size() - 20)),
+      ContainsRegex("bad.laz: LAZ chunk table offset [0-9]+ \\(byte [0-9]+\\) is outside the "
+                    "file's [0-9]+\\.\\.[0-9]+ bytes; truncated file\\?"));
 }
 
 TEST_F(LazErrorTest, DamagedBytesNeverCrash) {
@@ -263,16 +272,18 @@ TEST_F(LazErrorTest, LayerSizePastTheChunk) {
   std::string laz = Laz7();
   const size_t sizes = PointOffset(laz) + 8 + 36 + 4;  // chunk 0: raw point, count, sizes
   Put<uint32_t>(&laz, sizes, 0x7FFFFFFF);
-  EXPECT_THAT(ErrorOf(laz), ContainsRegex("bad.laz: LAZ chunk 0 of 3 \\(points 0-999, bytes [0-9]+-[0-9]+\\): "
-                                          "layer 0 of 2147483647 bytes runs past the chunk's end"));
+  EXPECT_THAT(ErrorOf(laz),
+              ContainsRegex("bad.laz: LAZ chunk 0 of 3 \\(points 0-999, bytes [0-9]+-[0-9]+\\): "
+                            "layer 0 of 2147483647 bytes runs past the chunk's end"));
 }
 
 TEST_F(LazErrorTest, ShortLayerRunsOut) {
   std::string laz = Laz7();
   const size_t sizes = PointOffset(laz) + 8 + 36 + 4;
   Put<uint32_t>(&laz, sizes, 40);  // the XY layer cut to 40 bytes
-  EXPECT_THAT(ErrorOf(laz), ContainsRegex("bad.laz: LAZ chunk 0 of 3 \\(points 0-999, bytes [0-9]+-[0-9]+\\): "
-                                          "(compressed data ran out|damaged compressed data) at point [0-9]+"));
+  EXPECT_THAT(ErrorOf(laz),
+              ContainsRegex("bad.laz: LAZ chunk 0 of 3 \\(points 0-999, bytes [0-9]+-[0-9]+\\): "
+                            "(compressed data ran out|damaged compressed data) at point [0-9]+"));
 }
 
 TEST_F(LazErrorTest, VlrErrorsNameTheVlr) {
@@ -281,15 +292,19 @@ TEST_F(LazErrorTest, VlrErrorsNameTheVlr) {
   const size_t vlr = PointOffset(laz) - 46;
   std::string bad = laz;
   Put<uint16_t>(&bad, vlr, 7);
-  EXPECT_THAT(ErrorOf(bad), HasSubstr("bad.laz: LAZ compressor 7 is unknown (expected 1 pointwise, 2 "
-                                      "pointwise chunked or 3 layered) (laszip VLR at byte " +
-                                      std::to_string(vlr) + ")"));
+  EXPECT_THAT(ErrorOf(bad),
+              HasSubstr("bad.laz: LAZ compressor 7 is unknown (expected 1 pointwise, 2 "
+                        "pointwise chunked or 3 layered) (laszip VLR at byte " +
+                        std::to_string(vlr) + ")"));
   bad = laz;
   Put<uint16_t>(&bad, vlr + 34 + 6 + 4, 4);  // RGB14 version 4
-  EXPECT_THAT(ErrorOf(bad), HasSubstr("bad.laz: laszip VLR item 1 (RGB14) version 4 is not supported (expected 3)"));
+  EXPECT_THAT(
+      ErrorOf(bad),
+      HasSubstr("bad.laz: laszip VLR item 1 (RGB14) version 4 is not supported (expected 3)"));
   bad = laz;
   Put<uint16_t>(&bad, vlr + 34 + 6, 8);  // RGB12 in a format 7 file
-  EXPECT_THAT(ErrorOf(bad), HasSubstr("bad.laz: laszip VLR item 1 (RGB12) does not belong to point format 7"));
+  EXPECT_THAT(ErrorOf(bad),
+              HasSubstr("bad.laz: laszip VLR item 1 (RGB12) does not belong to point format 7"));
   bad = laz;
   bad[104] = static_cast<char>(0x80 | 5);
   Put<uint16_t>(&bad, 105, 63);
@@ -371,11 +386,21 @@ TEST(LazCodecTest, EncoderAndDecoderRoundTrip) {
     const Step& step = steps[i];
     int64_t got = 0;
     switch (step.kind) {
-      case 0: got = decoder.DecodeSymbol(decode_models[step.model]); break;
-      case 1: got = decoder.DecodeBit(decode_bit); break;
-      case 2: got = decoder.DecodeInt(decode_int, step.prediction, step.model % 3); break;
-      case 3: got = decoder.DecodeInt(decode_short, step.prediction, step.model % 2); break;
-      default: got = decoder.ReadBits(1 + step.model); break;
+      case 0:
+        got = decoder.DecodeSymbol(decode_models[step.model]);
+        break;
+      case 1:
+        got = decoder.DecodeBit(decode_bit);
+        break;
+      case 2:
+        got = decoder.DecodeInt(decode_int, step.prediction, step.model % 3);
+        break;
+      case 3:
+        got = decoder.DecodeInt(decode_short, step.prediction, step.model % 2);
+        break;
+      default:
+        got = decoder.ReadBits(1 + step.model);
+        break;
     }
     ASSERT_EQ(got, step.value) << "step " << i << " kind " << step.kind;
   }

@@ -60,8 +60,10 @@ void ArithmeticEncoder::WriteInt(uint32_t value) {
   WriteBits(16, value >> 16);
 }
 
-void ArithmeticEncoder::EncodeInt(IntegerModel& ic, int32_t prediction, int32_t real, uint32_t context) {
-  int32_t corrector = static_cast<int32_t>(static_cast<uint32_t>(real) - static_cast<uint32_t>(prediction));
+void ArithmeticEncoder::EncodeInt(IntegerModel& ic, int32_t prediction, int32_t real,
+                                  uint32_t context) {
+  int32_t corrector =
+      static_cast<int32_t>(static_cast<uint32_t>(real) - static_cast<uint32_t>(prediction));
   if (ic.corr_range != 0) {
     if (corrector < ic.corr_min) {
       corrector += static_cast<int32_t>(ic.corr_range);
@@ -69,7 +71,8 @@ void ArithmeticEncoder::EncodeInt(IntegerModel& ic, int32_t prediction, int32_t 
       corrector -= static_cast<int32_t>(ic.corr_range);
     }
   }
-  uint32_t magnitude = corrector <= 0 ? 0u - static_cast<uint32_t>(corrector) : static_cast<uint32_t>(corrector) - 1;
+  uint32_t magnitude =
+      corrector <= 0 ? 0u - static_cast<uint32_t>(corrector) : static_cast<uint32_t>(corrector) - 1;
   uint32_t k = 0;
   while (magnitude) {
     magnitude >>= 1;
@@ -155,7 +158,8 @@ void AppendBytes(std::string* bytes, const std::vector<uint8_t>& more) {
   bytes->append(reinterpret_cast<const char*>(more.data()), more.size());
 }
 
-std::string VlrHeader(const char* user_id, uint16_t record_id, uint16_t payload_bytes, const char* description) {
+std::string VlrHeader(const char* user_id, uint16_t record_id, uint16_t payload_bytes,
+                      const char* description) {
   std::string header(54, '\0');
   std::strncpy(header.data() + 2, user_id, 16);
   Set<uint16_t>(&header, 18, record_id);
@@ -183,12 +187,14 @@ std::vector<Item> ItemsFor(int format, size_t record_bytes) {
   assert(record_bytes >= standard);
   if (record_bytes > standard) {
     const uint16_t extra = static_cast<uint16_t>(record_bytes - standard);
-    items.push_back({format <= 3 ? Item::kByte : Item::kByte14, extra, static_cast<uint16_t>(format <= 3 ? 2 : 3)});
+    items.push_back({format <= 3 ? Item::kByte : Item::kByte14, extra,
+                     static_cast<uint16_t>(format <= 3 ? 2 : 3)});
   }
   return items;
 }
 
-std::string EncodeChunk(const std::vector<Item>& items, const uint8_t* records, size_t record_bytes, size_t points) {
+std::string EncodeChunk(const std::vector<Item>& items, const uint8_t* records, size_t record_bytes,
+                        size_t points) {
   std::string out(reinterpret_cast<const char*>(records), record_bytes);
   ChunkCodec<EncodingCoder> codec(items, records);
   std::vector<uint8_t> record(record_bytes);
@@ -222,7 +228,8 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
   const uint16_t record_bytes = Get<uint16_t>(las, 105);
   const int minor = las[25];
   uint64_t count = Get<uint32_t>(las, 107);
-  if (minor >= 4 && header_bytes >= 375 && Get<uint64_t>(las, 247) != 0) count = Get<uint64_t>(las, 247);
+  if (minor >= 4 && header_bytes >= 375 && Get<uint64_t>(las, 247) != 0)
+    count = Get<uint64_t>(las, 247);
   assert(format <= 3 || (format >= 6 && format <= 8));
   assert(!options.copc || (minor == 4 && format >= 6));
   const std::vector<Item> items = ItemsFor(format, record_bytes);
@@ -233,7 +240,8 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
     chunk_points = {static_cast<uint32_t>(count)};
   } else if (chunk_points.empty()) {
     const uint32_t size = options.copc ? 1000 : options.chunk_size;
-    for (uint64_t done = 0; done < count; done += size) chunk_points.push_back(static_cast<uint32_t>(std::min<uint64_t>(size, count - done)));
+    for (uint64_t done = 0; done < count; done += size)
+      chunk_points.push_back(static_cast<uint32_t>(std::min<uint64_t>(size, count - done)));
   }
 
   // The laszip VLR.
@@ -262,7 +270,8 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
     ++vlr_count;
   }
   vlrs += las.substr(header_bytes, point_offset - header_bytes);
-  vlrs += VlrHeader("laszip encoded", 22204, static_cast<uint16_t>(laszip.size()), "by pointbake tests");
+  vlrs += VlrHeader("laszip encoded", 22204, static_cast<uint16_t>(laszip.size()),
+                    "by pointbake tests");
   vlrs += laszip;
   ++vlr_count;
   out += vlrs;
@@ -282,7 +291,8 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
   uint64_t first = 0;
   for (uint32_t points : chunk_points) {
     chunk_offsets.push_back(out.size());
-    const std::string chunk = EncodeChunk(items, records + first * record_bytes, record_bytes, points);
+    const std::string chunk =
+        EncodeChunk(items, records + first * record_bytes, record_bytes, points);
     chunk_bytes.push_back(static_cast<uint32_t>(chunk.size()));
     out += chunk;
     first += points;
@@ -344,7 +354,8 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
       min[axis] = Get<double>(out, 187 + 16 * axis);
       Set<double>(&out, info + 8 * axis, 0.5 * (min[axis] + max[axis]));
     }
-    Set<double>(&out, info + 24, 0.5 * std::max({max[0] - min[0], max[1] - min[1], max[2] - min[2]}));
+    Set<double>(&out, info + 24,
+                0.5 * std::max({max[0] - min[0], max[1] - min[1], max[2] - min[2]}));
     Set<double>(&out, info + 32, 1.0);
     Set<uint64_t>(&out, info + 40, evlr_offset + 60);
     Set<uint64_t>(&out, info + 48, page.size());
@@ -353,7 +364,7 @@ std::string CompressLas(const std::string& las, const LazWriteOptions& options) 
 }
 
 std::string SyntheticAirborneLas(int format, size_t points, size_t extra_bytes, uint32_t seed,
-                                int scanner_channels) {
+                                 int scanner_channels) {
   const int minor = format >= 6 ? 4 : 2;
   const size_t header_bytes = minor == 4 ? 375 : 227;
   const size_t record_bytes = StandardBytes(format) + extra_bytes;
@@ -386,7 +397,9 @@ std::string SyntheticAirborneLas(int format, size_t points, size_t extra_bytes, 
   for (size_t i = 0; i < points; ++i) {
     if (return_number >= returns) {  // a new pulse
       return_number = 1;
-      returns = uniform(0, 99) < 70 ? 1 : uniform(0, 99) < 90 ? uniform(2, 3) : uniform(4, format >= 6 ? 15 : 7);
+      returns = uniform(0, 99) < 70   ? 1
+                : uniform(0, 99) < 90 ? uniform(2, 3)
+                                      : uniform(4, format >= 6 ? 15 : 7);
       if (uniform(0, 199) == 0) line ^= 1;
       times[line] += uniform(0, 99) < 95 ? 1.0e-5 : uniform(0, 99) < 50 ? 3.0e-5 : 7.5;
       x += uniform(5, 60);
@@ -399,12 +412,14 @@ std::string SyntheticAirborneLas(int format, size_t points, size_t extra_bytes, 
     }
     y += uniform(-20, 20);
     z += uniform(-30, 30) - (return_number - 1) * 50;
-    if (uniform(0, 9) == 0) classification = static_cast<uint8_t>(uniform(0, 99) < 80 ? uniform(1, 6) : uniform(0, 255));
+    if (uniform(0, 9) == 0)
+      classification = static_cast<uint8_t>(uniform(0, 99) < 80 ? uniform(1, 6) : uniform(0, 255));
     if (uniform(0, 2) == 0) {
       if (uniform(0, 3) == 0) {  // grey
         rgb[0] = rgb[1] = rgb[2] = static_cast<uint16_t>(uniform(0, 255) * 257);
       } else {
-        for (uint16_t& c : rgb) c = static_cast<uint16_t>(std::clamp(c + uniform(-900, 900), 0, 65535));
+        for (uint16_t& c : rgb)
+          c = static_cast<uint16_t>(std::clamp(c + uniform(-900, 900), 0, 65535));
       }
     }
     const int32_t xyz[3] = {x, y, z};
@@ -421,7 +436,8 @@ std::string SyntheticAirborneLas(int format, size_t points, size_t extra_bytes, 
     const int edge = uniform(0, 99) == 0, direction = (i / 500) & 1;
     size_t gps_at, rgb_at = 0;
     if (format < 6) {
-      r[14] = static_cast<uint8_t>((return_number & 7) | ((returns & 7) << 3) | (direction << 6) | (edge << 7));
+      r[14] = static_cast<uint8_t>((return_number & 7) | ((returns & 7) << 3) | (direction << 6) |
+                                   (edge << 7));
       r[15] = classification;
       r[16] = static_cast<uint8_t>(static_cast<int8_t>(std::clamp(scan_angle / 100, -90, 90)));
       r[17] = static_cast<uint8_t>(uniform(0, 9) == 0 ? uniform(0, 255) : 0);
@@ -430,7 +446,8 @@ std::string SyntheticAirborneLas(int format, size_t points, size_t extra_bytes, 
       if (format >= 2) rgb_at = format == 2 ? 20 : 28;
     } else {
       r[14] = static_cast<uint8_t>(return_number | (returns << 4));
-      r[15] = static_cast<uint8_t>((uniform(0, 49) == 0 ? uniform(0, 15) : 0) | (channel << 4) | (direction << 6) | (edge << 7));
+      r[15] = static_cast<uint8_t>((uniform(0, 49) == 0 ? uniform(0, 15) : 0) | (channel << 4) |
+                                   (direction << 6) | (edge << 7));
       r[16] = classification;
       r[17] = static_cast<uint8_t>(uniform(0, 9) == 0 ? uniform(0, 255) : 0);
       Set<int16_t>(&las, at + 18, scan_angle);
