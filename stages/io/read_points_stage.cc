@@ -101,7 +101,7 @@ StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
   type.version = 2;
-  type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS) into points";
+  type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters, and normals "
       "and 8-bit sRGB colors, intensities and scanner stations when the file has them.\n\n"
@@ -111,8 +111,9 @@ StageType ReadPointsStage() {
       "declared with `columns:` or detected); PTX (several scans; each scan's 4x4 transform "
       "applied, its scanner position kept as a station, 0,0,0 points dropped); E57 (ASTM E2807: "
       "CRC-32C checked, bitPackCodec, float/scaled-integer/integer fields, cartesian or "
-      "spherical, poses, several scans, color and intensity); LAS 1.0-1.4 uncompressed, point "
-      "formats 0-10 (LAZ is refused with an explanation).\n\n"
+      "spherical, poses, several scans, color and intensity); LAS 1.0-1.4, point formats 0-10, "
+      "and LAZ (LASzip-compressed LAS, COPC included: point formats 0-3 and 6-8, decoded in "
+      "parallel over chunks; docs/laz.md).\n\n"
       "Double-precision (e.g. georeferenced) coordinates are stored as float32 offsets from an "
       "origin at the scan's bounding-box center rounded to 1 m, which keeps float32 precision "
       "(about 1e-7 of the scan's extent) for any location on Earth; the "

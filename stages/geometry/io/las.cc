@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "stages/geometry/core/buffered_input.h"
+#include "stages/geometry/io/laz.h"
 
 namespace pb {
 namespace {
@@ -60,20 +61,11 @@ struct LasHeader {
   std::array<double, 3> offset{};
   std::array<double, 3> min{};
   std::array<double, 3> max{};
+  uint32_t vlr_count = 0;
 };
 
-bool EndsWithLaz(const std::string& path) {
-  if (path.size() < 4) return false;
-  std::string tail = path.substr(path.size() - 4);
-  for (char& c : tail) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return tail == ".laz";
-}
-
-Status Laz(const std::string& path) {
-  return Status::Unsupported(path +
-                             ": compressed LAS (LAZ) is not supported; decompress it first, e.g. "
-                             "with `laszip` or PDAL");
-}
+constexpr size_t kVlrHeaderBytes = 54;
+constexpr uint16_t kLaszipRecordId = 22204;
 
 class LasReader {
  public:
@@ -83,11 +75,16 @@ class LasReader {
   Expected<ScanReadResult> Run() {
     PB_RETURN_IF_ERROR(in_.Open(path_, "a LAS file", &options_.progress));
     file_bytes_ = in_.size();
-    if (EndsWithLaz(path_)) return Laz(path_);
 
     PB_RETURN_IF_ERROR(ReadHeader());
-    PB_RETURN_IF_ERROR(ReadPoints());
-    result_.format = "las " + std::to_string(header_.version_major) + "." +
+    if (compressed_) {
+      PB_RETURN_IF_ERROR(OpenLaz());
+      PB_RETURN_IF_ERROR(ReadLazPoints());
+    } else {
+      PB_RETURN_IF_ERROR(ReadPoints());
+    }
+    result_.format = std::string(compressed_ ? laz_->description() : "las") + " " +
+                     std::to_string(header_.version_major) + "." +
                      std::to_string(header_.version_minor) + " format " +
                      std::to_string(header_.point_format);
     if (options_.progress) options_.progress(1.0);
@@ -132,8 +129,9 @@ class LasReader {
                              "-byte header");
     }
     const uint8_t format_byte = bytes[104];
-    if (format_byte & 0xC0) return Laz(path_);
-    h.point_format = format_byte;
+    compressed_ = (format_byte & 0xC0) != 0;  // LASzip sets bit 7 (older writers bit 6)
+    h.point_format = format_byte & 0x3F;
+    h.vlr_count = Load<uint32_t>(bytes + 100);
     PointLayout layout;
     if (!LayoutOf(h.point_format, &layout)) {
       return Status::Unsupported(path_ + ": point data record format " +
@@ -166,6 +164,7 @@ class LasReader {
       }
     }
     // Fail before decoding anything if the points cannot all be there.
+    if (compressed_) return Status::Ok();  // the chunk table says
     const uint64_t available = file_bytes_ - std::min(file_bytes_, h.point_offset);
     if (h.point_count > available / h.record_bytes) {
       return Truncated(available / h.record_bytes);
@@ -212,38 +211,112 @@ class LasReader {
     }
   }
 
-  Status ReadPoints() {
+  void Reserve() {
     const LasHeader& h = header_;
     PointCloud& cloud = result_.points;
-    const bool has_colors = layout_.rgb_offset >= 0;
-    // ReadHeader bounded the count by the file size.
+    // The count is bounded by the file size (LAS) or checked against the
+    // chunk table (LAZ).
     cloud.positions.reserve(3 * h.point_count);
     cloud.intensities.reserve(h.point_count);
-    if (has_colors) cloud.colors.reserve(3 * h.point_count);
+    if (layout_.rgb_offset >= 0) cloud.colors.reserve(3 * h.point_count);
+  }
 
+  // Appends point `i` from its record; `byte` is where it sits (LAS) or
+  // where its chunk starts (LAZ), for messages.
+  Status AppendRecord(const uint8_t* record, uint64_t i, const std::string& where) {
+    const LasHeader& h = header_;
+    PointCloud& cloud = result_.points;
+    std::array<double, 3> p;
+    for (int axis = 0; axis < 3; ++axis) {
+      p[axis] = Load<int32_t>(record + 4 * axis) * h.scale[axis] + h.offset[axis];
+    }
+    if (i == 0) ChooseOrigin(p);
+    for (int axis = 0; axis < 3; ++axis) p[axis] -= cloud.origin[axis];
+    if (!(std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])}) <= kMaxSpanM)) {
+      return Status::Corrupt(path_ + ": point " + std::to_string(i) + where +
+                             " lies more than 1e8 m from the origin; check the header's "
+                             "scale and offset");
+    }
+    for (int axis = 0; axis < 3; ++axis) cloud.positions.push_back(static_cast<float>(p[axis]));
+    cloud.intensities.push_back(static_cast<float>(Load<uint16_t>(record + 12) / 65535.0));
+    if (layout_.rgb_offset >= 0) AppendColor(record + layout_.rgb_offset);
+    return Status::Ok();
+  }
+
+  Status ReadPoints() {
+    const LasHeader& h = header_;
+    Reserve();
     if (!in_.Seek(h.point_offset)) return in_.error();
     std::vector<uint8_t> record_bytes(h.record_bytes);
-    const uint8_t* record = record_bytes.data();
     for (uint64_t i = 0; i < h.point_count; ++i) {
       if (!in_.Read(record_bytes.data(), h.record_bytes)) {
         PB_RETURN_IF_ERROR(in_.error());
         return Truncated(i);
       }
-      std::array<double, 3> p;
-      for (int axis = 0; axis < 3; ++axis) {
-        p[axis] = Load<int32_t>(record + 4 * axis) * h.scale[axis] + h.offset[axis];
+      PB_RETURN_IF_ERROR(
+          AppendRecord(record_bytes.data(), i,
+                       " at byte " + std::to_string(h.point_offset + i * h.record_bytes)));
+    }
+    return Status::Ok();
+  }
+
+  // Finds the laszip VLR among the VLRs between the header and the points.
+  Status OpenLaz() {
+    const LasHeader& h = header_;
+    uint64_t offset = h.header_bytes;
+    for (uint32_t i = 0; i < h.vlr_count; ++i) {
+      uint8_t vlr_header[kVlrHeaderBytes];
+      if (offset + kVlrHeaderBytes > h.point_offset || !in_.Seek(offset) ||
+          !in_.Read(vlr_header, kVlrHeaderBytes)) {
+        PB_RETURN_IF_ERROR(in_.error());
+        return Status::Corrupt(path_ + ": VLR " + std::to_string(i) + " of " +
+                               std::to_string(h.vlr_count) + " (byte " + std::to_string(offset) +
+                               ", count at byte 100) does not fit before the point data at byte " +
+                               std::to_string(h.point_offset));
       }
-      if (i == 0) ChooseOrigin(p);
-      for (int axis = 0; axis < 3; ++axis) p[axis] -= cloud.origin[axis];
-      if (!(std::max({std::abs(p[0]), std::abs(p[1]), std::abs(p[2])}) <= kMaxSpanM)) {
-        return Status::Corrupt(path_ + ": point " + std::to_string(i) + " at byte " +
-                               std::to_string(h.point_offset + i * h.record_bytes) +
-                               " lies more than 1e8 m from the origin; check the header's "
-                               "scale and offset");
+      const uint16_t record_id = Load<uint16_t>(vlr_header + 18);
+      const uint16_t payload_bytes = Load<uint16_t>(vlr_header + 20);
+      const uint64_t payload_offset = offset + kVlrHeaderBytes;
+      if (payload_offset + payload_bytes > h.point_offset) {
+        return Status::Corrupt(path_ + ": VLR " + std::to_string(i) + " at byte " +
+                               std::to_string(offset) + " has " + std::to_string(payload_bytes) +
+                               " bytes, more than lie before the point data at byte " +
+                               std::to_string(h.point_offset));
       }
-      for (int axis = 0; axis < 3; ++axis) cloud.positions.push_back(static_cast<float>(p[axis]));
-      cloud.intensities.push_back(static_cast<float>(Load<uint16_t>(record + 12) / 65535.0));
-      if (has_colors) AppendColor(record + layout_.rgb_offset);
+      if (std::memcmp(vlr_header + 2, "laszip encoded", 14) == 0 && record_id == kLaszipRecordId) {
+        std::vector<uint8_t> payload(payload_bytes);
+        if (!in_.Read(payload.data(), payload.size())) {
+          PB_RETURN_IF_ERROR(in_.error());
+          return Status::Corrupt(path_ + ": truncated: laszip VLR at byte " +
+                                 std::to_string(offset) + " (file has " +
+                                 std::to_string(file_bytes_) + " bytes)");
+        }
+        LazPointLayout layout{h.point_offset, h.point_count, h.point_format, h.record_bytes};
+        auto laz = LazReader::Open(&in_, path_, layout, payload, payload_offset, {});
+        if (!laz.ok()) return laz.status();
+        laz_ = std::move(*laz);
+        return Status::Ok();
+      }
+      offset = payload_offset + payload_bytes;
+    }
+    return Status::Corrupt(path_ + ": compressed point format " + std::to_string(h.point_format) +
+                           " (byte 104 has a compression bit, 0x80 or 0x40, set) but none of the " +
+                           std::to_string(h.vlr_count) +
+                           " VLRs is the laszip VLR (user id \"laszip encoded\", record id 22204)");
+  }
+
+  Status ReadLazPoints() {
+    Reserve();
+    uint64_t i = 0;
+    const std::string chunk_note = " (LAZ)";
+    for (;;) {
+      std::span<const uint8_t> records;
+      PB_RETURN_IF_ERROR(laz_->Next(&records));
+      if (records.empty()) break;
+      for (size_t at = 0; at < records.size(); at += header_.record_bytes, ++i) {
+        PB_RETURN_IF_ERROR(AppendRecord(records.data() + at, i, chunk_note));
+      }
+      if (options_.progress) options_.progress(static_cast<double>(i) / header_.point_count);
     }
     return Status::Ok();
   }
@@ -255,6 +328,8 @@ class LasReader {
   LasHeader header_;
   PointLayout layout_{};
   bool colors_16bit_ = false;
+  bool compressed_ = false;
+  std::unique_ptr<LazReader> laz_;
   ScanReadResult result_;
 };
 

@@ -1,6 +1,5 @@
 #include "stages/geometry/io/las.h"
 
-#include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 #include <unistd.h>
@@ -13,6 +12,8 @@
 #include <filesystem>
 #include <fstream>
 #include <limits>
+
+#include "stages/geometry/testing/test_data.h"
 
 namespace pb {
 namespace {
@@ -158,7 +159,6 @@ class LasTest : public pb::testing::TempDirTest {
     }
     EXPECT_TRUE(Validate(cloud).ok());
   }
-
 };
 
 // --- Valid files --------------------------------------------------------------
@@ -292,25 +292,28 @@ TEST_F(LasTest, RecordLengthTooShortForTheFormat) {
                                         "than the 34 bytes point format 3 needs"));
 }
 
-TEST_F(LasTest, LazByNameIsUnsupported) {
+TEST_F(LasTest, ContentNotNameDecidesCompression) {
+  // An uncompressed file named .LAZ reads as LAS (LAZ itself: laz_test.cc).
   auto read = ReadLas(Write("scan.LAZ", MakeLas(LasSpec{}, kPoints)), {});
-  ASSERT_FALSE(read.ok());
-  EXPECT_EQ(read.status().code(), Status::Code::kUnsupported);
-  EXPECT_THAT(read.status().message(),
-              HasSubstr("scan.LAZ: compressed LAS (LAZ) is not supported; decompress it first, "
-                        "e.g. with `laszip` or PDAL"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.size(), kPoints.size());
+  EXPECT_EQ(read->format, "las 1.2 format 0");
 }
 
-TEST_F(LasTest, CompressionBitIsUnsupported) {
+TEST_F(LasTest, CompressionBitWithoutLaszipVlr) {
   for (uint8_t bit : {0x80, 0x40}) {
     LasSpec spec;
     spec.format = 3;
+    spec.vlr_payload_bytes = 10;  // one VLR, not the laszip one
     std::string bytes = MakeLas(spec, kPoints);
     bytes[104] = static_cast<char>(3 | bit);
     auto read = ReadLas(Write("compressed.las", bytes), {});
     ASSERT_FALSE(read.ok());
-    EXPECT_EQ(read.status().code(), Status::Code::kUnsupported);
-    EXPECT_THAT(read.status().message(), HasSubstr("compressed LAS (LAZ) is not supported"));
+    EXPECT_EQ(read.status().code(), Status::Code::kCorrupt);
+    EXPECT_THAT(read.status().message(),
+                HasSubstr("compressed.las: compressed point format 3 (byte 104 has a compression "
+                          "bit, 0x80 or 0x40, set) but "
+                          "none of the 1 VLRs is the laszip VLR"));
   }
 }
 

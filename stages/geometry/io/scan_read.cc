@@ -30,7 +30,7 @@ constexpr ScanFormat kScanFormats[] = {
     {"xyz", ".xyz .txt .pts .csv", &ReadXyz},
     {"ptx", ".ptx", &ReadPtx},
     {"e57", ".e57", &ReadE57},
-    // .laz goes to the LAS reader, which explains that compressed LAS is not supported.
+    // LAZ is LAS with compressed records: the LAS reader reads both (laz.h).
     {"las", ".las .laz", &ReadLas},
 };
 
