@@ -27,7 +27,7 @@ mkdir -p "$out"
 
 results="$out/results.jsonl"
 if [ "${TABLE_ONLY:-0}" != 1 ]; then
-cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DPB_BENCH_PCL=ON -DPB_BUILD_TESTS=OFF >/dev/null
+cmake -S . -B build-bench -DCMAKE_BUILD_TYPE=Release -DPB_BUILD_TESTS=OFF >/dev/null
 cmake --build build-bench -j"$(nproc)" --target pointbake poisson_bench >/dev/null
 
 [ "${APPEND:-0}" = 1 ] || : > "$results"

@@ -1,13 +1,13 @@
 // poisson_bench: one screened Poisson reconstruction, measured the same way
 // for both candidate implementations, printed as one JSON line.
 //   poisson_bench --backend open3d|pcl --depth D --points points.ply
-//                 --truth truth_dir [--threads N] [--point-weight W]
-//                 [--samples-per-node S] [--trim Q] [--out mesh.ply]
+//                 --truth truth_dir [--threads N] [--trim Q] [--out mesh.ply]
 // `truth_dir` is a synth.scan truth output (mesh.ply + scene.json). Run it
 // once per process: peak RSS is the process's (getrusage), cloud included.
-// Built with -DPB_BENCH_PCL=ON (needs libpcl-dev); bench/poisson.sh drives it.
-#include <pcl/point_types.h>
-#include <pcl/surface/poisson.h>
+// Both run through ReconstructPoisson, as mesh.poisson's `implementation`
+// does: Open3D in pointbake-poisson-open3d.so, PCL (its defaults: point
+// weight 4, degree 2, 1.5 samples per node) in pointbake-pcl.so, built when
+// libpcl-dev is installed. bench/poisson.sh drives it.
 #include <sys/resource.h>
 
 #include <chrono>
@@ -20,6 +20,7 @@
 #include "stages/geometry/mesh/distance.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/mesh/poisson.h"
+#include "stages/geometry/mesh/trim.h"
 #include "stages/geometry/synth/scene.h"
 
 namespace {
@@ -29,70 +30,11 @@ namespace {
   std::exit(1);
 }
 
-pb::Mesh RunPcl(const pb::PointCloud& cloud, int depth, int threads, float point_weight,
-                float samples_per_node) {
-  auto input = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
-  input->resize(cloud.size());
-  for (size_t i = 0; i < cloud.size(); ++i) {
-    pcl::PointNormal& p = (*input)[i];
-    p.x = cloud.positions[3 * i];
-    p.y = cloud.positions[3 * i + 1];
-    p.z = cloud.positions[3 * i + 2];
-    p.normal_x = cloud.normals[3 * i];
-    p.normal_y = cloud.normals[3 * i + 1];
-    p.normal_z = cloud.normals[3 * i + 2];
-  }
-  pcl::Poisson<pcl::PointNormal> poisson;
-  poisson.setDepth(depth);
-  poisson.setThreads(threads);
-  poisson.setPointWeight(point_weight);
-  poisson.setSamplesPerNode(samples_per_node);
-  poisson.setScale(1.1f);
-  poisson.setInputCloud(input);
-  pcl::PointCloud<pcl::PointNormal> vertices;
-  std::vector<pcl::Vertices> polygons;
-  poisson.reconstruct(vertices, polygons);
-  pb::Mesh mesh;
-  mesh.origin = cloud.origin;
-  for (const pcl::PointNormal& v : vertices) {
-    mesh.positions.insert(mesh.positions.end(), {v.x, v.y, v.z});
-  }
-  for (const pcl::Vertices& polygon : polygons) {
-    for (size_t k = 1; k + 1 < polygon.vertices.size(); ++k) {
-      for (const size_t corner : {size_t{0}, k, k + 1}) {
-        mesh.indices.push_back(static_cast<uint32_t>(polygon.vertices[corner]));
-      }
-    }
-  }
-  return mesh;
-}
-
-size_t BoundaryEdges(const pb::Mesh& mesh) {
-  std::vector<std::pair<uint32_t, uint32_t>> edges;
-  edges.reserve(mesh.indices.size());
-  for (size_t f = 0; f < mesh.face_count(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      uint32_t a = mesh.indices[3 * f + k], b = mesh.indices[3 * f + (k + 1) % 3];
-      edges.emplace_back(std::min(a, b), std::max(a, b));
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  size_t boundary = 0;
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    boundary += j - i == 1;
-    i = j;
-  }
-  return boundary;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
   std::string backend = "open3d", points_path, truth_dir, out_path;
   int depth = 8, threads = 2;
-  float point_weight = 4, samples_per_node = 1.5f;
   double trim = 0;  // Open3D only: density quantile, as mesh.poisson's `trim`
   for (int i = 1; i < argc; ++i) {
     const std::string arg = argv[i];
@@ -105,8 +47,6 @@ int main(int argc, char** argv) {
     else if (arg == "--points") points_path = next();
     else if (arg == "--truth") truth_dir = next();
     else if (arg == "--threads") threads = std::stoi(next());
-    else if (arg == "--point-weight") point_weight = std::stof(next());
-    else if (arg == "--samples-per-node") samples_per_node = std::stof(next());
     else if (arg == "--trim") trim = std::stod(next());
     else if (arg == "--out") out_path = next();
     else Die("unknown argument " + arg);
@@ -119,18 +59,16 @@ int main(int argc, char** argv) {
   const pb::PointCloud& cloud = points->points;
 
   const auto start = std::chrono::steady_clock::now();
-  pb::Mesh mesh;
-  if (backend == "open3d") {
-    pb::PoissonOptions options;
-    options.depth = depth;
-    options.threads = threads;
-    auto out = pb::ReconstructPoisson(cloud, options);
-    if (!out.ok()) Die(out.status().message());
-    mesh = pb::TrimByDensity(std::move(out->mesh), out->densities, trim, nullptr);
-  } else {
-    if (trim > 0) Die("--trim needs densities: Open3D only");
-    mesh = RunPcl(cloud, depth, threads, point_weight, samples_per_node);
-  }
+  if (backend == "pcl" && trim > 0) Die("--trim needs densities: Open3D only");
+  pb::PoissonOptions options;
+  options.implementation =
+      backend == "pcl" ? pb::PoissonImplementation::kPcl : pb::PoissonImplementation::kOpen3d;
+  options.depth = depth;
+  options.threads = threads;
+  auto out = pb::ReconstructPoisson(cloud, options);
+  if (!out.ok()) Die(out.status().message());
+  pb::Mesh mesh = trim > 0 ? pb::TrimByDensity(std::move(out->mesh), out->densities, trim, nullptr)
+                           : std::move(out->mesh);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   rusage usage{};
@@ -161,7 +99,7 @@ int main(int argc, char** argv) {
       "\"mesh_to_truth_mean_mm\": %.2f, \"mesh_to_truth_p95_mm\": %.2f, "
       "\"truth_to_mesh_mean_mm\": %.2f, \"truth_to_mesh_p95_mm\": %.2f, \"hausdorff_mm\": %.1f}\n",
       backend.c_str(), depth, trim, threads, cloud.size(), seconds, peak_mib, mesh.face_count(),
-      BoundaryEdges(mesh), manifold ? "true" : "false",
+      static_cast<size_t>(pb::CountBoundaryEdges(mesh)), manifold ? "true" : "false",
       static_cast<unsigned long long>(clean.nonmanifold_edge_faces),
       static_cast<unsigned long long>(clean.small_components),
       distance->mesh_to_truth.mean_m * 1e3, distance->mesh_to_truth.p95_m * 1e3,
