@@ -237,18 +237,62 @@ Mask Dilate(const Mask& in, int g) {
   return out;
 }
 
+struct SolidRect {
+  int row, lo, width;
+};
+
 // One chart's four turned shapes: the mask to stamp and the dilated one to test.
 struct Shapes {
   Mask stamp[4], probe[4];
   std::vector<int> check_rows[4];  // probe rows, most discriminating first
+  // Solid rectangles [lo, lo + width) x [row, row + 2 gutter] inside
+  // probe[k] (see Atlas::LowestWindowWithRun); the widest first.
+  std::vector<SolidRect> solid[4];
 };
 
 Shapes MakeShapes(const FlatChart& chart, double s, int gutter) {
   Shapes shapes;
   for (int k = 0; k < (chart.isolated ? 1 : 4); ++k) {
     // Quarter turns 0 and 1 from the triangles, 2 and 3 by half turns.
-    shapes.stamp[k] = k < 2 ? Rasterize(chart, s, k) : HalfTurn(shapes.stamp[k - 2]);
-    shapes.probe[k] = Dilate(shapes.stamp[k], gutter);
+    // The square dilation commutes with the half turn (the dilated mask is
+    // offset by g on every side), so turns 2 and 3 turn the dilated masks too.
+    if (k < 2) {
+      shapes.stamp[k] = Rasterize(chart, s, k);
+      shapes.probe[k] = Dilate(shapes.stamp[k], gutter);
+    } else {
+      shapes.stamp[k] = HalfTurn(shapes.stamp[k - 2]);
+      shapes.probe[k] = HalfTurn(shapes.probe[k - 2]);
+      ComputeRuns(&shapes.probe[k]);
+    }
+    // A stamp row's longest run [a, a + n) at row j: the probe holds the
+    // solid rectangle [a, a + n + 2g) x [j, j + 2g] (probe coordinates).
+    // Kept for the stamp's longest run (first), and the longest runs of its
+    // bottom, middle and top rows.
+    {
+      const Mask& m = shapes.stamp[k];
+      std::vector<int> lo(m.h, 0), len(m.h, 0);
+      int longest = 0;
+      for (int y = 0; y < m.h; ++y) {
+        const uint64_t* row = m.Row(y);
+        for (int x = 0; x < m.w;) {
+          const int a = NextBit(row, m.words, m.w, x, true);
+          if (a >= m.w) break;
+          const int e = NextBit(row, m.words, m.w, a, false);
+          if (e - a > len[y]) {
+            len[y] = e - a;
+            lo[y] = a;
+          }
+          x = e;
+        }
+        if (len[y] > len[longest]) longest = y;
+      }
+      for (int y : {longest, 0, m.h - 1, m.h / 2}) {
+        if (len[y] == 0) continue;
+        bool seen = false;
+        for (const SolidRect& rect : shapes.solid[k]) seen = seen || rect.row == y;
+        if (!seen) shapes.solid[k].push_back({y, lo[y], len[y] + 2 * gutter});
+      }
+    }
     const Mask& p = shapes.probe[k];
     std::vector<int>& rows = shapes.check_rows[k];
     // Bottom, top, longest run, then quarters, then every row.
@@ -269,7 +313,8 @@ constexpr int kPruneRows = 6;  // check_rows used to prune candidate x
 // so that an overfull attempt still tells how tall it would be).
 class Atlas {
  public:
-  Atlas(int size, int height) : size_(size), height_(height), words_((size + 63) / 64 + 1) {
+  Atlas(int size, int height, int window)
+      : size_(size), height_(height), words_((size + 63) / 64 + 1), window_(window) {
     bits_.assign(size_t(words_) * size_t(height_), 0);
     for (int y = 0; y < height_; ++y) {
       uint64_t* row = Row(y);
@@ -279,6 +324,14 @@ class Atlas {
     max_free_.assign(height_, size_);
     lowest_row_.assign(size_ + 1, 0);
     runs_.assign(height_, std::vector<std::pair<int, int>>(1, {0, size_}));
+    window_max_free_.assign(height_, 0);
+    window_runs_.assign(height_, {});
+    for (int y = 0; y + window_ <= height_; ++y) {
+      window_max_free_[y] = size_;
+      window_runs_[y].push_back({0, size_});
+    }
+    lowest_window_.assign(size_ + 1, 0);
+    window_bits_.assign(words_, 0);
   }
 
   // The lowest-top, then leftmost position of `probe` (its lower-left
@@ -289,8 +342,9 @@ class Atlas {
     int last_fail = 0;
   };
 
-  bool Find(const Mask& probe, const std::vector<int>& check_rows, int64_t best_top,
-            Scratch* scratch, int* x_out, int* y_out) const {
+  bool Find(const Mask& probe, const std::vector<int>& check_rows,
+            const std::vector<SolidRect>& solid, int64_t best_top, Scratch* scratch, int* x_out,
+            int* y_out) const {
     if (probe.w > size_) return false;
     scratch->last_fail = 0;
     auto& candidates_ = scratch->candidates;
@@ -303,29 +357,42 @@ class Atlas {
       const int r = check_rows[i];
       start = std::max(start, LowestRowWithRun(probe.run_len[r]) - r);
     }
+    // Nor below the lowest window of rows that holds the probe's solid
+    // rectangle.
+    for (const SolidRect& rect : solid) {
+      start = std::max(start, LowestWindowWithRun(rect.width) - rect.row);
+    }
     for (int y = start; y + probe.h <= height_ && y + probe.h <= best_top; ++y) {
       bool possible = true;
+      for (const SolidRect& rect : solid) {
+        possible = possible && window_max_free_[y + rect.row] >= rect.width;
+      }
       for (int i = 0; i < prune && possible; ++i) {
         const int r = check_rows[i];
         possible = max_free_[y + r] >= probe.run_len[r];
       }
       if (!possible) continue;
-      // Candidate x: where each pruning row's longest run lies in a free run.
+      // Candidate x: where the solid rectangle lies in a free run of its
+      // window of rows, and each pruning row's longest run in a free run.
       candidates_.clear();
       {
-        const int r = check_rows[0];
-        const int lo = probe.run_lo[r], len = probe.run_len[r];
-        for (const auto& [s, e] : runs_[y + r]) {
+        const int lo = solid[0].lo, len = solid[0].width;
+        for (const auto& [s, e] : window_runs_[y + solid[0].row]) {
           if (e - s < len) continue;
           const int a = std::max(0, s - lo), b = std::min(size_ - probe.w, e - len - lo);
           if (a <= b) candidates_.push_back({a, b});
         }
       }
-      for (int i = 1; i < prune && !candidates_.empty(); ++i) {
-        const int r = check_rows[i];
-        const int lo = probe.run_lo[r], len = probe.run_len[r];
+      const int windows = int(solid.size());
+      for (int i = 1 - windows; i < prune && !candidates_.empty(); ++i) {
+        // First the other solid rectangles in their windows, then the
+        // pruning rows' longest runs in their rows.
+        const bool window = i < 0;
+        const int r = window ? solid[windows + i].row : check_rows[i];
+        const int lo = window ? solid[windows + i].lo : probe.run_lo[r];
+        const int len = window ? solid[windows + i].width : probe.run_len[r];
         if (len == 0) continue;
-        const auto& runs = runs_[y + r];
+        const auto& runs = window ? window_runs_[y + r] : runs_[y + r];
         next_.clear();
         // Both lists are sorted: one merge pass.
         size_t k = 0;
@@ -366,11 +433,45 @@ class Atlas {
     return y;
   }
 
+  // The lowest window of `window_` rows whose common free texels hold a run
+  // of `length` or more (height_ if none); kept per length like
+  // LowestRowWithRun.
+  int LowestWindowWithRun(int length) const {
+    if (length <= 0) return 0;
+    if (length > size_) return height_;
+    int& y = lowest_window_[length];
+    while (y < height_ && window_max_free_[y] < length) ++y;
+    return y;
+  }
+
   void Stamp(const Mask& stamp, int x0, int y0) {
     for (int y = 0; y < stamp.h; ++y) {
       uint64_t* row = Row(y0 + y);
       ShiftOr(row, words_, stamp.Row(y), stamp.words, x0);
       UpdateRuns(y0 + y);
+    }
+    // The windows that contain a stamped row.
+    const int last = std::min(y0 + stamp.h - 1, height_ - window_);
+    for (int y = std::max(0, y0 - window_ + 1); y <= last; ++y) {
+      std::copy(Row(y), Row(y) + words_, window_bits_.begin());
+      for (int r = 1; r < window_; ++r) {
+        const uint64_t* row = Row(y + r);
+        for (int i = 0; i < words_; ++i) window_bits_[i] |= row[i];
+      }
+      int best = 0;
+      auto& runs = window_runs_[y];
+      runs.clear();
+      for (int x = 0; x < size_;) {
+        const int a = NextBit(window_bits_.data(), words_, size_, x, false);
+        if (a >= size_) break;
+        const int e = NextBit(window_bits_.data(), words_, size_, a, true);
+        // Runs shorter than the window are of no use: every solid rectangle
+        // is at least 2 gutter + 1 wide.
+        if (e - a >= window_) runs.push_back({a, e});
+        best = std::max(best, e - a);
+        x = e;
+      }
+      window_max_free_[y] = best;
     }
   }
 
@@ -444,7 +545,11 @@ class Atlas {
     max_free_[y] = best;
   }
 
-  int size_, height_, words_;
+  int size_, height_, words_, window_;
+  std::vector<int> window_max_free_;        // per window of rows y..y + window_ - 1
+  mutable std::vector<int> lowest_window_;  // per run length, see LowestWindowWithRun
+  std::vector<uint64_t> window_bits_;       // scratch
+  std::vector<std::vector<std::pair<int, int>>> window_runs_;  // free runs of each window
   std::vector<uint64_t> bits_;
   std::vector<int> max_free_;
   mutable std::vector<int> lowest_row_;                 // per run length, see LowestRowWithRun
@@ -457,7 +562,7 @@ int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint
                     double s, int size, int gutter, int64_t give_up_height,
                     std::vector<RasterPlacement>* placements) {
   // Nothing is placed above the give-up height: no need for those rows.
-  Atlas atlas(size, int(std::min<int64_t>(2 * int64_t(size), give_up_height + 1)));
+  Atlas atlas(size, int(std::min<int64_t>(2 * int64_t(size), give_up_height + 1)), 2 * gutter + 1);
   int64_t used = 0;
   placements->assign(charts.size(), RasterPlacement());
   // Shapes are made block by block in parallel (an attempt that gives up
@@ -484,7 +589,10 @@ int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint
       int best_x = 0, best_y = 0, best_k = -1;
       for (int k = 0; k < turns; ++k) {
         int x = 0, y = 0;
-        if (!atlas.Find(shape.probe[k], shape.check_rows[k], best_top, &scratch, &x, &y)) continue;
+        if (!atlas.Find(shape.probe[k], shape.check_rows[k], shape.solid[k], best_top, &scratch, &x,
+                        &y)) {
+          continue;
+        }
         const int64_t top = int64_t(y) + shape.probe[k].h;
         if (top < best_top || (top == best_top && x < best_x)) {
           best_top = top;
