@@ -22,35 +22,16 @@
 #include "stages/builtin.h"
 #include "stages/geometry/core/image.h"
 #include "stages/geometry/io/ply.h"
+#include "stages/geometry/testing/vtk_read.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {
 namespace {
 
-class ErrorCounter : public vtkCommand {
- public:
-  static ErrorCounter* New() { return new ErrorCounter; }
-  void Execute(vtkObject*, unsigned long, void* data) override {
-    ++errors;
-    last = data ? static_cast<const char*>(data) : "";
-  }
-  int errors = 0;
-  std::string last;
-};
-
 vtkSmartPointer<vtkPolyData> ReadWithVtk(const std::string& path) {
-  vtkNew<vtkXMLPolyDataReader> reader;
-  vtkNew<ErrorCounter> counter;
-  reader->AddObserver(vtkCommand::ErrorEvent, counter);
-  reader->SetFileName(path.c_str());
-  reader->Update();
-  EXPECT_EQ(counter->errors, 0) << path << ": " << counter->last;
-  return reader->GetOutput();
-}
-
-std::string FieldString(vtkPolyData* poly, const char* name) {
-  auto* array = vtkStringArray::SafeDownCast(poly->GetFieldData()->GetAbstractArray(name));
-  return array && array->GetNumberOfValues() == 1 ? array->GetValue(0) : "<missing>";
+  testing::VtkRead read = testing::ReadVtpWithVtk(path);
+  EXPECT_EQ(read.errors, 0) << path << ": " << read.last_error;
+  return read.poly;
 }
 
 std::string FileBytes(const std::string& path) {
@@ -149,8 +130,8 @@ TEST_F(VtpStagesTest, GeometryErrorMapsOpenInVtkAndAgreeWithThePly) {
   vtkDataArray* to_scan = pd->GetArray("distance_to_scan_m");
   vtkDataArray* invented = pd->GetArray("invented");
   ASSERT_TRUE(to_truth && to_scan && invented);
-  EXPECT_EQ(FieldString(poly, "truth"), "mesh");
-  EXPECT_EQ(FieldString(poly, "quality"), "distance_to_truth_m");
+  EXPECT_EQ(testing::VtkFieldString(poly, "truth"), "mesh");
+  EXPECT_EQ(testing::VtkFieldString(poly, "quality"), "distance_to_truth_m");
   for (vtkIdType v = 0; v < 121; ++v) {
     const int i = int(v % 11);
     EXPECT_NEAR(to_truth->GetComponent(v, 0), 0.02, 1e-6) << v;
@@ -188,7 +169,7 @@ TEST_F(VtpStagesTest, GeometryErrorMapsWithTheScanOnly) {
   ASSERT_NE(poly->GetPointData()->GetScalars(), nullptr);
   EXPECT_STREQ(poly->GetPointData()->GetScalars()->GetName(), "distance_to_scan_m");
   EXPECT_EQ(poly->GetPointData()->GetArray("distance_to_truth_m"), nullptr);
-  EXPECT_EQ(FieldString(poly, "truth"), "<missing>");
+  EXPECT_EQ(testing::VtkFieldString(poly, "truth"), "<missing>");
   const auto ply = PlyFloatProperties(ctx.files_.at("errors/errors.ply"));
   for (float q : ply.at("quality")) EXPECT_NEAR(q, 0.03, 1e-6);
 }
@@ -227,8 +208,8 @@ TEST_F(VtpStagesTest, ExportVtpWritesTheMeshItsAttributesAndItsMaps) {
     EXPECT_EQ(pd->GetTCoords()->GetComponent(v, 1), mesh.uvs[2 * v + 1]);
     EXPECT_EQ(pd->GetArray("Colors")->GetComponent(v, 0), mesh.colors[3 * v]);
   }
-  EXPECT_EQ(FieldString(poly, "BaseColorTexture"), "color.png");
-  EXPECT_EQ(FieldString(poly, "NormalTexture"), "normal.png");
+  EXPECT_EQ(testing::VtkFieldString(poly, "BaseColorTexture"), "color.png");
+  EXPECT_EQ(testing::VtkFieldString(poly, "NormalTexture"), "normal.png");
   EXPECT_EQ(FileBytes(ctx.files_.at("model/color.png")), FileBytes(color_path));
   EXPECT_EQ(FileBytes(ctx.files_.at("model/normal.png")), FileBytes(normal_path));
   EXPECT_EQ(ctx.meta_.at("model").at("format"), "vtp");

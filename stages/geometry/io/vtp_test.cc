@@ -23,40 +23,13 @@
 
 #include "base/testing/durable_write_check.h"
 #include "stages/geometry/testing/test_data.h"
+#include "stages/geometry/testing/vtk_read.h"
 
 namespace pb {
 namespace {
 
-// Counts the errors VTK reports (instead of printing them and going on).
-class ErrorCounter : public vtkCommand {
- public:
-  static ErrorCounter* New() { return new ErrorCounter; }
-  void Execute(vtkObject*, unsigned long, void* data) override {
-    ++errors;
-    last = data ? static_cast<const char*>(data) : "";
-  }
-  int errors = 0;
-  std::string last;
-};
-
-struct Read {
-  vtkSmartPointer<vtkPolyData> poly;
-  int errors = 0;
-  std::string last_error;
-};
-
-Read ReadWithVtk(const std::string& path) {
-  vtkNew<vtkXMLPolyDataReader> reader;
-  vtkNew<ErrorCounter> counter;
-  reader->AddObserver(vtkCommand::ErrorEvent, counter);
-  reader->SetFileName(path.c_str());
-  reader->Update();
-  Read read;
-  read.poly = reader->GetOutput();
-  read.errors = counter->errors;
-  read.last_error = counter->last;
-  return read;
-}
+using testing::ReadVtpWithVtk;
+using testing::VtkFieldString;
 
 // An n x n grid far from the origin with every attribute the writer knows.
 Mesh Grid(int n) {
@@ -81,12 +54,6 @@ Mesh Grid(int n) {
   return mesh;
 }
 
-std::string FieldString(vtkPolyData* poly, const char* name) {
-  auto* array = vtkStringArray::SafeDownCast(poly->GetFieldData()->GetAbstractArray(name));
-  if (array == nullptr || array->GetNumberOfValues() != 1) return "<missing>";
-  return array->GetValue(0);
-}
-
 class VtpTest : public testing::TempDirTest {};
 
 TEST_F(VtpTest, VtkReadsPointsCellsAndEveryArray) {
@@ -108,7 +75,7 @@ TEST_F(VtpTest, VtkReadsPointsCellsAndEveryArray) {
   ASSERT_TRUE(WriteVtp(path, mesh, options, &bytes).ok());
   EXPECT_EQ(bytes, std::filesystem::file_size(path));
 
-  const Read read = ReadWithVtk(path);
+  const testing::VtkRead read = ReadVtpWithVtk(path);
   ASSERT_EQ(read.errors, 0) << read.last_error;
   vtkPolyData* poly = read.poly;
   ASSERT_EQ(poly->GetNumberOfPoints(), vtkIdType(n));
@@ -157,8 +124,8 @@ TEST_F(VtpTest, VtkReadsPointsCellsAndEveryArray) {
     ASSERT_EQ(pd->GetScalars()->GetComponent(vtkIdType(v), 0), distance[v]) << v;
     ASSERT_EQ(invented->GetComponent(vtkIdType(v), 0), flag[v]) << v;
   }
-  EXPECT_EQ(FieldString(poly, "BaseColorTexture"), "color.png");
-  EXPECT_EQ(FieldString(poly, "Note"), "a <b> & \"c\" é");
+  EXPECT_EQ(VtkFieldString(poly, "BaseColorTexture"), "color.png");
+  EXPECT_EQ(VtkFieldString(poly, "Note"), "a <b> & \"c\" é");
 }
 
 TEST_F(VtpTest, BareMeshAndEmptyMesh) {
@@ -168,7 +135,7 @@ TEST_F(VtpTest, BareMeshAndEmptyMesh) {
   bare.colors.clear();
   bare.tangents.clear();
   ASSERT_TRUE(WriteVtp(Path("bare.vtp"), bare, {}).ok());
-  Read read = ReadWithVtk(Path("bare.vtp"));
+  testing::VtkRead read = ReadVtpWithVtk(Path("bare.vtp"));
   ASSERT_EQ(read.errors, 0) << read.last_error;
   EXPECT_EQ(read.poly->GetNumberOfPoints(), 9);
   EXPECT_EQ(read.poly->GetNumberOfPolys(), 8);
@@ -176,7 +143,7 @@ TEST_F(VtpTest, BareMeshAndEmptyMesh) {
   EXPECT_EQ(read.poly->GetPointData()->GetNormals(), nullptr);
 
   ASSERT_TRUE(WriteVtp(Path("empty.vtp"), Mesh{}, {}).ok());
-  read = ReadWithVtk(Path("empty.vtp"));
+  read = ReadVtpWithVtk(Path("empty.vtp"));
   ASSERT_EQ(read.errors, 0) << read.last_error;
   EXPECT_EQ(read.poly->GetNumberOfPoints(), 0);
   EXPECT_EQ(read.poly->GetNumberOfPolys(), 0);
