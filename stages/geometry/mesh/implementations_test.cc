@@ -21,6 +21,7 @@
 #include "stages/geometry/points/module_calls.h"
 #include "stages/geometry/points/outliers.h"
 #include "stages/geometry/points/smooth.h"
+#include "stages/geometry/testing/clouds.h"
 
 namespace pb {
 namespace {
@@ -33,18 +34,7 @@ constexpr double kRadius = 0.5;
 // Fibonacci-lattice sphere with Gaussian radial noise.
 PointCloud Sphere(int points, double noise_m, uint32_t seed) {
   PointCloud cloud;
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, noise_m);
-  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < points; ++i) {
-    const double z = 1.0 - 2.0 * (i + 0.5) / points;
-    const double r = std::sqrt(1.0 - z * z);
-    const double r_m = kRadius + (noise_m > 0 ? noise(rng) : 0.0);
-    cloud.positions.insert(cloud.positions.end(),
-                           {static_cast<float>(kCenter[0] + r_m * r * std::cos(golden * i)),
-                            static_cast<float>(kCenter[1] + r_m * r * std::sin(golden * i)),
-                            static_cast<float>(kCenter[2] + r_m * z)});
-  }
+  testing::AddSphere(cloud, kCenter, kRadius, points, noise_m, seed);
   return cloud;
 }
 

@@ -11,6 +11,7 @@
 #include <random>
 #include <vector>
 
+#include "stages/geometry/testing/clouds.h"
 
 namespace pb {
 namespace {
@@ -21,23 +22,7 @@ const double kCos2Deg = std::cos(2.0 * std::numbers::pi / 180.0);
 
 double Dot(const float* n, const double v[3]) { return n[0] * v[0] + n[1] * v[1] + n[2] * v[2]; }
 
-// Points on a sphere (Fibonacci lattice, even spacing) with Gaussian radial
-// noise, appended to `cloud`.
-void AddSphere(PointCloud& cloud, const double center[3], double radius_m, int points, double noise_m,
-               uint32_t seed) {
-  std::mt19937 rng(seed);
-  std::normal_distribution<double> noise(0.0, noise_m);
-  const double golden = std::numbers::pi * (3.0 - std::sqrt(5.0));
-  for (int i = 0; i < points; ++i) {
-    const double z = 1.0 - 2.0 * (i + 0.5) / points;
-    const double r = std::sqrt(1.0 - z * z);
-    const double r_m = radius_m + noise(rng);
-    cloud.positions.insert(cloud.positions.end(),
-                           {static_cast<float>(center[0] + r_m * r * std::cos(golden * i)),
-                            static_cast<float>(center[1] + r_m * r * std::sin(golden * i)),
-                            static_cast<float>(center[2] + r_m * z)});
-  }
-}
+using testing::AddSphere;
 
 TEST(NormalsTest, SmallestEigenvector) {
   const double diagonal[9] = {3, 0, 0, 0, 1, 0, 0, 0, 2};
