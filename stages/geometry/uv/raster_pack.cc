@@ -692,6 +692,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
   constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double lo = 0, hi = kInf;
+  int64_t lo_used = 0;  // the packed height at lo
   double a = std::min(std::sqrt(0.70) * s_area, s_limit);
   double b = std::min(std::sqrt(0.80) * s_area, s_limit);
   if (b < a * 1.01) a = b / 1.05;
@@ -714,6 +715,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
       if (trial.used <= size) {
         if (trial.s > lo) {
           lo = trial.s;
+          lo_used = trial.used;
           result.texels_per_meter = trial.s;
           result.placements = std::move(trial.placements);
         }
@@ -762,11 +764,21 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     }
   }
   // The packed height jumps with the scale (one chart more or less on the
-  // top row), and other orders often nest better: longest side first and
-  // shortest side first are tried side by side one step above the best
+  // top row), and other orders sometimes nest better: longest side first
+  // and shortest side first are tried side by side one step above the best
   // scale so far, climbing while one of them fits (the first if both do).
+  // Only while the best packing so far, its height grown as s^2 to the
+  // step, would still fit: the other orders then need only to nest about
+  // as well as it does. When it would not (a packing that already fills
+  // the square), they never fitted on the benchmark meshes (docs/uv.md):
+  // two full packings for nothing.
+  constexpr double kClimb = 1.012;
+  auto worth_climbing = [&]() {
+    return lo > 0 && lo * kClimb <= s_limit && double(lo_used) * kClimb * kClimb <= double(size);
+  };
+  const bool climb = worth_climbing();
   std::vector<uint32_t> others[2];
-  for (int variant = 0; variant < 2 && lo > 0; ++variant) {
+  for (int variant = 0; variant < 2 && climb; ++variant) {
     others[variant].resize(charts.size());
     std::iota(others[variant].begin(), others[variant].end(), 0u);
     std::vector<double> key(charts.size(), 0.0);
@@ -776,8 +788,8 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     std::stable_sort(others[variant].begin(), others[variant].end(),
                      [&](uint32_t a, uint32_t b) { return key[a] > key[b]; });
   }
-  for (int climb = 0; climb < 8 && lo > 0 && lo * 1.012 <= s_limit; ++climb) {
-    const double trial_s = lo * 1.012;
+  for (int step = 0; step < 8 && climb && worth_climbing(); ++step) {
+    const double trial_s = lo * kClimb;
     Trial trials[2];
     tbb::parallel_for(0, 2, [&](int i) {
       trials[i].used =
@@ -789,6 +801,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
                                           : nullptr;
     if (fit == nullptr) break;
     lo = trial_s;
+    lo_used = fit->used;
     result.texels_per_meter = trial_s;
     result.placements = std::move(fit->placements);
   }
