@@ -560,7 +560,8 @@ class Atlas {
 // the height used (INT64_MAX if a chart fits nowhere) and the placements.
 int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint32_t>& order,
                     double s, int size, int gutter, int64_t give_up_height,
-                    std::vector<RasterPlacement>* placements) {
+                    std::vector<RasterPlacement>* placements,
+                    const std::vector<Shapes>* made = nullptr) {
   // Nothing is placed above the give-up height: no need for those rows.
   Atlas atlas(size, int(std::min<int64_t>(2 * int64_t(size), give_up_height + 1)), 2 * gutter + 1);
   int64_t used = 0;
@@ -572,15 +573,17 @@ int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint
   Atlas::Scratch scratch;
   for (size_t begin = 0; begin < order.size(); begin += kBlock) {
     const size_t end = std::min(order.size(), begin + kBlock);
-    block.assign(end - begin, Shapes());
-    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4), [&](const auto& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        block[i - begin] = MakeShapes(charts[order[i]], s, gutter);
-      }
-    });
+    if (made == nullptr) {  // else every chart's shapes are given, at s
+      block.assign(end - begin, Shapes());
+      tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4), [&](const auto& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          block[i - begin] = MakeShapes(charts[order[i]], s, gutter);
+        }
+      });
+    }
     for (size_t i = begin; i < end; ++i) {
       const uint32_t c = order[i];
-      const Shapes& shape = block[i - begin];
+      const Shapes& shape = made != nullptr ? (*made)[c] : block[i - begin];
       // The four turns one after the other, each searched only up to the
       // best top edge so far (a packing runs on one thread: the scale
       // search runs its trials side by side instead).
@@ -790,10 +793,15 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
   }
   for (int step = 0; step < 8 && climb && worth_climbing(); ++step) {
     const double trial_s = lo * kClimb;
+    // Both orders pack at the same scale: the masks are made once for both.
+    std::vector<Shapes> shapes(charts.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, charts.size(), 4), [&](const auto& r) {
+      for (size_t c = r.begin(); c < r.end(); ++c) shapes[c] = MakeShapes(charts[c], trial_s, g);
+    });
     Trial trials[2];
     tbb::parallel_for(0, 2, [&](int i) {
-      trials[i].used =
-          PackAtScale(charts, others[i], trial_s, size, g, size, &trials[i].placements);
+      trials[i].used = PackAtScale(charts, others[i], trial_s, size, g, size,
+                                   &trials[i].placements, &shapes);
     });
     result.attempts += 2;
     Trial* fit = trials[0].used <= size   ? &trials[0]
