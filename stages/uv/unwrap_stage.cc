@@ -152,7 +152,7 @@ Status Run(StageContext& ctx) {
 StageType UnwrapStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;  // 3: faster shape packer (other placements and scales)
+  type.version = 4;  // 4: the packer skips the climb when the best packing fills the square
   type.summary =
       "UV atlas: conformal charts that follow the surface (or planar ones), one square texture";
   type.doc =

@@ -560,7 +560,8 @@ class Atlas {
 // the height used (INT64_MAX if a chart fits nowhere) and the placements.
 int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint32_t>& order,
                     double s, int size, int gutter, int64_t give_up_height,
-                    std::vector<RasterPlacement>* placements) {
+                    std::vector<RasterPlacement>* placements,
+                    const std::vector<Shapes>* made = nullptr) {
   // Nothing is placed above the give-up height: no need for those rows.
   Atlas atlas(size, int(std::min<int64_t>(2 * int64_t(size), give_up_height + 1)), 2 * gutter + 1);
   int64_t used = 0;
@@ -572,15 +573,17 @@ int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint
   Atlas::Scratch scratch;
   for (size_t begin = 0; begin < order.size(); begin += kBlock) {
     const size_t end = std::min(order.size(), begin + kBlock);
-    block.assign(end - begin, Shapes());
-    tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4), [&](const auto& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        block[i - begin] = MakeShapes(charts[order[i]], s, gutter);
-      }
-    });
+    if (made == nullptr) {  // else every chart's shapes are given, at s
+      block.assign(end - begin, Shapes());
+      tbb::parallel_for(tbb::blocked_range<size_t>(begin, end, 4), [&](const auto& r) {
+        for (size_t i = r.begin(); i < r.end(); ++i) {
+          block[i - begin] = MakeShapes(charts[order[i]], s, gutter);
+        }
+      });
+    }
     for (size_t i = begin; i < end; ++i) {
       const uint32_t c = order[i];
-      const Shapes& shape = block[i - begin];
+      const Shapes& shape = made != nullptr ? (*made)[c] : block[i - begin];
       // The four turns one after the other, each searched only up to the
       // best top edge so far (a packing runs on one thread: the scale
       // search runs its trials side by side instead).
@@ -692,6 +695,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
   constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double lo = 0, hi = kInf;
+  int64_t lo_used = 0;  // the packed height at lo
   double a = std::min(std::sqrt(0.70) * s_area, s_limit);
   double b = std::min(std::sqrt(0.80) * s_area, s_limit);
   if (b < a * 1.01) a = b / 1.05;
@@ -714,6 +718,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
       if (trial.used <= size) {
         if (trial.s > lo) {
           lo = trial.s;
+          lo_used = trial.used;
           result.texels_per_meter = trial.s;
           result.placements = std::move(trial.placements);
         }
@@ -762,11 +767,21 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     }
   }
   // The packed height jumps with the scale (one chart more or less on the
-  // top row), and other orders often nest better: longest side first and
-  // shortest side first are tried side by side one step above the best
+  // top row), and other orders sometimes nest better: longest side first
+  // and shortest side first are tried side by side one step above the best
   // scale so far, climbing while one of them fits (the first if both do).
+  // Only while the best packing so far, its height grown as s^2 to the
+  // step, would still fit: the other orders then need only to nest about
+  // as well as it does. When it would not (a packing that already fills
+  // the square), they never fitted on the benchmark meshes (docs/uv.md):
+  // two full packings for nothing.
+  constexpr double kClimb = 1.012;
+  auto worth_climbing = [&]() {
+    return lo > 0 && lo * kClimb <= s_limit && double(lo_used) * kClimb * kClimb <= double(size);
+  };
+  const bool climb = worth_climbing();
   std::vector<uint32_t> others[2];
-  for (int variant = 0; variant < 2 && lo > 0; ++variant) {
+  for (int variant = 0; variant < 2 && climb; ++variant) {
     others[variant].resize(charts.size());
     std::iota(others[variant].begin(), others[variant].end(), 0u);
     std::vector<double> key(charts.size(), 0.0);
@@ -776,12 +791,17 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     std::stable_sort(others[variant].begin(), others[variant].end(),
                      [&](uint32_t a, uint32_t b) { return key[a] > key[b]; });
   }
-  for (int climb = 0; climb < 8 && lo > 0 && lo * 1.012 <= s_limit; ++climb) {
-    const double trial_s = lo * 1.012;
+  for (int step = 0; step < 8 && climb && worth_climbing(); ++step) {
+    const double trial_s = lo * kClimb;
+    // Both orders pack at the same scale: the masks are made once for both.
+    std::vector<Shapes> shapes(charts.size());
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, charts.size(), 4), [&](const auto& r) {
+      for (size_t c = r.begin(); c < r.end(); ++c) shapes[c] = MakeShapes(charts[c], trial_s, g);
+    });
     Trial trials[2];
     tbb::parallel_for(0, 2, [&](int i) {
-      trials[i].used =
-          PackAtScale(charts, others[i], trial_s, size, g, size, &trials[i].placements);
+      trials[i].used = PackAtScale(charts, others[i], trial_s, size, g, size,
+                                   &trials[i].placements, &shapes);
     });
     result.attempts += 2;
     Trial* fit = trials[0].used <= size   ? &trials[0]
@@ -789,6 +809,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
                                           : nullptr;
     if (fit == nullptr) break;
     lo = trial_s;
+    lo_used = fit->used;
     result.texels_per_meter = trial_s;
     result.placements = std::move(fit->placements);
   }
