@@ -11,6 +11,7 @@
 
 #include "stages/geometry/mesh/distance.h"
 #include "stages/geometry/mesh/scan_agreement.h"
+#include "stages/geometry/points/knn.h"
 #include "stages/geometry/points/spacing.h"
 #include "stages/points_io.h"
 #include "stages/geometry/io/ply.h"
@@ -194,7 +195,13 @@ Status Run(StageContext& ctx) {
     Expected<ScanAgreement> agreement = Status::Internal("not run");
     Expected<VertexScanAgreement> at_vertices = Status::Internal("not run");
     arena.execute([&] {
-      Expected<std::vector<float>> spacing = LocalSpacing(scan->cloud, int(k));
+      // One index of the scan for the spacing and both measures.
+      Expected<KnnIndex> index = KnnIndex::Build(scan->cloud.positions);
+      if (!index.ok()) {
+        agreement = index.status();
+        return;
+      }
+      Expected<std::vector<float>> spacing = LocalSpacing(*index, int(k));
       if (!spacing.ok()) {
         agreement = spacing.status();
         return;
@@ -203,8 +210,8 @@ Status Run(StageContext& ctx) {
       options.spacing_factor = spacing_factor;
       options.samples = static_cast<size_t>(samples);
       options.seed = static_cast<uint64_t>(seed);
-      agreement = MeasureScanAgreement(mesh, scan->cloud, *spacing, options);
-      if (agreement.ok()) at_vertices = MeasureVertexScanAgreement(mesh, scan->cloud, *spacing, options);
+      agreement = MeasureScanAgreement(mesh, scan->cloud, *index, *spacing, options);
+      if (agreement.ok()) at_vertices = MeasureVertexScanAgreement(mesh, scan->cloud, *index, *spacing, options);
     });
     if (!agreement.ok())
       return agreement.status().WithContext(std::string(kId) + ": input 'points' (" + scan->path + ")");

@@ -53,6 +53,15 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
                                              std::span<const float> local_spacing_m,
                                              const ScanAgreementOptions& options) {
   PB_RETURN_IF_ERROR(CheckInputs(mesh, scan, local_spacing_m, options));
+  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(scan.positions));
+  return MeasureScanAgreement(mesh, scan, index, local_spacing_m, options);
+}
+
+Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan, const KnnIndex& index,
+                                             std::span<const float> local_spacing_m,
+                                             const ScanAgreementOptions& options) {
+  PB_RETURN_IF_ERROR(CheckInputs(mesh, scan, local_spacing_m, options));
+  if (index.size() != scan.size()) return Status::Invalid("scan agreement: the index is not of the scan's points");
 
   ScanAgreement result;
   result.mean_edge_m = MeanEdgeLength(mesh);
@@ -66,7 +75,6 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
   // Invented area: mesh samples against their nearest scan points.
   const std::vector<Vec3> samples = SampleMeshSurface(mesh, options.samples, options.seed);
   if (samples.empty()) return Status::Invalid("scan agreement: the mesh has no faces with positive area");
-  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(scan.positions));
   std::vector<uint8_t> invented(samples.size(), 0);
   std::vector<double> nearest_m(samples.size(), 0.0);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
@@ -108,8 +116,17 @@ Expected<VertexScanAgreement> MeasureVertexScanAgreement(const Mesh& mesh, const
                                                          std::span<const float> local_spacing_m,
                                                          const ScanAgreementOptions& options) {
   PB_RETURN_IF_ERROR(CheckInputs(mesh, scan, local_spacing_m, options));
-  const double mean_edge_m = MeanEdgeLength(mesh);
   PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(scan.positions));
+  return MeasureVertexScanAgreement(mesh, scan, index, local_spacing_m, options);
+}
+
+Expected<VertexScanAgreement> MeasureVertexScanAgreement(const Mesh& mesh, const PointCloud& scan,
+                                                         const KnnIndex& index,
+                                                         std::span<const float> local_spacing_m,
+                                                         const ScanAgreementOptions& options) {
+  PB_RETURN_IF_ERROR(CheckInputs(mesh, scan, local_spacing_m, options));
+  if (index.size() != scan.size()) return Status::Invalid("scan agreement: the index is not of the scan's points");
+  const double mean_edge_m = MeanEdgeLength(mesh);
   const size_t n = mesh.vertex_count();
   VertexScanAgreement result;
   result.distance_to_scan_m.resize(n);

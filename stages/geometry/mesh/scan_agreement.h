@@ -33,6 +33,7 @@
 #include "stages/geometry/core/point_cloud.h"
 #include "stages/geometry/mesh/distance.h"
 #include "stages/geometry/mesh/trim.h"  // CountBoundaryEdges, MeanEdgeLength
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 
@@ -63,6 +64,11 @@ struct ScanAgreement {
 Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan,
                                              std::span<const float> local_spacing_m,
                                              const ScanAgreementOptions& options = {});
+// The same with the caller's index of the scan's points (KnnIndex::Build of
+// scan.positions), for a caller that measures several things against one scan.
+Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud& scan, const KnnIndex& index,
+                                             std::span<const float> local_spacing_m,
+                                             const ScanAgreementOptions& options = {});
 
 // The same tests at the mesh's vertices, for error maps (a .vtp or a PLY
 // `quality` a person looks at): per vertex, the distance to the nearest scan
@@ -74,6 +80,10 @@ struct VertexScanAgreement {
   std::vector<uint8_t> invented;
 };
 Expected<VertexScanAgreement> MeasureVertexScanAgreement(const Mesh& mesh, const PointCloud& scan,
+                                                         std::span<const float> local_spacing_m,
+                                                         const ScanAgreementOptions& options = {});
+Expected<VertexScanAgreement> MeasureVertexScanAgreement(const Mesh& mesh, const PointCloud& scan,
+                                                         const KnnIndex& index,
                                                          std::span<const float> local_spacing_m,
                                                          const ScanAgreementOptions& options = {});
 

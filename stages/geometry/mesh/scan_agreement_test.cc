@@ -134,5 +134,32 @@ TEST(ScanAgreementTest, RejectsBadInput) {
   EXPECT_TRUE(MeasureScanAgreement(mesh, scan, two).ok());
 }
 
+TEST(ScanAgreementTest, TheCallersIndexGivesTheSameFiguresAndMustBeOfTheScan) {
+  // A 1 m grid of 5 cm cells and a scan of its left 30 cm: the rest is invented.
+  const Mesh mesh = GridMesh(20, {0, 0, 0});
+  PointCloud scan;
+  for (int j = 0; j <= 100; ++j)
+    for (int i = 0; i <= 30; ++i) scan.positions.insert(scan.positions.end(), {float(i * 0.01), float(j * 0.01), 0.002f});
+  const std::vector<float> spacing(scan.size(), 0.01f);
+  Expected<KnnIndex> index = KnnIndex::Build(scan.positions);
+  ASSERT_TRUE(index.ok());
+  Expected<ScanAgreement> own = MeasureScanAgreement(mesh, scan, spacing);
+  Expected<ScanAgreement> given = MeasureScanAgreement(mesh, scan, *index, spacing);
+  ASSERT_TRUE(own.ok() && given.ok());
+  EXPECT_EQ(own->invented_area_fraction, given->invented_area_fraction);
+  EXPECT_GT(given->invented_area_fraction, 0.0);
+  EXPECT_EQ(own->missing_fraction, given->missing_fraction);
+  Expected<VertexScanAgreement> own_v = MeasureVertexScanAgreement(mesh, scan, spacing);
+  Expected<VertexScanAgreement> given_v = MeasureVertexScanAgreement(mesh, scan, *index, spacing);
+  ASSERT_TRUE(own_v.ok() && given_v.ok());
+  EXPECT_EQ(own_v->invented, given_v->invented);
+  EXPECT_EQ(own_v->distance_to_scan_m, given_v->distance_to_scan_m);
+
+  Expected<KnnIndex> other = KnnIndex::Build(std::vector<float>{0, 0, 0, 1, 1, 0});
+  ASSERT_TRUE(other.ok());
+  EXPECT_FALSE(MeasureScanAgreement(mesh, scan, *other, spacing).ok());
+  EXPECT_FALSE(MeasureVertexScanAgreement(mesh, scan, *other, spacing).ok());
+}
+
 }  // namespace
 }  // namespace pb
