@@ -16,6 +16,7 @@
 #include <exception>
 #include <memory>
 
+#include "stages/geometry/core/module_guard.h"
 #include "stages/geometry/mesh/poisson_module.h"
 #include "stages/geometry/points/module_calls.h"
 
@@ -31,26 +32,12 @@ pcl::PointCloud<pcl::PointXYZ>::Ptr ToPcl(const pb::PointCloud& cloud) {
   return out;
 }
 
-// Runs `body`, turning exceptions into the call's error.
-template <typename Call, typename Body>
-bool Guard(Call* call, Body body) {
-  try {
-    body();
-    return true;
-  } catch (const std::exception& e) {
-    *call->error = e.what();
-  } catch (...) {
-    *call->error = "unknown exception";
-  }
-  return false;
-}
-
 }  // namespace
 
 #define PB_EXPORT extern "C" __attribute__((visibility("default")))
 
 PB_EXPORT bool pb_pcl_normals_v1(pb::NormalsModuleCall* call) {
-  return Guard(call, [call] {
+  return pb::GuardModuleCall(call, [call] {
     pcl::NormalEstimationOMP<pcl::PointXYZ, pcl::Normal> estimation(
         static_cast<unsigned int>(call->threads));
     estimation.setInputCloud(ToPcl(*call->cloud));
@@ -72,7 +59,7 @@ PB_EXPORT bool pb_pcl_normals_v1(pb::NormalsModuleCall* call) {
 }
 
 PB_EXPORT bool pb_pcl_outliers_v1(pb::OutliersModuleCall* call) {
-  return Guard(call, [call] {
+  return pb::GuardModuleCall(call, [call] {
     pcl::StatisticalOutlierRemoval<pcl::PointXYZ> filter;
     filter.setInputCloud(ToPcl(*call->cloud));
     filter.setMeanK(call->k);
@@ -84,7 +71,7 @@ PB_EXPORT bool pb_pcl_outliers_v1(pb::OutliersModuleCall* call) {
 }
 
 PB_EXPORT bool pb_pcl_smooth_v1(pb::SmoothModuleCall* call) {
-  return Guard(call, [call] {
+  return pb::GuardModuleCall(call, [call] {
     pcl::MovingLeastSquares<pcl::PointXYZ, pcl::PointXYZ> mls;
     mls.setInputCloud(ToPcl(*call->cloud));
     mls.setSearchMethod(std::make_shared<pcl::search::KdTree<pcl::PointXYZ>>());
@@ -109,7 +96,7 @@ PB_EXPORT bool pb_pcl_smooth_v1(pb::SmoothModuleCall* call) {
 }
 
 PB_EXPORT bool pb_pcl_poisson_v1(pb::PoissonModuleCall* call) {
-  return Guard(call, [call] {
+  return pb::GuardModuleCall(call, [call] {
     const pb::PointCloud& cloud = *call->cloud;
     auto input = std::make_shared<pcl::PointCloud<pcl::PointNormal>>();
     input->resize(cloud.size());

@@ -13,24 +13,37 @@
 #include <memory>
 #include <tuple>
 
+#include "stages/geometry/core/module_guard.h"
 #include "stages/geometry/mesh/poisson_module.h"
 #include "stages/geometry/points/module_calls.h"
 
+namespace {
+
+// Open3D's copy of the cloud's positions (relative to its origin). Also
+// quiets Open3D, which prints its progress at Info level to stdout; errors
+// reach the caller as exceptions.
+open3d::geometry::PointCloud Open3dPoints(const pb::PointCloud& cloud) {
+  open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
+  open3d::geometry::PointCloud input;
+  input.points_.resize(cloud.size());
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const float* p = &cloud.positions[3 * i];
+    input.points_[i] = Eigen::Vector3d(p[0], p[1], p[2]);
+  }
+  return input;
+}
+
+}  // namespace
+
 extern "C" __attribute__((visibility("default"))) bool pb_poisson_open3d_run_v1(
     pb::PoissonModuleCall* call) {
-  try {
-    // Open3D prints its progress at Info level to stdout; errors reach the
-    // caller as exceptions.
-    open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
+  return pb::GuardModuleCall(call, [call] {
     const pb::PointCloud& cloud = *call->cloud;
     const size_t n = cloud.size();
-    open3d::geometry::PointCloud input;
-    input.points_.resize(n);
+    open3d::geometry::PointCloud input = Open3dPoints(cloud);
     input.normals_.resize(n);
     for (size_t i = 0; i < n; ++i) {
-      const float* p = &cloud.positions[3 * i];
       const float* q = &cloud.normals[3 * i];
-      input.points_[i] = Eigen::Vector3d(p[0], p[1], p[2]);
       input.normals_[i] = Eigen::Vector3d(q[0], q[1], q[2]);
     }
     const bool colors = cloud.has_colors();
@@ -82,27 +95,14 @@ extern "C" __attribute__((visibility("default"))) bool pb_poisson_open3d_run_v1(
       }
     }
     call->densities->assign(densities.begin(), densities.end());
-    return true;
-  } catch (const std::exception& e) {
-    *call->error = e.what();
-  } catch (...) {
-    *call->error = "unknown exception";
-  }
-  return false;
+  });
 }
 
 extern "C" __attribute__((visibility("default"))) bool pb_open3d_normals_v1(
     pb::NormalsModuleCall* call) {
-  try {
-    open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
-    const pb::PointCloud& cloud = *call->cloud;
-    const size_t n = cloud.size();
-    open3d::geometry::PointCloud input;
-    input.points_.resize(n);
-    for (size_t i = 0; i < n; ++i) {
-      const float* p = &cloud.positions[3 * i];
-      input.points_[i] = Eigen::Vector3d(p[0], p[1], p[2]);
-    }
+  return pb::GuardModuleCall(call, [call] {
+    const size_t n = call->cloud->size();
+    open3d::geometry::PointCloud input = Open3dPoints(*call->cloud);
     // Without normals on input, Open3D leaves each sign as its solver found
     // it; the caller orients. Open3D parallelizes with OpenMP: as many
     // threads as the stage was given.
@@ -115,11 +115,5 @@ extern "C" __attribute__((visibility("default"))) bool pb_open3d_normals_v1(
         (*call->normals)[3 * i + k] = static_cast<float>(input.normals_[i][k]);
       }
     }
-    return true;
-  } catch (const std::exception& e) {
-    *call->error = e.what();
-  } catch (...) {
-    *call->error = "unknown exception";
-  }
-  return false;
+  });
 }
