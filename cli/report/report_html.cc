@@ -11,6 +11,7 @@
 #include <utility>
 #include <vector>
 
+#include "base/markup.h"
 #include "cli/report/report_internal.h"
 
 namespace pb::report_internal {
@@ -47,31 +48,6 @@ std::string FmtTexture(const Row& r) {
 }
 std::string FmtFits(const Row& r) { return r.fits ? (*r.fits ? "yes" : "no") : kDash; }
 
-std::string EscapeHtml(const std::string& s) {
-  std::string out;
-  for (char ch : s) {
-    switch (ch) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      case '\'':
-        out += "&#39;";
-        break;
-      default:
-        out += ch;
-    }
-  }
-  return out;
-}
 std::string EscapeMd(const std::string& s) {
   std::string out;
   for (char ch : s) {
@@ -115,7 +91,7 @@ std::string SvgBars(const std::vector<Bar>& bars, const std::string& unit, doubl
   const double height = top + row_h * double(bars.size()) + 34;
   std::string svg = "<svg class=\"chart\" role=\"img\" width=\"" + Num(width) + "\" height=\"" +
                     Num(height) + "\" viewBox=\"0 0 " + Num(width) + " " + Num(height) +
-                    "\"><title>" + EscapeHtml(title) + "</title>";
+                    "\"><title>" + EscapeMarkup(title) + "</title>";
   const double axis_y = top + row_h * double(bars.size());
   for (double t = 0; t <= axis_max + step * 1e-6; t += step) {
     const double x = label_w + plot_w * t / axis_max;
@@ -128,12 +104,12 @@ std::string SvgBars(const std::vector<Bar>& bars, const std::string& unit, doubl
   svg += "<line x1=\"" + Num(label_w) + "\" y1=\"" + Num(axis_y) + "\" x2=\"" +
          Num(label_w + plot_w) + "\" y2=\"" + Num(axis_y) + "\" stroke=\"#333\"/>";
   svg += "<text x=\"" + Num(label_w + plot_w / 2) + "\" y=\"" + Num(axis_y + 31) +
-         "\" text-anchor=\"middle\" class=\"axis\">" + EscapeHtml(unit) + "</text>";
+         "\" text-anchor=\"middle\" class=\"axis\">" + EscapeMarkup(unit) + "</text>";
   for (size_t i = 0; i < bars.size(); ++i) {
     const Bar& b = bars[i];
     const double y = top + row_h * double(i);
     svg += "<text x=\"" + Num(label_w - 8) + "\" y=\"" + Num(y + row_h * 0.65) +
-           "\" text-anchor=\"end\">" + EscapeHtml(b.label) + "</text>";
+           "\" text-anchor=\"end\">" + EscapeMarkup(b.label) + "</text>";
     double x = label_w;
     for (const auto& [group, value] : b.segments) {
       const double w = plot_w * value / scale / axis_max;
@@ -141,13 +117,13 @@ std::string SvgBars(const std::vector<Bar>& bars, const std::string& unit, doubl
       const char* color = group >= 0 ? kGroupColors[size_t(group)] : "#6a51a3";
       svg += "<rect x=\"" + Num(x) + "\" y=\"" + Num(y + 4) + "\" width=\"" + Printf("%.2f", w) +
              "\" height=\"" + Num(row_h - 8) + "\" fill=\"" + color + "\"><title>" +
-             EscapeHtml((group >= 0 ? std::string(kGroupTitles[size_t(group)]) + ": " : "") +
+             EscapeMarkup((group >= 0 ? std::string(kGroupTitles[size_t(group)]) + ": " : "") +
                         Printf("%.3g", value / scale) + " " + unit) +
              "</title></rect>";
       x += w;
     }
     svg += "<text x=\"" + Num(x + 6) + "\" y=\"" + Num(y + row_h * 0.65) + "\" class=\"value\">" +
-           EscapeHtml(b.end_label) + "</text>";
+           EscapeMarkup(b.end_label) + "</text>";
   }
   return svg + "</svg>";
 }
@@ -314,12 +290,12 @@ std::string MarkdownTable(const TextTable& t) {
 std::string HtmlTable(const TextTable& t) {
   std::string html = "<table><thead><tr>";
   for (size_t i = 0; i < t.header.size(); ++i)
-    html += (i < t.text_columns ? "<th class=\"l\">" : "<th>") + EscapeHtml(t.header[i]) + "</th>";
+    html += (i < t.text_columns ? "<th class=\"l\">" : "<th>") + EscapeMarkup(t.header[i]) + "</th>";
   html += "</tr></thead><tbody>";
   for (const auto& row : t.rows) {
     html += "<tr>";
     for (size_t i = 0; i < row.size(); ++i)
-      html += (i < t.text_columns ? "<td class=\"l\">" : "<td>") + EscapeHtml(row[i]) + "</td>";
+      html += (i < t.text_columns ? "<td class=\"l\">" : "<td>") + EscapeMarkup(row[i]) + "</td>";
     html += "</tr>";
   }
   return html + "</tbody></table>";
@@ -389,12 +365,12 @@ std::string ViewerUrl(const std::string& key, const std::string& value) {
 std::string ViewerHtml(const Campaign& c) {
   std::string h = "<h2>3-D viewer</h2><p><a href=\"viewer/index.html\">All models in 3-D</a> (linked "
                   "cameras, orbit and walk, color/normal/wireframe toggles, PNG or KTX2 textures, "
-                  "Enter VR). " + EscapeHtml(kViewerNote) + "</p><p>";
+                  "Enter VR). " + EscapeMarkup(kViewerNote) + "</p><p>";
   for (const std::string& scene : c.scenes) {
-    h += "<b>" + EscapeHtml(scene) + "</b>: <a href=\"" + EscapeHtml(ViewerUrl("scene", scene)) + "\">all</a>";
+    h += "<b>" + EscapeMarkup(scene) + "</b>: <a href=\"" + EscapeMarkup(ViewerUrl("scene", scene)) + "\">all</a>";
     for (const Row& r : c.rows) {
       if (r.scene == scene && r.ok()) {
-        h += " · <a href=\"" + EscapeHtml(ViewerUrl("run", r.name)) + "\">" + EscapeHtml(DisplayName(r)) + "</a>";
+        h += " · <a href=\"" + EscapeMarkup(ViewerUrl("run", r.name)) + "\">" + EscapeMarkup(DisplayName(r)) + "</a>";
       }
     }
     h += "<br>";
@@ -464,7 +440,7 @@ const char* kCss =
 std::string Img(const std::optional<ReportImage>& image, const std::string& alt,
                 const char* cls = "") {
   if (!image) return "";
-  return "<img class=\"" + std::string(cls) + "\" alt=\"" + EscapeHtml(alt) + "\" width=\"" +
+  return "<img class=\"" + std::string(cls) + "\" alt=\"" + EscapeMarkup(alt) + "\" width=\"" +
          std::to_string(image->width) + "\" height=\"" + std::to_string(image->height) +
          "\" src=\"" + image->data_uri + "\">";
 }
@@ -475,25 +451,25 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
                        const ReportOptions& options) {
   std::string h =
       "<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\"><title>pointbake report: " +
-      EscapeHtml(c.name) + "</title><style>" + kCss + "</style></head><body>\n";
-  h += "<h1>Campaign report: " + EscapeHtml(c.name) + "</h1><div class=\"meta\"><p>Started " +
-       EscapeHtml(c.started.empty() ? kDash : c.started) +
+      EscapeMarkup(c.name) + "</title><style>" + kCss + "</style></head><body>\n";
+  h += "<h1>Campaign report: " + EscapeMarkup(c.name) + "</h1><div class=\"meta\"><p>Started " +
+       EscapeMarkup(c.started.empty() ? kDash : c.started) +
        (c.total_wall_s ? ", campaign wall time " + FmtSeconds(c.total_wall_s) + " s" : "") +
-       ". Machine: " + EscapeHtml(HostLine(c)) + ".</p><p>" + EscapeHtml(kTimesNote) +
+       ". Machine: " + EscapeMarkup(HostLine(c)) + ".</p><p>" + EscapeMarkup(kTimesNote) +
        "</p></div>\n";
   h += ViewerHtml(c);
   h += "<h2>Construction time</h2>" + Legend();
   for (const std::string& scene : c.scenes)
-    h += "<h3>" + EscapeHtml(scene) + "</h3>" + TimeChart(c, scene);
+    h += "<h3>" + EscapeMarkup(scene) + "</h3>" + TimeChart(c, scene);
   h += "\n<h2>Peak RAM</h2>";
   for (const std::string& scene : c.scenes)
-    h += "<h3>" + EscapeHtml(scene) + "</h3>" + RamChart(c, scene);
-  h += "\n<h2>Speed-ups of point transfer</h2><p>" + EscapeHtml(speed_sentence) + "</p>" +
+    h += "<h3>" + EscapeMarkup(scene) + "</h3>" + RamChart(c, scene);
+  h += "\n<h2>Speed-ups of point transfer</h2><p>" + EscapeMarkup(speed_sentence) + "</p>" +
        HtmlTable(speed);
   h += "\n<h2>Times and peak RAM</h2>" + HtmlTable(times);
   h += "\n<h2>Quality against HPM</h2>" + HtmlTable(vs_hpm);
   h += "\n<h2>Quality against ground truth</h2>" + HtmlTable(vs_truth);
-  h += "\n<h2>Against the scan</h2><p>" + EscapeHtml(kScanNote) + "</p>" + HtmlTable(vs_scan);
+  h += "\n<h2>Against the scan</h2><p>" + EscapeMarkup(kScanNote) + "</p>" + HtmlTable(vs_scan);
   h += "\n<h2>Faces, textures and FPS estimate</h2>" + HtmlTable(fps);
   h += "\n<h2>Warnings</h2>";
   if (!AnyWarnings(c))
@@ -502,13 +478,13 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
     h += "<ul>";
   for (const Row& r : c.rows)
     for (const auto& [stage, text] : r.warnings)
-      h += "<li>" + EscapeHtml(DisplayName(r)) + " on " + EscapeHtml(r.scene) + ", stage <code>" +
-           EscapeHtml(stage) + "</code>: " + EscapeHtml(text) + "</li>";
+      h += "<li>" + EscapeMarkup(DisplayName(r)) + " on " + EscapeMarkup(r.scene) + ", stage <code>" +
+           EscapeMarkup(stage) + "</code>: " + EscapeMarkup(text) + "</li>";
   if (AnyWarnings(c)) h += "</ul>";
   for (const SceneImages& s : images) {
     for (const ViewSection& v : s.views) {
       h +=
-          "\n<h2>" + EscapeHtml(s.scene) + ", view " + EscapeHtml(v.view) +
+          "\n<h2>" + EscapeMarkup(s.scene) + ", view " + EscapeMarkup(v.view) +
           "</h2><p>Crop: " + std::to_string(v.window.size) + "\xC3\x97" +
           std::to_string(v.window.size) + " px at (" + std::to_string(v.window.x) + ", " +
           std::to_string(v.window.y) +
@@ -516,12 +492,12 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
           std::to_string(std::max(1, options.thumbnail_px / v.window.size)) +
           "\xC3\x97 (nearest neighbor); yellow box in the frames.</p><div class=\"frames\">";
       for (const FrameCell& cell : v.cells) {
-        h += "<div class=\"cell\"><b>" + EscapeHtml(cell.title) + "</b>";
-        if (!cell.note.empty()) h += "<div class=\"note\">" + EscapeHtml(cell.note) + "</div>";
+        h += "<div class=\"cell\"><b>" + EscapeMarkup(cell.title) + "</b>";
+        if (!cell.note.empty()) h += "<div class=\"note\">" + EscapeMarkup(cell.note) + "</div>";
         h += Img(cell.thumb, cell.title);
         if (cell.crop) h += "<div>Crop</div>" + Img(cell.crop, cell.title + " crop", "crop");
         if (cell.flip)
-          h += "<div>" + EscapeHtml(cell.flip_title) + "</div>" + Img(cell.flip, cell.flip_title);
+          h += "<div>" + EscapeMarkup(cell.flip_title) + "</div>" + Img(cell.flip, cell.flip_title);
         h += "</div>";
       }
       h += "</div>";

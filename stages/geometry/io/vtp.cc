@@ -12,6 +12,8 @@
 #include <set>
 #include <string_view>
 
+#include "base/markup.h"
+
 namespace pb {
 namespace {
 
@@ -24,29 +26,6 @@ struct Block {
   size_t units = 0;       // what `append` counts: vertices or faces
   size_t unit_bytes = 0;  // bytes per unit
 };
-
-std::string XmlEscaped(std::string_view text) {
-  std::string out;
-  for (char c : text) {
-    switch (c) {
-      case '&':
-        out += "&amp;";
-        break;
-      case '<':
-        out += "&lt;";
-        break;
-      case '>':
-        out += "&gt;";
-        break;
-      case '"':
-        out += "&quot;";
-        break;
-      default:
-        out += c;
-    }
-  }
-  return out;
-}
 
 template <typename T>
 void AppendLittleEndian(std::string& out, T value) {
@@ -66,14 +45,14 @@ void AppendValues(std::string& out, std::span<const T> values) {
 }
 
 std::string DataArrayLine(std::string_view type, std::string_view name, int components) {
-  return "<DataArray type=\"" + std::string(type) + "\" Name=\"" + XmlEscaped(name) +
+  return "<DataArray type=\"" + std::string(type) + "\" Name=\"" + EscapeMarkup(name) +
          "\" NumberOfComponents=\"" + std::to_string(components) + "\" format=\"appended\"";
 }
 
 // The character codes of `value`, 0-ended: how VTK writes a String array in
 // ascii format.
 std::string StringFieldLine(const VtpStringField& field) {
-  std::string line = "      <Array type=\"String\" Name=\"" + XmlEscaped(field.name) +
+  std::string line = "      <Array type=\"String\" Name=\"" + EscapeMarkup(field.name) +
                      "\" NumberOfTuples=\"1\" format=\"ascii\">\n        ";
   for (unsigned char c : field.value) line += std::to_string(int(c)) + " ";
   return line + "0\n      </Array>\n";
@@ -190,7 +169,7 @@ Status WriteVtp(const std::string& path, const Mesh& mesh, const VtpWriteOptions
          "\" NumberOfVerts=\"0\" NumberOfLines=\"0\" NumberOfStrips=\"0\" NumberOfPolys=\"" +
          std::to_string(faces) + "\">\n      <PointData";
   if (!options.active_scalars.empty())
-    xml += " Scalars=\"" + XmlEscaped(options.active_scalars) + "\"";
+    xml += " Scalars=\"" + EscapeMarkup(options.active_scalars) + "\"";
   if (mesh.has_normals()) xml += " Normals=\"Normals\"";
   if (mesh.has_uvs()) xml += " TCoords=\"TCoords\"";
   xml += ">\n";
