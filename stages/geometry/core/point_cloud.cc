@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cmath>
 #include <limits>
 #include <string>
 
@@ -41,6 +42,16 @@ Bounds AbsoluteBounds(const PointCloud& cloud) {
     bounds.max_m[axis] += cloud.origin[axis];
   }
   return bounds;
+}
+
+Status CheckFinitePositions(const PointCloud& cloud, std::string_view what) {
+  for (size_t i = 0; i < cloud.positions.size(); ++i) {
+    if (!std::isfinite(cloud.positions[i])) {
+      return Status::Invalid(std::string(what) + ": point " + std::to_string(i / 3) +
+                             " has a non-finite coordinate");
+    }
+  }
+  return Status::Ok();
 }
 
 Status Validate(const PointCloud& cloud) {

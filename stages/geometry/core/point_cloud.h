@@ -19,6 +19,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string_view>
 #include <vector>
 
 #include "base/status.h"
@@ -61,6 +62,11 @@ Bounds AbsoluteBounds(const PointCloud& cloud);
 // Checks that attribute arrays agree with the point count; Status::Invalid
 // naming the attribute otherwise.
 Status Validate(const PointCloud& cloud);
+
+// Status::Invalid "<what>: point N has a non-finite coordinate" for the first
+// such point, for the steps that hand the cloud to a library that would not
+// say which point (PCL, Open3D).
+Status CheckFinitePositions(const PointCloud& cloud, std::string_view what);
 
 // The points `indices` (each < cloud.size()) in that order, with every
 // attribute; origin and stations copied.

@@ -243,12 +243,7 @@ void NeighborGraph(const KnnIndex& index, std::vector<uint32_t>& graph) {
 // (non-finite or zero) becomes +z, so every normal is a unit vector.
 Status EstimateWithModule(PointCloud& cloud, const NormalOptions& options) {
   // Our kd-tree names a non-finite point; the libraries would not.
-  for (size_t i = 0; i < cloud.positions.size(); ++i) {
-    if (!std::isfinite(cloud.positions[i])) {
-      return Status::Invalid("normal estimation: point " + std::to_string(i / 3) +
-                             " has a non-finite coordinate");
-    }
-  }
+  PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "normal estimation"));
   const bool pcl = options.implementation == NormalImplementation::kPcl;
   PB_ASSIGN_OR_RETURN(
       void* symbol,

@@ -76,12 +76,7 @@ Expected<PointCloud> RemoveWithPcl(const PointCloud& cloud, const OutlierOptions
   PB_ASSIGN_OR_RETURN(void* symbol,
                       ModuleSymbol(kPclModule, PB_PCL_OUTLIERS_SYMBOL,
                                    "statistical outlier removal (implementation 'pcl')"));
-  for (size_t i = 0; i < cloud.positions.size(); ++i) {
-    if (!std::isfinite(cloud.positions[i])) {
-      return Status::Invalid("statistical outlier removal: point " + std::to_string(i / 3) +
-                             " has a non-finite coordinate");
-    }
-  }
+  PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "statistical outlier removal"));
   std::vector<uint32_t> kept;
   std::string error;
   OutliersModuleCall call;

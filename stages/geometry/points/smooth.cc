@@ -27,12 +27,7 @@ Expected<PointCloud> SmoothMovingLeastSquares(const PointCloud& cloud, const Smo
     return Status::Invalid("MLS smoothing: needs at least 3 points, the cloud has " +
                            std::to_string(n));
   }
-  for (size_t i = 0; i < cloud.positions.size(); ++i) {
-    if (!std::isfinite(cloud.positions[i])) {
-      return Status::Invalid("MLS smoothing: point " + std::to_string(i / 3) +
-                             " has a non-finite coordinate");
-    }
-  }
+  PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "MLS smoothing"));
   PB_ASSIGN_OR_RETURN(void* symbol, ModuleSymbol(kPclModule, PB_PCL_SMOOTH_SYMBOL,
                                                  "MLS smoothing (points.smooth)"));
   std::vector<float> positions;
