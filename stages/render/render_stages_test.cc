@@ -366,5 +366,98 @@ TEST_F(RenderStagesTest, DepthMapsOfMeshAndSplatsAgreeOnTheSameSurface) {
   EXPECT_EQ(plain.files_.count("frames/front.depth.exr"), 0u);
 }
 
+// A plate in the plane y = 5 facing -y (the quad's), x in [-1.05, 1.05] and z
+// in [-1.05, 1.65], cut into a 3 x 3 grid of cells at x, z = +-0.3; `hole`
+// leaves the middle cell (0.6 x 0.6 m) out.
+Mesh Plate(bool hole) {
+  Mesh mesh;
+  mesh.origin = {300000.0, 5000000.0, 100.0};
+  const float xs[4] = {-1.05f, -0.3f, 0.3f, 1.05f}, zs[4] = {-1.05f, -0.3f, 0.3f, 1.65f};
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      mesh.positions.insert(mesh.positions.end(), {xs[i], 5.0f, zs[j]});
+      mesh.uvs.insert(mesh.uvs.end(), {(xs[i] + 1.05f) / 2.1f, (zs[j] + 1.05f) / 2.7f});
+    }
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) {
+      if (hole && i == 1 && j == 1) continue;
+      const uint32_t a = uint32_t(j * 4 + i), b = a + 1, c = a + 5, d = a + 4;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+    }
+  mesh.normals = ComputeVertexNormals(mesh);
+  return mesh;
+}
+
+TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
+  // The reference: the quad's 5 cm grid of points, plus two sparse rows above
+  // it (z = 1.3 and 1.6, every 30 cm) whose spacing is inflated, drawn as
+  // large camera-facing disks (orient false, radius 2 spacings) that reach
+  // past the plate (the sparse rows' disks, capped at 4 median spacings,
+  // 0.35 m: 3.9 px; the grid's 0.09 m past x = +-1 and z = -1, the plate
+  // ending 0.05 m out).
+  PointCloud cloud = QuadPoints();
+  for (const float z : {1.3f, 1.6f})
+    for (int i = 0; i < 7; ++i) {
+      cloud.positions.insert(cloud.positions.end(), {-0.9f + 0.3f * float(i), 5.0f, z});
+      cloud.colors.insert(cloud.colors.end(), {200, 200, 200});
+    }
+  nlohmann::json splat_params = {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"orient", false},
+                                 {"radius_scale", 2.0}};
+  std::filesystem::create_directories(dir_ / "scan");
+  FakeContext scan(dir_ / "scan", splat_params);
+  scan.AddInput("points", "points", WriteInputPoints("cloud", cloud));
+  ASSERT_TRUE(Run("render.splats", scan).ok());
+  const FrameSet scan_frames = Frames(scan).value();
+  ASSERT_EQ(scan_frames.frames[0].entry.samples_file, "front.samples.png");
+  const Image& samples = scan_frames.frames[0].samples;
+  ASSERT_EQ(samples.width, 64);
+  // Every pixel of the grid's square (x, z = -1 .. 1 project to 20.9 .. 43.1
+  // px: 24 x 24 pixels) holds a sample (0.55 px apart), the sparse rows one
+  // pixel each; none of the background does.
+  EXPECT_EQ(samples.at_u8(32, 32, 0), 255);
+  EXPECT_EQ(samples.at_u8(2, 2, 0), 0);
+  EXPECT_EQ(scan.counters_.at("sample_pixels"), 24 * 24 + 14);
+
+  auto artifact = [](const FakeContext& ctx) {
+    std::map<std::string, std::string> files;
+    for (const auto& [key, path] : ctx.files_)
+      if (key.rfind("frames/", 0) == 0) files[key.substr(7)] = path;
+    return files;
+  };
+  // Holes of `model` against the scan: {hole_px, enclosed_hole_px, splat_hole_px, footprint_px}.
+  auto holes = [&](const Mesh& model, const std::string& out) -> std::array<double, 4> {
+    std::filesystem::create_directories(dir_ / out);
+    FakeContext render(dir_ / out, {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"lighting", "unlit"}});
+    render.AddInput("mesh", "mesh", WriteInputMesh(out, model));
+    EXPECT_TRUE(Run("render.frames", render).ok());
+    std::filesystem::create_directories(dir_ / (out + "_metrics"));
+    FakeContext metrics(dir_ / (out + "_metrics"), nlohmann::json::object());
+    metrics.AddInput("frames", "frames", artifact(render));
+    metrics.AddInput("reference", "frames", artifact(scan));
+    const Status status = Run("metrics.image", metrics);
+    EXPECT_TRUE(status.ok()) << status.message();
+    const nlohmann::json table = nlohmann::json::parse(std::ifstream(metrics.outputs_.at("table")));
+    std::map<std::string, double> row;
+    for (size_t c = 0; c < table["columns"].size(); ++c)
+      if (table["rows"][0][c].is_number()) row[table["columns"][c]] = table["rows"][0][c].get<double>();
+    EXPECT_EQ(metrics.counters_.at("sample_mask_frames"), 1);
+    EXPECT_DOUBLE_EQ(row["hole_fraction"], row["hole_px"] / row["footprint_px"]);
+    return {row["hole_px"], row["enclosed_hole_px"], row["splat_hole_px"], row["footprint_px"]};
+  };
+  // The exact plate: no hole where the scan has samples, though the disks
+  // reach past it by up to 3 px all around.
+  const std::array<double, 4> exact = holes(Plate(false), "exact");
+  EXPECT_EQ(exact[0], 0);
+  EXPECT_GT(exact[2], 40);
+  EXPECT_EQ(exact[3], 24 * 24 + 14);
+  // The plate with a 0.6 m hole (6.6 px) inside the grid: every pixel of it
+  // holds samples, so it counts whole, enclosed by the model.
+  const std::array<double, 4> open = holes(Plate(true), "open");
+  EXPECT_GE(open[0], 36);
+  EXPECT_LE(open[0], 49);
+  EXPECT_EQ(open[1], open[0]);
+  EXPECT_EQ(open[2], exact[2] + open[0]);
+}
+
 }  // namespace
 }  // namespace pb
