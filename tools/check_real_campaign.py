@@ -33,8 +33,9 @@ WORKFLOWS = ("hpm", "lpm", "remeshing", "point_transfer")
 
 
 def read_png(path):
-    """(width, height, channels, rows) of an 8-bit, non-interlaced RGB or RGBA
-    PNG (what render.frames and render.splats write); rows are bytes objects."""
+    """(width, height, channels, rows) of an 8-bit, non-interlaced gray, RGB or
+    RGBA PNG (what render.frames and render.splats write, gray: the sample
+    masks); rows are bytes objects."""
     with open(path, "rb") as f:
         data = f.read()
     if data[:8] != b"\x89PNG\r\n\x1a\n":
@@ -51,9 +52,9 @@ def read_png(path):
         elif kind == b"IEND":
             break
     width, height, depth, color, _, _, interlace = header
-    if depth != 8 or color not in (2, 6) or interlace:
-        raise ValueError(f"{path}: only 8-bit RGB/RGBA non-interlaced PNGs are read")
-    channels = 3 if color == 2 else 4
+    if depth != 8 or color not in (0, 2, 6) or interlace:
+        raise ValueError(f"{path}: only 8-bit gray/RGB/RGBA non-interlaced PNGs are read")
+    channels = {0: 1, 2: 3, 6: 4}[color]
     raw = zlib.decompress(b"".join(idat))
     stride = width * channels
     rows, previous = [], bytearray(stride)
@@ -81,28 +82,46 @@ def read_png(path):
 
 def background_pixels(run_dir, background):
     """Over the run's frames (render.frames, drawn with `background`): pixels
-    inside the scan render's footprint (scan_frames, alpha > 0) whose color is
-    exactly the background, i.e. where no sample of the model was drawn; and
-    the footprint's size."""
-    shown = footprint = 0
+    whose color is exactly the background, i.e. where no sample of the model
+    was drawn, counted on the scan's sample footprint (the frame's
+    <name>.samples.png of scan_frames, render.splats v3: pixels into which a
+    visible scan point projects; metrics.image's hole pixels) and on the scan
+    render's disk footprint (alpha > 0; metrics.image's splat_hole_px).
+    Returns (shown on samples, sample footprint, shown on disks, disk
+    footprint); the sample figures are None without sample masks."""
+    shown = footprint = disk_shown = disk_footprint = 0
+    masks = True
     frames = os.path.join(run_dir, "frames")
+    with open(os.path.join(run_dir, "scan_frames", "frames.json")) as f:
+        scan_index = {e["file"]: e for e in json.load(f)["frames"]}
     for name in sorted(os.listdir(frames)):
-        if not name.endswith(".png"):
+        if not name.endswith(".png") or name not in scan_index:
             continue
         w, h, ch, rows = read_png(os.path.join(frames, name))
         sw, sh, sch, scan = read_png(os.path.join(run_dir, "scan_frames", name))
         if (w, h) != (sw, sh) or sch != 4:
             raise ValueError(f"{run_dir}: {name}: frame and scan render differ in size or lack alpha")
+        samples = None
+        if "samples" in scan_index[name]:
+            mw, mh, mch, samples = read_png(os.path.join(run_dir, "scan_frames", scan_index[name]["samples"]))
+            if (mw, mh, mch) != (w, h, 1):
+                raise ValueError(f"{run_dir}: {name}: the sample mask is not one gray channel of the frame's size")
+        else:
+            masks = False
         bg = bytes(background)
         for y in range(h):
             row, ref = rows[y], scan[y]
             for x in range(w):
-                if ref[x * 4 + 3] == 0:
-                    continue
-                footprint += 1
-                if row[x * ch:x * ch + 3] == bg:
-                    shown += 1
-    return shown, footprint
+                is_bg = row[x * ch:x * ch + 3] == bg
+                if ref[x * 4 + 3] != 0:
+                    disk_footprint += 1
+                    disk_shown += is_bg
+                if samples is not None and samples[y][x] != 0:
+                    footprint += 1
+                    shown += is_bg
+    if not masks:
+        return None, None, disk_shown, disk_footprint
+    return shown, footprint, disk_shown, disk_footprint
 
 
 def main():
@@ -143,17 +162,28 @@ def main():
             g, s = r["scan_geometry"], r["vs_scan"]
             inv, holes = g["invented_area_fraction"], s["hole_fraction"]
             check(inv is not None and inv < 0.02, f"{scene}/{w}: invented area {100 * inv:.2f} % < 2 %")
+            disk = s.get("splat_hole_fraction")
+            disk_text = f" (on the splats' disks: {100 * disk:.3f} %)" if disk is not None else ""
             check(holes is not None and holes < args.max_holes,
-                  f"{scene}/{w}: hole pixels {100 * holes:.3f} % < {100 * args.max_holes:g} %")
+                  f"{scene}/{w}: hole pixels {100 * holes:.3f} % of the scan's sample footprint < "
+                  f"{100 * args.max_holes:g} %{disk_text}")
         if args.background:
             bg = [int(v) for v in args.background.split(",")]
             for w, r in runs.items():
                 run_dir = os.path.join(args.out_dir, "runs", scene, w)
-                shown, footprint = background_pixels(run_dir, bg)
+                shown, footprint, disk_shown, disk_footprint = background_pixels(run_dir, bg)
+                disk_fraction = disk_shown / disk_footprint if disk_footprint else 0.0
+                disks = (f"on the splats' disks: {100 * disk_fraction:.3f} % of {disk_footprint} px "
+                         f"({disk_shown} px)")
+                if footprint is None:
+                    check(disk_footprint > 0 and disk_fraction <= args.max_background,
+                          f"{scene}/{w}: frames show the background {tuple(bg)} (no sample masks) {disks} "
+                          f"<= {100 * args.max_background:g} %")
+                    continue
                 fraction = shown / footprint if footprint else 0.0
                 check(footprint > 0 and fraction <= args.max_background,
                       f"{scene}/{w}: frames show the background {tuple(bg)} on {100 * fraction:.3f} % of the scan's "
-                      f"footprint ({shown} px) <= {100 * args.max_background:g} %")
+                      f"sample footprint ({shown} of {footprint} px) <= {100 * args.max_background:g} %; {disks}")
         lpm_b = runs["lpm"]["scan_geometry"]["boundary_edges_per_1000_faces"]
         for w in ("remeshing", "point_transfer"):
             b = runs[w]["scan_geometry"]["boundary_edges_per_1000_faces"]

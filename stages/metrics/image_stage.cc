@@ -27,7 +27,7 @@ constexpr const char* kColumns[] = {
     "covered_psnr_db", "covered_ssim_luma", "covered_ssim_rgb", "covered_ms_ssim_luma", "covered_flip_mean",
     "coverage_iou",    "hole_px",           "enclosed_hole_px", "hole_fraction",        "compared_px",
     "nearer_px",       "farther_px",        "nearer_fraction",  "farther_fraction",     "footprint_px",
-    "splat_hole_px",   "splat_hole_fraction"};
+    "splat_hole_px",   "splat_hole_fraction", "silhouette_hole_px"};
 
 // The ppd default is FLIP's own (FlipDefaultPpd(), checked by a test).
 constexpr const char* kSchema = R"({
@@ -149,7 +149,8 @@ Status Run(StageContext& ctx) {
                                                                      : std::nan(""),
                                double(cov.footprint_px),
                                double(cov.splat_hole_px),
-                               cov.splat_hole_fraction};
+                               cov.splat_hole_fraction,
+                               double(cov.silhouette_hole_px)};
       sample_masks += cov.sample_mask ? 1 : 0;
       static_assert(std::size(values) == std::size(kColumns));
       std::vector<TableValue> row = {frame.entry.name};
@@ -235,7 +236,9 @@ StageType ImageMetricsStage() {
       "a visible scan point's center projects, what the scanner has evidence of), else its covered "
       "pixels; `enclosed_hole_px`: those of them inside the tested frame's "
       "own silhouette (its background not connected to the frame's border: background seen through "
-      "the surface); `hole_fraction` = hole_px / footprint_px. `splat_hole_px` / "
+      "the surface); `silhouette_hole_px`: those of the others that touch (8-neighbourhood) a pixel "
+      "the tested frame covers (its outline a pixel short of the footprint, as a low-poly chord "
+      "across a curved silhouette; the rest are missing parts); `hole_fraction` = hole_px / footprint_px. `splat_hole_px` / "
       "`splat_hole_fraction`: the same against all the reference's covered pixels (a splat "
       "reference's disks reach a local spacing past their points, several pixels at a sparse border; "
       "version 3's hole_px). When both frames "
@@ -248,7 +251,7 @@ StageType ImageMetricsStage() {
       "`flip_mean` (whole frame), `covered_psnr_db`, `covered_ssim_luma`, `covered_ssim_rgb`, "
       "`covered_ms_ssim_luma`, `covered_flip_mean`, `coverage_iou`, `hole_px`, `enclosed_hole_px`, "
       "`hole_fraction`, `compared_px`, `nearer_px`, `farther_px`, `nearer_fraction`, "
-      "`farther_fraction`, `footprint_px`, `splat_hole_px`, `splat_hole_fraction`; one row per frame in the order of `frames`, then a row `mean` "
+      "`farther_fraction`, `footprint_px`, `splat_hole_px`, `splat_hole_fraction`, `silhouette_hole_px`; one row per frame in the order of `frames`, then a row `mean` "
       "with the arithmetic mean of each column. Output `flip`: the whole-frame FLIP error map of "
       "every frame, magma color-mapped, same names and files; `flip_covered`: the map of the "
       "covered-pixel comparison.\n\n"

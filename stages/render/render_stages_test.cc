@@ -442,6 +442,7 @@ TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
       if (table["rows"][0][c].is_number()) row[table["columns"][c]] = table["rows"][0][c].get<double>();
     EXPECT_EQ(metrics.counters_.at("sample_mask_frames"), 1);
     EXPECT_DOUBLE_EQ(row["hole_fraction"], row["hole_px"] / row["footprint_px"]);
+    EXPECT_EQ(row["silhouette_hole_px"], 0);  // no outline falls short of the samples
     return {row["hole_px"], row["enclosed_hole_px"], row["splat_hole_px"], row["footprint_px"]};
   };
   // The exact plate: no hole where the scan has samples, though the disks

@@ -365,6 +365,16 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
     if (footprint && !test_covered[i]) {
       ++r.coverage.hole_px;
       r.coverage.enclosed_hole_px += enclosed[i];
+      if (!enclosed[i]) {
+        const int x = int(i % size_t(w)), y = int(i / size_t(w));
+        bool touches = false;
+        for (int dy = -1; dy <= 1 && !touches; ++dy)
+          for (int dx = -1; dx <= 1 && !touches; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            touches = nx >= 0 && ny >= 0 && nx < w && ny < h && test_covered[size_t(ny) * w + nx];
+          }
+        r.coverage.silhouette_hole_px += touches;
+      }
     }
   }
   r.coverage.iou = r.coverage.union_px == 0 ? 1.0 : double(r.coverage.both_px) / double(r.coverage.union_px);

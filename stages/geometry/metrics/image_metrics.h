@@ -117,7 +117,12 @@ Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
 //    shows background, whether at the silhouette or inside it;
 //    `enclosed_hole_px` counts those of them that no 4-connected path of the
 //    test frame's background links to the frame's border: background seen
-//    through the surface inside its own silhouette (a hole in a wall).
+//    through the surface inside its own silhouette (a hole in a wall);
+//    `silhouette_hole_px` those of the others that touch (8-neighbourhood) a
+//    pixel the test frame covers: its outline falls about a pixel short of
+//    the reference's footprint there, as a low-poly chord across a curved
+//    silhouette does (a shortfall of the outline rather than missing
+//    surface; the rest, open holes deeper than a pixel, are missing parts).
 //    hole_fraction = hole_px / footprint_px. The footprint is the reference's
 //    sample mask when one is given (render.splats: the pixels into which a
 //    visible scan point's center projects, the scan's evidence), else its
@@ -157,6 +162,7 @@ struct CoverageStats {
   size_t footprint_px = 0;   // the reference's sample pixels (sample_mask), else reference_px
   size_t hole_px = 0;        // footprint pixels where the test frame is background
   size_t enclosed_hole_px = 0;  // of hole_px, inside the test frame's silhouette
+  size_t silhouette_hole_px = 0;  // of hole_px, not enclosed, touching a pixel the test frame covers
   double hole_fraction = 0;     // hole_px / footprint_px (0 without footprint)
   size_t splat_hole_px = 0;     // reference covered, test background
   double splat_hole_fraction = 0;  // splat_hole_px / reference_px (0 without reference coverage)

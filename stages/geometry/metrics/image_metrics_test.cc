@@ -285,6 +285,7 @@ TEST(CoveredTest, CountsHolePixelsExactly) {
   EXPECT_EQ(r->coverage.reference_px, 64u * 64u);
   EXPECT_EQ(r->coverage.hole_px, 35u + 3u * 64u);
   EXPECT_EQ(r->coverage.enclosed_hole_px, 35u);
+  EXPECT_EQ(r->coverage.silhouette_hole_px, 64u);  // the strip's column next to the covered pixels
   EXPECT_DOUBLE_EQ(r->coverage.hole_fraction, (35.0 + 192.0) / 4096.0);
   EXPECT_DOUBLE_EQ(r->coverage.iou, (4096.0 - 227.0) / 4096.0);
   // The same texture where both are covered.
@@ -318,6 +319,7 @@ TEST(CoveredTest, HolesCountOnTheSampleMaskWhenGiven) {
   EXPECT_EQ(r->coverage.footprint_px, sample_px);
   EXPECT_EQ(r->coverage.hole_px, 16u);
   EXPECT_EQ(r->coverage.enclosed_hole_px, 16u);
+  EXPECT_EQ(r->coverage.silhouette_hole_px, 0u);
   EXPECT_DOUBLE_EQ(r->coverage.hole_fraction, 16.0 / double(sample_px));
   // The disks' count: the hole and the ring between radius 16 and 20.
   EXPECT_EQ(r->coverage.splat_hole_px, r->coverage.reference_px - (sample_px - 16));
