@@ -389,20 +389,26 @@ Mesh Plate(bool hole) {
 }
 
 TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
-  // The reference: the quad's 5 cm grid of points, plus two sparse rows above
-  // it (z = 1.3 and 1.6, every 30 cm) whose spacing is inflated, drawn as
-  // large camera-facing disks (orient false, radius 2 spacings) that reach
-  // past the plate (the sparse rows' disks, capped at 4 median spacings,
-  // 0.35 m: 3.9 px; the grid's 0.09 m past x = +-1 and z = -1, the plate
-  // ending 0.05 m out).
-  PointCloud cloud = QuadPoints();
-  for (const float z : {1.3f, 1.6f})
+  // The reference: a 2.5 cm grid of points where the quad is, plus two
+  // sparse rows above it (z = 1.3 and 1.5, every 30 cm) whose spacing is
+  // inflated, drawn as large camera-facing disks (orient false, radius 3
+  // spacings, capped at 8 median spacings: 0.53 m, 6 px, for the sparse
+  // rows) that reach past the plate all around (the grid's by 0.07 m past
+  // x = +-1 and z = -1, the plate ending 0.05 m out).
+  PointCloud cloud;
+  cloud.origin = {300000.0, 5000000.0, 100.0};
+  for (int j = 0; j <= 80; ++j)
+    for (int i = 0; i <= 80; ++i) {
+      cloud.positions.insert(cloud.positions.end(), {-1.0f + 0.025f * i, 5.0f, -1.0f + 0.025f * j});
+      cloud.colors.insert(cloud.colors.end(), {uint8_t(i * 3), 90, uint8_t(j * 3)});
+    }
+  for (const float z : {1.3f, 1.5f})
     for (int i = 0; i < 7; ++i) {
       cloud.positions.insert(cloud.positions.end(), {-0.9f + 0.3f * float(i), 5.0f, z});
       cloud.colors.insert(cloud.colors.end(), {200, 200, 200});
     }
   nlohmann::json splat_params = {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"orient", false},
-                                 {"radius_scale", 2.0}};
+                                 {"radius_scale", 3.0}, {"max_radius_spacings", 8.0}};
   std::filesystem::create_directories(dir_ / "scan");
   FakeContext scan(dir_ / "scan", splat_params);
   scan.AddInput("points", "points", WriteInputPoints("cloud", cloud));
@@ -411,12 +417,16 @@ TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
   ASSERT_EQ(scan_frames.frames[0].entry.samples_file, "front.samples.png");
   const Image& samples = scan_frames.frames[0].samples;
   ASSERT_EQ(samples.width, 64);
-  // Every pixel of the grid's square (x, z = -1 .. 1 project to 20.9 .. 43.1
-  // px: 24 x 24 pixels) holds a sample (0.55 px apart), the sparse rows one
-  // pixel each; none of the background does.
+  // A point counts where it falls in the middle half of its pixel (per axis:
+  // the hull of the 2 x 2 sample centers). The grid (x, z = -1 .. 1 project
+  // to 20.9 .. 43.1 px, 0.28 px apart) puts one there in pixels 21 .. 42 of
+  // each axis; of the sparse rows (at 15.4 and 17.6 px) the points at x =
+  // -0.6, -0.3, 0.3 and 0.6 (25.3, 28.7, 35.3, 38.7 px) do; the background
+  // holds none.
   EXPECT_EQ(samples.at_u8(32, 32, 0), 255);
+  EXPECT_EQ(samples.at_u8(20, 32, 0), 0);
   EXPECT_EQ(samples.at_u8(2, 2, 0), 0);
-  EXPECT_EQ(scan.counters_.at("sample_pixels"), 24 * 24 + 14);
+  EXPECT_EQ(scan.counters_.at("sample_pixels"), 22 * 22 + 2 * 4);
 
   auto artifact = [](const FakeContext& ctx) {
     std::map<std::string, std::string> files;
@@ -446,18 +456,19 @@ TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
     return {row["hole_px"], row["enclosed_hole_px"], row["splat_hole_px"], row["footprint_px"]};
   };
   // The exact plate: no hole where the scan has samples, though the disks
-  // reach past it by up to 3 px all around.
+  // reach past it all around.
   const std::array<double, 4> exact = holes(Plate(false), "exact");
   EXPECT_EQ(exact[0], 0);
   EXPECT_GT(exact[2], 40);
-  EXPECT_EQ(exact[3], 24 * 24 + 14);
-  // The plate with a 0.6 m hole (6.6 px) inside the grid: every pixel of it
-  // holds samples, so it counts whole, enclosed by the model.
+  EXPECT_EQ(exact[3], 22 * 22 + 2 * 4);
+  // The plate with a 0.6 m hole inside the grid (x, z = -0.3 .. 0.3: 28.7 ..
+  // 35.3 px, so pixels 29 .. 34 show background): each of its 36 pixels
+  // holds a sample, so it counts whole, enclosed by the model; the disks'
+  // count grows by the same.
   const std::array<double, 4> open = holes(Plate(true), "open");
-  EXPECT_GE(open[0], 36);
-  EXPECT_LE(open[0], 49);
-  EXPECT_EQ(open[1], open[0]);
-  EXPECT_EQ(open[2], exact[2] + open[0]);
+  EXPECT_EQ(open[0], 36);
+  EXPECT_EQ(open[1], 36);
+  EXPECT_EQ(open[2], exact[2] + 36);
 }
 
 }  // namespace

@@ -363,13 +363,17 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
   size_t sample_pixels = 0;
   if (samples) {
     // One pass over the points in index order (each writes 255 or nothing,
-    // so the mask does not depend on the order anyway).
+    // so the mask does not depend on the order anyway). A point counts only
+    // inside the hull of its pixel's sample centers (ss >= 2): see splat.h.
     *samples = Image::Make(size, size, 1, Image::PixelType::kU8);
     uint8_t* mask = samples->u8();
+    const double lo = ss >= 2 ? 0.5 : 0.0, hi = ss >= 2 ? ss - 0.5 : double(ss);
     for (size_t i = 0; i < n; ++i) {
       const ScreenSplat& s = splats[i];
       if (!(s.depth > 0)) continue;  // behind the near plane, or no valid radius
       if (!(s.x >= 0 && s.y >= 0 && s.x < cam.samples && s.y < cam.samples)) continue;
+      const double fx = s.x - std::floor(s.x / ss) * ss, fy = s.y - std::floor(s.y / ss) * ss;
+      if (!(fx >= lo && fx <= hi && fy >= lo && fy <= hi)) continue;
       const int sx = int(s.x), sy = int(s.y);
       if (!(double(s.depth) <= visible_limit[size_t(sy) * cam.samples + sx])) continue;
       uint8_t& m = mask[size_t(sy / ss) * size + size_t(sx / ss)];

@@ -108,7 +108,16 @@ struct SplatShapes {
 // at most the front depth of the sample its center falls in + depth_tolerance
 // x the front splat's radius, the rule by which splats blend (a point whose
 // own disk does not cover that sample, e.g. seen edge-on, and that no other
-// splat covers, is visible). Counted in `stats->sample_pixels`.
+// splat covers, is visible). With supersample >= 2 a point counts only when
+// its center falls inside the hull of its pixel's sample centers (the middle
+// (s - 1) / s of the pixel per axis): a frame of the same sample grid whose
+// surface reaches the point (its outline, locally a line, through the point
+// or beyond it) then covers at least one of those samples, so the pixel
+// never reads as background by the quantization of an outline that passes
+// the point in the pixel's outer margin (a quarter of the pixels an exact
+// model's outline crosses would otherwise count as holes). The mask thereby
+// samples the evidence (1 - 1/s)^2 of it: uniformly, so fractions measured
+// on it are unbiased. Counted in `stats->sample_pixels`.
 Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
                              const RenderCamera& camera, const SplatOptions& options,
                              SplatStats* stats = nullptr, Image* depth_m = nullptr, Image* samples = nullptr);
