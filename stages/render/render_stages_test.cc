@@ -294,7 +294,11 @@ TEST_F(RenderStagesTest, SplatsWriteTheSameFramesAsRenderFramesWouldNameThem) {
   ASSERT_EQ(one.frames.size(), 2u);
   EXPECT_EQ(one.frames[0].entry.name, "front");
   EXPECT_EQ(one.frames[1].entry.file, "view2.png");
-  for (size_t i = 0; i < one.frames.size(); ++i) EXPECT_EQ(one.frames[i].image.data, two.frames[i].image.data);
+  for (size_t i = 0; i < one.frames.size(); ++i) {
+    EXPECT_EQ(one.frames[i].image.data, two.frames[i].image.data);
+    ASSERT_EQ(one.frames[i].samples.width, 32);  // the sample masks too
+    EXPECT_EQ(one.frames[i].samples.data, two.frames[i].samples.data);
+  }
   // Where render.frames draws the quad, the splats cover the same middle.
   const Image& front = one.frames[0].image;
   EXPECT_EQ(front.at_u8(16, 16, 3), 255);
