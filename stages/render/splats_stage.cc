@@ -38,7 +38,7 @@ constexpr const char* kSchema = R"({
     "samples": {
       "type": "boolean",
       "default": true,
-      "description": "Also write each frame's sample mask (<frame>.samples.png, 8-bit gray: 255 in the pixels into which the center of a scan point projects that no nearer splat hides, by the same depth tolerance as the blending; 0 elsewhere): the pixels the scan has evidence of, on which metrics.image counts hole pixels, as against the pixels the disks interpolate (a disk reaches a local spacing around its point, more at a sparse border or corner)."
+      "description": "Also write each frame's sample mask (<frame>.samples.png, 8-bit gray: 255 in the pixels into which the center of a scan point projects that no nearer splat hides, by the same depth tolerance as the blending, counted with supersample >= 2 only inside the hull of the pixel's sample centers, so that a frame whose surface reaches the point covers a sample of that pixel; 0 elsewhere): the pixels the scan has evidence of, on which metrics.image counts hole pixels, as against the pixels the disks interpolate (a disk reaches a local spacing around its point, more at a sparse border or corner)."
     },
     "size": {
       "type": "integer",
@@ -316,8 +316,8 @@ StageType SplatsStage() {
       "files as render.frames with the same viewpoints, so metrics.image compares them; with "
       "`depth`, also <name>.depth.exr (the front splats' view depth in meters, 0 on background); with "
       "`samples` (default), also <name>.samples.png (8-bit gray, 255 where the center of a point no "
-      "nearer splat hides projects into the pixel: the pixels the scan has evidence of; metrics.image "
-      "counts hole pixels on them).\n\n"
+      "nearer splat hides projects into the pixel, inside the hull of the pixel's sample centers: the "
+      "pixels the scan has evidence of; metrics.image counts hole pixels on them).\n\n"
       "Counters: `frames`, `points`, `splats_drawn` (over all frames), `radii_capped`, `border_points`, "
       "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`). "
       "Phases: `io`, `spacing`, `surfels`, `compute`.";
