@@ -60,8 +60,8 @@
 //                     the frames
 //     vs_scan.json    metrics.image (v2) of the unlit frames against
 //                     scan_frames: the covered_* columns, coverage_iou,
-//                     hole_fraction, nearer_fraction, farther_fraction of
-//                     row "mean"
+//                     hole_fraction, nearer_fraction, farther_fraction,
+//                     splat_hole_fraction of row "mean"
 //     flip_scan/      its covered-pixel FLIP maps (shown for scenes without
 //                     ground truth, instead of flip_hpm)
 //     geometry.json   metrics.geometry (v2) with the scan: beyond_fraction of
@@ -89,7 +89,7 @@
 //                  ms_ssim_luma, flip_mean}, vs_truth: {...}, vs_scan:
 //                  {covered_psnr_db, covered_ssim_luma, covered_flip_mean,
 //                  coverage_iou, hole_fraction, nearer_fraction,
-//                  farther_fraction}, scan_geometry:
+//                  farther_fraction, splat_hole_fraction}, scan_geometry:
 //                  {invented_area_fraction, missing_fraction,
 //                  boundary_edges_per_1000_faces}, warnings:
 //                  [{stage, warning}] (the stages' warnings from run.json,

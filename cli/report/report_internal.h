@@ -46,15 +46,15 @@ constexpr std::array<const char*, kQualityCount> kQualityTitles = {"PSNR dB", "S
 // Against the scan (issue 15): the covered-pixel figures of the metrics.image
 // table vs_scan.json (the first kScanImageCount) and the truth-free geometry
 // figures of geometry.json (the rest), with their titles.
-constexpr int kScanCount = 10;
-constexpr int kScanImageCount = 7;
+constexpr int kScanCount = 11;
+constexpr int kScanImageCount = 8;
 constexpr std::array<const char*, kScanCount> kScanColumns = {
     "covered_psnr_db",        "covered_ssim_luma", "covered_flip_mean",
     "coverage_iou",           "hole_fraction",     "nearer_fraction",
-    "farther_fraction",       "invented_area_fraction", "missing_fraction",
+    "farther_fraction",       "splat_hole_fraction", "invented_area_fraction", "missing_fraction",
     "boundary_edges_per_1000_faces"};
 constexpr std::array<const char*, kScanCount> kScanTitles = {
-    "PSNR dB", "SSIM luma", "FLIP", "Coverage IoU", "Holes %", "In front %", "Behind %",
+    "PSNR dB", "SSIM luma", "FLIP", "Coverage IoU", "Holes %", "In front %", "Behind %", "Disk holes %",
     "Invented area %", "Missing scan %", "Boundary edges / 1000 faces"};
 
 // One run of the campaign: its manifest entry and the figures read from its

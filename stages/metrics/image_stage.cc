@@ -26,7 +26,8 @@ constexpr const char* kColumns[] = {
     "psnr_db",         "ssim_luma",         "ssim_rgb",         "ms_ssim_luma",         "flip_mean",
     "covered_psnr_db", "covered_ssim_luma", "covered_ssim_rgb", "covered_ms_ssim_luma", "covered_flip_mean",
     "coverage_iou",    "hole_px",           "enclosed_hole_px", "hole_fraction",        "compared_px",
-    "nearer_px",       "farther_px",        "nearer_fraction",  "farther_fraction"};
+    "nearer_px",       "farther_px",        "nearer_fraction",  "farther_fraction",     "footprint_px",
+    "splat_hole_px",   "splat_hole_fraction", "silhouette_hole_px"};
 
 // The ppd default is FLIP's own (FlipDefaultPpd(), checked by a test).
 constexpr const char* kSchema = R"({
@@ -102,6 +103,7 @@ Status Run(StageContext& ctx) {
   maps.width = covered_maps.width = test.width;
   maps.height = covered_maps.height = test.height;
   std::vector<double> sums(std::size(kColumns), 0.0);
+  size_t sample_masks = 0;  // frames whose holes were counted on the reference's sample mask
   {
     PB_PHASE(ctx, "compute");
     tbb::task_arena arena(std::max(1, ctx.threads()));
@@ -119,7 +121,7 @@ Status Run(StageContext& ctx) {
         m = CompareImages(ref.image, frame.image, options, &flip);
         if (m.ok())
           c = CompareCovered(ref.image, frame.image, options, &covered_flip, depth ? &ref.depth : nullptr,
-                             depth ? &frame.depth : nullptr);
+                             depth ? &frame.depth : nullptr, ref.samples.width > 0 ? &ref.samples : nullptr);
       });
       if (!m.ok()) return m.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
       if (!c.ok()) return c.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
@@ -144,7 +146,12 @@ Status Run(StageContext& ctx) {
                                cov.depth_checked && cov.reference_px ? double(cov.nearer_px) / double(cov.reference_px)
                                                                      : std::nan(""),
                                cov.depth_checked && cov.reference_px ? double(cov.farther_px) / double(cov.reference_px)
-                                                                     : std::nan("")};
+                                                                     : std::nan(""),
+                               double(cov.footprint_px),
+                               double(cov.splat_hole_px),
+                               cov.splat_hole_fraction,
+                               double(cov.silhouette_hole_px)};
+      sample_masks += cov.sample_mask ? 1 : 0;
       static_assert(std::size(values) == std::size(kColumns));
       std::vector<TableValue> row = {frame.entry.name};
       for (size_t k = 0; k < std::size(values); ++k) {
@@ -154,6 +161,7 @@ Status Run(StageContext& ctx) {
       table.rows.push_back(std::move(row));
       FrameEntry map_entry = frame.entry;
       map_entry.depth_file.clear();  // the maps are pictures of errors, without depth
+      map_entry.samples_file.clear();
       maps.frames.push_back(Frame{map_entry, FlipErrorColorMap(flip), {}});
       covered_maps.frames.push_back(Frame{map_entry, FlipErrorColorMap(covered_flip), {}});
       ctx.progress(0.1 + 0.8 * double(i + 1) / double(test.frames.size()));
@@ -166,6 +174,7 @@ Status Run(StageContext& ctx) {
 
   ctx.counter("frames", n);
   ctx.counter("pixels_per_frame", double(test.width) * double(test.height));
+  ctx.counter("sample_mask_frames", double(sample_masks));
   // An identical frame makes the mean PSNR infinite (and a frame with no
   // pixel covered in both makes the covered means NaN); the run record holds
   // finite numbers only, so such counters are left out.
@@ -181,7 +190,12 @@ Status Run(StageContext& ctx) {
       return ctx.output_path("flip_covered", file);
     }));
   }
-  ctx.set_output_meta("table", {{"kind", "image_metrics"}, {"ppd", ppd}, {"frames", n}});
+  ctx.set_output_meta("table", {{"kind", "image_metrics"},
+                                {"ppd", ppd},
+                                {"frames", n},
+                                {"hole_footprint", sample_masks == test.frames.size() ? "samples"
+                                                   : sample_masks == 0              ? "covered"
+                                                                                    : "mixed"}});
   nlohmann::json flip_meta = ctx.input("frames").meta;
   if (!flip_meta.is_object()) flip_meta = nlohmann::json::object();
   flip_meta["kind"] = "flip_error_maps";
@@ -198,7 +212,7 @@ Status Run(StageContext& ctx) {
 StageType ImageMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;
+  type.version = 4;  // 4: hole pixels on the reference's sample mask; splat_hole_* the old count
   type.summary = "Image quality of rendered frames against reference frames: PSNR, SSIM, MS-SSIM, FLIP";
   type.doc =
       "Compares every frame of `frames` with the frame of the same name in `reference` (a frame "
@@ -216,10 +230,18 @@ StageType ImageMetricsStage() {
       "4 neighbours are too (supersampled edge pixels blend with the background); PSNR is their MSE; "
       "for SSIM, MS-SSIM and FLIP the tested frame takes the reference's pixels outside them, the "
       "maps are computed on the full frame and averaged over them only (null when there are none). "
-      "`coverage_iou`: covered in both / covered in either. `hole_px`: covered in the reference, "
-      "background in the tested frame; `enclosed_hole_px`: those of them inside the tested frame's "
+      "`coverage_iou`: covered in both / covered in either. `hole_px`: pixels of the reference's "
+      "footprint where the tested frame shows background; the footprint (`footprint_px`) is the "
+      "reference frame's sample mask when it has one (render.splats `samples`: the pixels into which "
+      "a visible scan point's center projects, what the scanner has evidence of), else its covered "
+      "pixels; `enclosed_hole_px`: those of them inside the tested frame's "
       "own silhouette (its background not connected to the frame's border: background seen through "
-      "the surface); `hole_fraction` = hole_px / the reference's covered pixels. When both frames "
+      "the surface); `silhouette_hole_px`: those of the others that touch (8-neighbourhood) a pixel "
+      "the tested frame covers (its outline a pixel short of the footprint, as a low-poly chord "
+      "across a curved silhouette; the rest are missing parts); `hole_fraction` = hole_px / footprint_px. `splat_hole_px` / "
+      "`splat_hole_fraction`: the same against all the reference's covered pixels (a splat "
+      "reference's disks reach a local spacing past their points, several pixels at a sparse border; "
+      "version 3's hole_px). When both frames "
       "carry depth maps, `nearer_px` / `farther_px` count the pixels covered in both where the "
       "tested surface lies in front of / behind the reference's by more than `depth_tolerance` x "
       "its depth (invented surface in front; missing surface seen through); they are geometry, "
@@ -229,11 +251,12 @@ StageType ImageMetricsStage() {
       "`flip_mean` (whole frame), `covered_psnr_db`, `covered_ssim_luma`, `covered_ssim_rgb`, "
       "`covered_ms_ssim_luma`, `covered_flip_mean`, `coverage_iou`, `hole_px`, `enclosed_hole_px`, "
       "`hole_fraction`, `compared_px`, `nearer_px`, `farther_px`, `nearer_fraction`, "
-      "`farther_fraction`; one row per frame in the order of `frames`, then a row `mean` "
+      "`farther_fraction`, `footprint_px`, `splat_hole_px`, `splat_hole_fraction`, `silhouette_hole_px`; one row per frame in the order of `frames`, then a row `mean` "
       "with the arithmetic mean of each column. Output `flip`: the whole-frame FLIP error map of "
       "every frame, magma color-mapped, same names and files; `flip_covered`: the map of the "
       "covered-pixel comparison.\n\n"
-      "Counters: `frames`, `pixels_per_frame`, and the mean of every column (left out when not "
+      "Counters: `frames`, `pixels_per_frame`, `sample_mask_frames` (frames whose holes were counted "
+      "on the reference's sample mask), and the mean of every column (left out when not "
       "finite: identical frames give an infinite PSNR). Phases: `io`, `compute`.";
   type.params_schema = kSchema;
   type.inputs = {{"frames", "frames", "The frames to evaluate (frames.json + PNGs).", false},

@@ -88,6 +88,34 @@ TEST_F(FramesTest, DepthMapsRoundTripAndBadDepthFilesAreNamed) {
   EXPECT_NE(missing.status().message().find("door.depth.exr"), std::string::npos) << missing.status().message();
 }
 
+TEST_F(FramesTest, SampleMasksRoundTripAndBadSampleFilesAreNamed) {
+  FrameSet set = MakeSet(24, 16, {{"door", 0}});
+  set.frames[0].entry.samples_file = "door.samples.png";
+  set.frames[0].samples = Image::Make(24, 16, 1, Image::PixelType::kU8);
+  for (int y = 0; y < 16; ++y)
+    for (int x = 0; x < 24; ++x) set.frames[0].samples.at_u8(x, y, 0) = (x + y) % 3 ? 0 : 255;
+  ASSERT_TRUE(WriteFrames(dir_.string(), set).ok());
+  Expected<FrameSet> read = ReadFrames(Path("frames.json"));
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->frames[0].entry.samples_file, "door.samples.png");
+  EXPECT_EQ(read->frames[0].samples.data, set.frames[0].samples.data);
+  // Named like the image, not .png, or without its mask.
+  FrameSet bad = set;
+  bad.frames[0].entry.samples_file = "door.png";
+  EXPECT_FALSE(WriteFrames(Path("bad1"), bad).ok());
+  bad.frames[0].entry.samples_file = "door.samples.exr";
+  Status named = Validate(FramesIndex{24, 16, {bad.frames[0].entry}});
+  EXPECT_NE(named.message().find("samples file"), std::string::npos) << named.message();
+  bad.frames[0].entry.samples_file = "m.png";
+  bad.frames[0].samples = Image();
+  std::filesystem::create_directories(Path("bad3"));
+  EXPECT_FALSE(WriteFrames(Path("bad3"), bad).ok());
+  std::filesystem::remove(Path("door.samples.png"));
+  Expected<FrameSet> missing = ReadFrames(Path("frames.json"));
+  ASSERT_FALSE(missing.ok());
+  EXPECT_NE(missing.status().message().find("door.samples.png"), std::string::npos) << missing.status().message();
+}
+
 TEST_F(FramesTest, ClearErrors) {
   ASSERT_TRUE(WriteFrames(dir_.string(), MakeSet(24, 16, {{"a", 0}, {"b", 1}})).ok());
   // Missing image.
@@ -236,7 +264,7 @@ TEST_F(ImageStageTest, SchemaDefaultPpdIsFlipDefault) {
   ASSERT_EQ(type->outputs.size(), 3u);
   EXPECT_EQ(type->outputs[1].type, "frames");
   EXPECT_EQ(type->outputs[2].name, "flip_covered");
-  EXPECT_EQ(type->version, 3);
+  EXPECT_EQ(type->version, 4);
 }
 
 TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {

@@ -294,7 +294,11 @@ TEST_F(RenderStagesTest, SplatsWriteTheSameFramesAsRenderFramesWouldNameThem) {
   ASSERT_EQ(one.frames.size(), 2u);
   EXPECT_EQ(one.frames[0].entry.name, "front");
   EXPECT_EQ(one.frames[1].entry.file, "view2.png");
-  for (size_t i = 0; i < one.frames.size(); ++i) EXPECT_EQ(one.frames[i].image.data, two.frames[i].image.data);
+  for (size_t i = 0; i < one.frames.size(); ++i) {
+    EXPECT_EQ(one.frames[i].image.data, two.frames[i].image.data);
+    ASSERT_EQ(one.frames[i].samples.width, 32);  // the sample masks too
+    EXPECT_EQ(one.frames[i].samples.data, two.frames[i].samples.data);
+  }
   // Where render.frames draws the quad, the splats cover the same middle.
   const Image& front = one.frames[0].image;
   EXPECT_EQ(front.at_u8(16, 16, 3), 255);
@@ -364,6 +368,111 @@ TEST_F(RenderStagesTest, DepthMapsOfMeshAndSplatsAgreeOnTheSameSurface) {
   ASSERT_TRUE(Run("render.frames", plain).ok());
   EXPECT_TRUE(Frames(plain)->frames[0].entry.depth_file.empty());
   EXPECT_EQ(plain.files_.count("frames/front.depth.exr"), 0u);
+}
+
+// A plate in the plane y = 5 facing -y (the quad's), x in [-1.05, 1.05] and z
+// in [-1.05, 1.65], cut into a 3 x 3 grid of cells at x, z = +-0.3; `hole`
+// leaves the middle cell (0.6 x 0.6 m) out.
+Mesh Plate(bool hole) {
+  Mesh mesh;
+  mesh.origin = {300000.0, 5000000.0, 100.0};
+  const float xs[4] = {-1.05f, -0.3f, 0.3f, 1.05f}, zs[4] = {-1.05f, -0.3f, 0.3f, 1.65f};
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) {
+      mesh.positions.insert(mesh.positions.end(), {xs[i], 5.0f, zs[j]});
+      mesh.uvs.insert(mesh.uvs.end(), {(xs[i] + 1.05f) / 2.1f, (zs[j] + 1.05f) / 2.7f});
+    }
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 3; ++i) {
+      if (hole && i == 1 && j == 1) continue;
+      const uint32_t a = uint32_t(j * 4 + i), b = a + 1, c = a + 5, d = a + 4;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+    }
+  mesh.normals = ComputeVertexNormals(mesh);
+  return mesh;
+}
+
+TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
+  // The reference: a 2.5 cm grid of points where the quad is, plus two
+  // sparse rows above it (z = 1.3 and 1.5, every 30 cm) whose spacing is
+  // inflated, drawn as large camera-facing disks (orient false, radius 3
+  // spacings, capped at 8 median spacings: 0.53 m, 6 px, for the sparse
+  // rows) that reach past the plate all around (the grid's by 0.07 m past
+  // x = +-1 and z = -1, the plate ending 0.05 m out).
+  PointCloud cloud;
+  cloud.origin = {300000.0, 5000000.0, 100.0};
+  for (int j = 0; j <= 80; ++j)
+    for (int i = 0; i <= 80; ++i) {
+      cloud.positions.insert(cloud.positions.end(), {-1.0f + 0.025f * i, 5.0f, -1.0f + 0.025f * j});
+      cloud.colors.insert(cloud.colors.end(), {uint8_t(i * 3), 90, uint8_t(j * 3)});
+    }
+  for (const float z : {1.3f, 1.5f})
+    for (int i = 0; i < 7; ++i) {
+      cloud.positions.insert(cloud.positions.end(), {-0.9f + 0.3f * float(i), 5.0f, z});
+      cloud.colors.insert(cloud.colors.end(), {200, 200, 200});
+    }
+  nlohmann::json splat_params = {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"orient", false},
+                                 {"radius_scale", 3.0}, {"max_radius_spacings", 8.0}};
+  std::filesystem::create_directories(dir_ / "scan");
+  FakeContext scan(dir_ / "scan", splat_params);
+  scan.AddInput("points", "points", WriteInputPoints("cloud", cloud));
+  ASSERT_TRUE(Run("render.splats", scan).ok());
+  const FrameSet scan_frames = Frames(scan).value();
+  ASSERT_EQ(scan_frames.frames[0].entry.samples_file, "front.samples.png");
+  const Image& samples = scan_frames.frames[0].samples;
+  ASSERT_EQ(samples.width, 64);
+  // A point counts where it falls in the middle half of its pixel (per axis:
+  // the hull of the 2 x 2 sample centers). The grid (x, z = -1 .. 1 project
+  // to 20.9 .. 43.1 px, 0.28 px apart) puts one there in pixels 21 .. 42 of
+  // each axis; of the sparse rows (at 15.4 and 17.6 px) the points at x =
+  // -0.6, -0.3, 0.3 and 0.6 (25.3, 28.7, 35.3, 38.7 px) do; the background
+  // holds none.
+  EXPECT_EQ(samples.at_u8(32, 32, 0), 255);
+  EXPECT_EQ(samples.at_u8(20, 32, 0), 0);
+  EXPECT_EQ(samples.at_u8(2, 2, 0), 0);
+  EXPECT_EQ(scan.counters_.at("sample_pixels"), 22 * 22 + 2 * 4);
+
+  auto artifact = [](const FakeContext& ctx) {
+    std::map<std::string, std::string> files;
+    for (const auto& [key, path] : ctx.files_)
+      if (key.rfind("frames/", 0) == 0) files[key.substr(7)] = path;
+    return files;
+  };
+  // Holes of `model` against the scan: {hole_px, enclosed_hole_px, splat_hole_px, footprint_px}.
+  auto holes = [&](const Mesh& model, const std::string& out) -> std::array<double, 4> {
+    std::filesystem::create_directories(dir_ / out);
+    FakeContext render(dir_ / out, {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"lighting", "unlit"}});
+    render.AddInput("mesh", "mesh", WriteInputMesh(out, model));
+    EXPECT_TRUE(Run("render.frames", render).ok());
+    std::filesystem::create_directories(dir_ / (out + "_metrics"));
+    FakeContext metrics(dir_ / (out + "_metrics"), nlohmann::json::object());
+    metrics.AddInput("frames", "frames", artifact(render));
+    metrics.AddInput("reference", "frames", artifact(scan));
+    const Status status = Run("metrics.image", metrics);
+    EXPECT_TRUE(status.ok()) << status.message();
+    const nlohmann::json table = nlohmann::json::parse(std::ifstream(metrics.outputs_.at("table")));
+    std::map<std::string, double> row;
+    for (size_t c = 0; c < table["columns"].size(); ++c)
+      if (table["rows"][0][c].is_number()) row[table["columns"][c]] = table["rows"][0][c].get<double>();
+    EXPECT_EQ(metrics.counters_.at("sample_mask_frames"), 1);
+    EXPECT_DOUBLE_EQ(row["hole_fraction"], row["hole_px"] / row["footprint_px"]);
+    EXPECT_EQ(row["silhouette_hole_px"], 0);  // no outline falls short of the samples
+    return {row["hole_px"], row["enclosed_hole_px"], row["splat_hole_px"], row["footprint_px"]};
+  };
+  // The exact plate: no hole where the scan has samples, though the disks
+  // reach past it all around.
+  const std::array<double, 4> exact = holes(Plate(false), "exact");
+  EXPECT_EQ(exact[0], 0);
+  EXPECT_GT(exact[2], 40);
+  EXPECT_EQ(exact[3], 22 * 22 + 2 * 4);
+  // The plate with a 0.6 m hole inside the grid (x, z = -0.3 .. 0.3: 28.7 ..
+  // 35.3 px, so pixels 29 .. 34 show background): each of its 36 pixels
+  // holds a sample, so it counts whole, enclosed by the model; the disks'
+  // count grows by the same.
+  const std::array<double, 4> open = holes(Plate(true), "open");
+  EXPECT_EQ(open[0], 36);
+  EXPECT_EQ(open[1], 36);
+  EXPECT_EQ(open[2], exact[2] + 36);
 }
 
 }  // namespace

@@ -35,6 +35,11 @@ constexpr const char* kSchema = R"({
       "default": false,
       "description": "Also write each frame's depth map (<frame>.depth.exr: per pixel the view depth in meters of the nearest surface hit, 0 where none), so metrics.image can tell a surface in front of or behind the reference's apart from a texture difference."
     },
+    "samples": {
+      "type": "boolean",
+      "default": true,
+      "description": "Also write each frame's sample mask (<frame>.samples.png, 8-bit gray: 255 in the pixels into which the center of a scan point projects that no nearer splat hides, by the same depth tolerance as the blending, counted with supersample >= 2 only inside the hull of the pixel's sample centers, so that a frame whose surface reaches the point covers a sample of that pixel; 0 elsewhere): the pixels the scan has evidence of, on which metrics.image counts hole pixels, as against the pixels the disks interpolate (a disk reaches a local spacing around its point, more at a sparse border or corner)."
+    },
     "size": {
       "type": "integer",
       "minimum": 16,
@@ -123,6 +128,7 @@ constexpr const char* kSchema = R"({
 struct Options {
   SplatOptions splat;
   bool depth = false;
+  bool samples = true;
   bool orient = true;
   bool clip_border = true;
   int surfel_k = 16;
@@ -140,6 +146,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t supersample, IntegerParam(ctx, kId, "supersample", {1, 8}));
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 64}));
   PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth"));
+  PB_ASSIGN_OR_RETURN(options.samples, BoolParam(ctx, kId, "samples"));
   PB_ASSIGN_OR_RETURN(options.orient, BoolParam(ctx, kId, "orient"));
   PB_ASSIGN_OR_RETURN(options.clip_border, BoolParam(ctx, kId, "clip_border"));
   PB_ASSIGN_OR_RETURN(const int64_t surfel_k, IntegerParam(ctx, kId, "surfel_k", {3, 64}));
@@ -226,23 +233,26 @@ Status Run(StageContext& ctx) {
 
   FrameSet frames;
   frames.width = frames.height = options.size;
-  size_t covered_samples = 0, drawn = 0;
+  size_t covered_samples = 0, drawn = 0, sample_pixels = 0;
   {
     PB_PHASE(ctx, "compute");
     for (size_t i = 0; i < views.size(); ++i) {
       Expected<Image> image = Status::Internal("not run");
       SplatStats stats;
-      Image depth;
+      Image depth, samples;
       arena.execute([&] {
-        image = RenderSplats(cloud, shapes, views[i].camera, options.splat, &stats, options.depth ? &depth : nullptr);
+        image = RenderSplats(cloud, shapes, views[i].camera, options.splat, &stats, options.depth ? &depth : nullptr,
+                             options.samples ? &samples : nullptr);
       });
       if (!image.ok())
         return image.status().WithContext(std::string(kId) + ": viewpoint '" + views[i].entry.name + "'");
       covered_samples += stats.covered_samples;
       drawn += stats.drawn;
+      sample_pixels += stats.sample_pixels;
       FrameEntry entry = views[i].entry;
       if (options.depth) entry.depth_file = DepthFileName(entry.file);
-      frames.frames.push_back(Frame{std::move(entry), std::move(*image), std::move(depth)});
+      if (options.samples) entry.samples_file = SamplesFileName(entry.file);
+      frames.frames.push_back(Frame{std::move(entry), std::move(*image), std::move(depth), std::move(samples)});
       ctx.progress(0.35 + 0.55 * double(i + 1) / double(views.size()));
     }
   }
@@ -265,6 +275,7 @@ Status Run(StageContext& ctx) {
                     {"border_points", surfels.border_points},
                     {"median_radius_m", median_radius_m},
                     {"coverage", covered_samples / (pixels * ss * ss)}};
+  if (options.samples) meta["render"]["sample_coverage"] = double(sample_pixels) / pixels;
   ctx.set_output_meta("frames", std::move(meta));
   ctx.counter("frames", double(views.size()));
   ctx.counter("points", double(cloud.size()));
@@ -274,6 +285,7 @@ Status Run(StageContext& ctx) {
   ctx.counter("oriented_points", double(oriented_points));
   ctx.counter("median_radius_m", median_radius_m);
   ctx.counter("pixels", pixels);
+  if (options.samples) ctx.counter("sample_pixels", double(sample_pixels));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -283,7 +295,9 @@ Status Run(StageContext& ctx) {
 StageType SplatsStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;  // 2: tangent disks, clip lines at the border, spacing r_k sqrt(pi / k)
+  // 2: tangent disks, clip lines at the border, spacing r_k sqrt(pi / k);
+  // 3: the sample masks (`samples`), frames' PNGs unchanged.
+  type.version = 3;
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
       "Draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
@@ -300,9 +314,12 @@ StageType SplatsStage() {
       "Points without colors are gray (180). The bytes are the same for any thread count.\n\n"
       "Output `frames`: frames.json and one PNG per viewpoint (name or view<N>), the same names and "
       "files as render.frames with the same viewpoints, so metrics.image compares them; with "
-      "`depth`, also <name>.depth.exr (the front splats' view depth in meters, 0 on background).\n\n"
+      "`depth`, also <name>.depth.exr (the front splats' view depth in meters, 0 on background); with "
+      "`samples` (default), also <name>.samples.png (8-bit gray, 255 where the center of a point no "
+      "nearer splat hides projects into the pixel, inside the hull of the pixel's sample centers: the "
+      "pixels the scan has evidence of; metrics.image counts hole pixels on them).\n\n"
       "Counters: `frames`, `points`, `splats_drawn` (over all frames), `radii_capped`, `border_points`, "
-      "`median_radius_m`, `pixels`. "
+      "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`). "
       "Phases: `io`, `spacing`, `surfels`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);
   type.inputs = {{"points", "points", "The colored scan (points.ply).", false}};

@@ -42,6 +42,11 @@ std::string DepthFileName(const std::string& png_file) {
   return stem + ".depth.exr";
 }
 
+std::string SamplesFileName(const std::string& png_file) {
+  const std::string stem = png_file.size() > 4 ? png_file.substr(0, png_file.size() - 4) : png_file;
+  return stem + ".samples.png";
+}
+
 std::string WithViewpointsSchema(std::string schema) {
   const std::string token = "VIEWPOINTS_SCHEMA";
   const size_t at = schema.find(token);

@@ -50,6 +50,9 @@ struct View {
 // The depth map's file name beside frame file `png_file`: "door.png" ->
 // "door.depth.exr".
 std::string DepthFileName(const std::string& png_file);
+// The sample mask's file name beside frame file `png_file` (render.splats):
+// "door.png" -> "door.samples.png".
+std::string SamplesFileName(const std::string& png_file);
 
 // Reads parameter `viewpoints` of the stage `stage_id` (errors name it and
 // the item: "render.frames: viewpoints[1].eye: must be finite").

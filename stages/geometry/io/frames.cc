@@ -63,6 +63,15 @@ Status Validate(const FramesIndex& index) {
       if (!files.insert(d).second)
         return Status::Invalid(where + " '" + f.name + "': file '" + d + "' used twice");
     }
+    if (!f.samples_file.empty()) {
+      const std::string& m = f.samples_file;
+      if (m.find('/') != std::string::npos || m.find('\\') != std::string::npos || m == kFramesIndexFile ||
+          !EndsWithPng(m))
+        return Status::Invalid(where + " '" + f.name + "': samples file '" + m +
+                               "' must be a plain file name ending in .png");
+      if (!files.insert(m).second)
+        return Status::Invalid(where + " '" + f.name + "': file '" + m + "' used twice");
+    }
   }
   return Status::Ok();
 }
@@ -78,6 +87,7 @@ std::string FramesIndexToJson(const FramesIndex& index) {
       if (f.viewpoint->fov_deg) entry["fov_deg"] = *f.viewpoint->fov_deg;
     }
     if (!f.depth_file.empty()) entry["depth"] = f.depth_file;
+    if (!f.samples_file.empty()) entry["samples"] = f.samples_file;
     frames.push_back(std::move(entry));
   }
   nlohmann::json document = nlohmann::json::object();
@@ -135,6 +145,10 @@ Expected<FramesIndex> FramesIndexFromJson(std::string_view json_text, const std:
       if (!f["depth"].is_string()) return Status::Invalid(where + ": \"depth\" must be a file name");
       entry.depth_file = f["depth"].get<std::string>();
     }
+    if (f.contains("samples")) {
+      if (!f["samples"].is_string()) return Status::Invalid(where + ": \"samples\" must be a file name");
+      entry.samples_file = f["samples"].get<std::string>();
+    }
     index.frames.push_back(std::move(entry));
   }
   PB_RETURN_IF_ERROR(Validate(index).WithContext(source));
@@ -176,7 +190,21 @@ Expected<FrameSet> ReadFrames(const std::string& index_path, const FramesFilePat
                                std::to_string(index.width) + "x" + std::to_string(index.height) + " EXR");
       depth = std::move(*read);
     }
-    set.frames.push_back(Frame{std::move(entry), std::move(image).value(), std::move(depth)});
+    Image samples;
+    if (!entry.samples_file.empty()) {
+      const std::string samples_path = path_of ? path_of(entry.samples_file) : JoinPath(dir, entry.samples_file);
+      if (samples_path.empty() || !Env::Default()->Exists(samples_path))
+        return Status::NotFound(what + ": missing samples file '" + entry.samples_file + "'");
+      Expected<Image> read = ReadPng(samples_path);
+      if (!read.ok()) return read.status().WithContext(what);
+      if (read->type != Image::PixelType::kU8 || read->channels != 1 || read->width != index.width ||
+          read->height != index.height)
+        return Status::Invalid(what + ": " + entry.samples_file + " must be an 8-bit gray " +
+                               std::to_string(index.width) + "x" + std::to_string(index.height) + " PNG");
+      samples = std::move(*read);
+    }
+    set.frames.push_back(
+        Frame{std::move(entry), std::move(image).value(), std::move(depth), std::move(samples)});
   }
   return set;
 }
@@ -189,6 +217,8 @@ Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of, Env* e
   PB_RETURN_IF_ERROR(Validate(index).WithContext("writing frames"));
   std::vector<std::vector<uint8_t>> pngs;
   std::vector<std::string> depths, depth_paths;  // depth maps (EXR), when the frames have them
+  std::vector<std::vector<uint8_t>> masks;         // sample masks (PNG), when the frames have them
+  std::vector<std::string> mask_paths;
   for (const Frame& f : frames.frames) {
     const Image& image = f.image;
     if (image.type != Image::PixelType::kU8 || (image.channels != 3 && image.channels != 4) ||
@@ -207,6 +237,16 @@ Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of, Env* e
       PB_ASSIGN_OR_RETURN(depths.emplace_back(), EncodeExr(depth, path_of(f.entry.depth_file)));
       depth_paths.push_back(path_of(f.entry.depth_file));
     }
+    if (!f.entry.samples_file.empty()) {
+      const Image& samples = f.samples;
+      if (samples.type != Image::PixelType::kU8 || samples.channels != 1 || samples.width != frames.width ||
+          samples.height != frames.height)
+        return Status::Invalid("writing frames: frame '" + f.entry.name + "' names a samples file but has no " +
+                               std::to_string(frames.width) + "x" + std::to_string(frames.height) +
+                               " one-channel 8-bit sample mask");
+      PB_ASSIGN_OR_RETURN(masks.emplace_back(), EncodePng(samples));
+      mask_paths.push_back(path_of(f.entry.samples_file));
+    }
   }
   const std::string index_json = FramesIndexToJson(index);
   std::vector<FileContents> files;
@@ -215,6 +255,8 @@ Status WriteFrames(const FrameSet& frames, const FramesFilePath& path_of, Env* e
                      std::string_view(reinterpret_cast<const char*>(pngs[i].data()), pngs[i].size())});
   }
   for (size_t i = 0; i < depths.size(); ++i) files.push_back({depth_paths[i], depths[i]});
+  for (size_t i = 0; i < masks.size(); ++i)
+    files.push_back({mask_paths[i], std::string_view(reinterpret_cast<const char*>(masks[i].data()), masks[i].size())});
   files.push_back({path_of(kFramesIndexFile), index_json});
   return WriteFilesAtomic(env, files);
 }

@@ -10,7 +10,8 @@
 //         {"name": "door", "file": "door.png",
 //          "eye": [x, y, z], "target": [x, y, z],   <- optional viewpoint
 //          "up": [x, y, z], "fov_deg": 75,          <- (scene file units)
-//          "depth": "door.depth.exr"},              <- optional depth map
+//          "depth": "door.depth.exr",               <- optional depth map
+//          "samples": "door.samples.png"},          <- optional sample mask
 //         ...
 //       ]
 //     }
@@ -21,6 +22,13 @@
 //                   where nothing was hit (render.frames `depth: true`,
 //                   render.splats). Readers of version 1 without this key
 //                   ignore it.
+//   door.samples.png optional: one 8-bit gray channel, width x height, 255
+//                   where the centre of a sample of the drawn point cloud
+//                   that no nearer surface hides projects into the pixel,
+//                   0 elsewhere (render.splats): the pixels the scan has
+//                   evidence of, as against its disks' interpolation
+//                   (metrics.image counts hole pixels on them). Readers of
+//                   version 1 without this key ignore it.
 //
 // Names are unique and non-empty; files are plain file names (no folder),
 // ending in ".png", unique, not "frames.json". Alpha, when present, is 255
@@ -59,6 +67,7 @@ struct FrameEntry {
   std::string file;  // PNG file name inside the artifact
   std::optional<FrameViewpoint> viewpoint;
   std::string depth_file;  // "" or the depth map's file name (plain, ending in .exr)
+  std::string samples_file;  // "" or the sample mask's file name (plain, ending in .png)
 };
 
 struct FramesIndex {
@@ -71,6 +80,7 @@ struct Frame {
   FrameEntry entry;
   Image image;  // kU8, 3 or 4 channels, width x height of the set
   Image depth;  // empty, or kF32 1 channel, width x height: with entry.depth_file
+  Image samples;  // empty, or kU8 1 channel, width x height: with entry.samples_file
 };
 
 struct FrameSet {

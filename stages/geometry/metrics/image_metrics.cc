@@ -335,7 +335,8 @@ std::vector<uint8_t> DownsampleMask(const std::vector<uint8_t>& mask, int width,
 
 Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
                                            const ImageMetricsOptions& options, FlipResult* flip,
-                                           const Image* reference_depth, const Image* test_depth) {
+                                           const Image* reference_depth, const Image* test_depth,
+                                           const Image* reference_samples) {
   PB_ASSIGN_OR_RETURN(auto pair, ToRgb8Pair(reference, test));
   Rgb8& a = pair.first;
   Rgb8& b = pair.second;
@@ -343,7 +344,14 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
   const size_t pixels = size_t(w) * size_t(h);
   const std::vector<uint8_t> ref_covered = CoverageMask(reference), test_covered = CoverageMask(test);
   const std::vector<uint8_t> enclosed = EnclosedBackground(test_covered, w, h);
+  if (reference_samples &&
+      (reference_samples->type != Image::PixelType::kU8 || reference_samples->channels != 1 ||
+       reference_samples->width != w || reference_samples->height != h))
+    return Status::Invalid("covered comparison: a sample mask must be one 8-bit channel of " + std::to_string(w) +
+                           "x" + std::to_string(h));
+  const uint8_t* samples = reference_samples ? reference_samples->u8() : nullptr;
   CoveredComparison r;
+  r.coverage.sample_mask = samples != nullptr;
   std::vector<uint8_t> both(pixels);
   for (size_t i = 0; i < pixels; ++i) {
     both[i] = ref_covered[i] && test_covered[i];
@@ -351,14 +359,29 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
     r.coverage.test_px += test_covered[i];
     r.coverage.both_px += both[i];
     r.coverage.union_px += ref_covered[i] || test_covered[i];
-    if (ref_covered[i] && !test_covered[i]) {
+    r.coverage.splat_hole_px += ref_covered[i] && !test_covered[i];
+    const bool footprint = samples ? samples[i] > 0 : ref_covered[i] != 0;
+    r.coverage.footprint_px += footprint;
+    if (footprint && !test_covered[i]) {
       ++r.coverage.hole_px;
       r.coverage.enclosed_hole_px += enclosed[i];
+      if (!enclosed[i]) {
+        const int x = int(i % size_t(w)), y = int(i / size_t(w));
+        bool touches = false;
+        for (int dy = -1; dy <= 1 && !touches; ++dy)
+          for (int dx = -1; dx <= 1 && !touches; ++dx) {
+            const int nx = x + dx, ny = y + dy;
+            touches = nx >= 0 && ny >= 0 && nx < w && ny < h && test_covered[size_t(ny) * w + nx];
+          }
+        r.coverage.silhouette_hole_px += touches;
+      }
     }
   }
   r.coverage.iou = r.coverage.union_px == 0 ? 1.0 : double(r.coverage.both_px) / double(r.coverage.union_px);
   r.coverage.hole_fraction =
-      r.coverage.reference_px == 0 ? 0.0 : double(r.coverage.hole_px) / double(r.coverage.reference_px);
+      r.coverage.footprint_px == 0 ? 0.0 : double(r.coverage.hole_px) / double(r.coverage.footprint_px);
+  r.coverage.splat_hole_fraction =
+      r.coverage.reference_px == 0 ? 0.0 : double(r.coverage.splat_hole_px) / double(r.coverage.reference_px);
   if ((reference_depth == nullptr) != (test_depth == nullptr))
     return Status::Invalid("covered comparison: give both depth maps or neither");
   if (reference_depth) {

@@ -113,11 +113,26 @@ Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
 // render.splats write 255 where geometry is, 0 on background; an image without
 // alpha is covered everywhere).
 //  - Coverage agreement: IoU = |covered in both| / |covered in either|.
-//  - Hole pixels: covered in the reference, background in the test frame,
-//    whether at the silhouette or inside it; `enclosed_hole_px` counts those
-//    of them that no 4-connected path of the test frame's background links to
-//    the frame's border: background seen through the surface inside its own
-//    silhouette (a hole in a wall). hole_fraction = hole_px / reference_px.
+//  - Hole pixels: pixels of the reference's footprint where the test frame
+//    shows background, whether at the silhouette or inside it;
+//    `enclosed_hole_px` counts those of them that no 4-connected path of the
+//    test frame's background links to the frame's border: background seen
+//    through the surface inside its own silhouette (a hole in a wall);
+//    `silhouette_hole_px` those of the others that touch (8-neighbourhood) a
+//    pixel the test frame covers: its outline falls about a pixel short of
+//    the reference's footprint there, as a low-poly chord across a curved
+//    silhouette does (a shortfall of the outline rather than missing
+//    surface; the rest, open holes deeper than a pixel, are missing parts).
+//    hole_fraction = hole_px / footprint_px. The footprint is the reference's
+//    sample mask when one is given (render.splats: the pixels into which a
+//    visible scan point's center projects, the scan's evidence), else its
+//    covered pixels. A splat reference covers more than its samples: each
+//    disk a local spacing around its point, and where the spacing is
+//    inflated (a sparse border, an isolated sample) a disk of up to several
+//    pixels past anything the scanner saw; a model that ends at the last
+//    sample is right there, and a person sees no hole. `splat_hole_px` /
+//    `splat_hole_fraction` keep the count against all the reference's covered
+//    pixels (the disks), the definition before sample masks.
 //  - Appearance, on the compared pixels: covered in both frames, and so are
 //    their 4 neighbours (edge pixels blend the surface with the background
 //    under supersampling, so they belong to the silhouette, not the texture).
@@ -143,9 +158,14 @@ struct CoverageStats {
   size_t both_px = 0;
   size_t union_px = 0;
   double iou = 1;           // both / union; 1 when neither has coverage
-  size_t hole_px = 0;       // reference covered, test background
+  bool sample_mask = false;  // holes were counted on the reference's sample mask
+  size_t footprint_px = 0;   // the reference's sample pixels (sample_mask), else reference_px
+  size_t hole_px = 0;        // footprint pixels where the test frame is background
   size_t enclosed_hole_px = 0;  // of hole_px, inside the test frame's silhouette
-  double hole_fraction = 0;     // hole_px / reference_px (0 without reference coverage)
+  size_t silhouette_hole_px = 0;  // of hole_px, not enclosed, touching a pixel the test frame covers
+  double hole_fraction = 0;     // hole_px / footprint_px (0 without footprint)
+  size_t splat_hole_px = 0;     // reference covered, test background
+  double splat_hole_fraction = 0;  // splat_hole_px / reference_px (0 without reference coverage)
   size_t compared_px = 0;       // the pixels the metrics below are measured on
   bool depth_checked = false;   // both depth maps were given
   size_t nearer_px = 0;         // covered in both, tested surface nearer (depth_checked)
@@ -163,9 +183,13 @@ struct CoveredComparison {
 // CompareImages.
 // `reference_depth` and `test_depth` (both or neither): one-channel kF32
 // depth maps of the frames' size (Status::Invalid otherwise).
+// `reference_samples` (optional): the reference's sample mask, one kU8
+// channel of the frames' size, > 0 on sample pixels (Status::Invalid
+// otherwise); hole pixels are counted on it.
 Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
                                            const ImageMetricsOptions& options = {},
                                            FlipResult* flip = nullptr, const Image* reference_depth = nullptr,
-                                           const Image* test_depth = nullptr);
+                                           const Image* test_depth = nullptr,
+                                           const Image* reference_samples = nullptr);
 
 }  // namespace pb

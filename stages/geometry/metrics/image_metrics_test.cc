@@ -285,6 +285,7 @@ TEST(CoveredTest, CountsHolePixelsExactly) {
   EXPECT_EQ(r->coverage.reference_px, 64u * 64u);
   EXPECT_EQ(r->coverage.hole_px, 35u + 3u * 64u);
   EXPECT_EQ(r->coverage.enclosed_hole_px, 35u);
+  EXPECT_EQ(r->coverage.silhouette_hole_px, 64u);  // the strip's column next to the covered pixels
   EXPECT_DOUBLE_EQ(r->coverage.hole_fraction, (35.0 + 192.0) / 4096.0);
   EXPECT_DOUBLE_EQ(r->coverage.iou, (4096.0 - 227.0) / 4096.0);
   // The same texture where both are covered.
@@ -295,6 +296,44 @@ TEST(CoveredTest, CountsHolePixelsExactly) {
   Expected<ImageMetrics> whole = CompareImages(reference, test);
   ASSERT_TRUE(whole.ok());
   EXPECT_LT(whole->psnr_db, 25);  // 5.5 % of the pixels black instead of ~100
+}
+
+TEST(CoveredTest, HolesCountOnTheSampleMaskWhenGiven) {
+  // Reference: a disk of radius 20 drawn around samples that fill a disk of
+  // radius 16 only (the splats reach past the last samples). Test: covered
+  // on the radius-16 disk except a 4 x 4 hole at its middle.
+  const Image reference = Frame(64, [](int x, int y) { return Disk(x, y, 32, 32, 20); });
+  const Image test = Frame(64, [](int x, int y) {
+    return Disk(x, y, 32, 32, 16) && !(x >= 30 && x < 34 && y >= 30 && y < 34);
+  });
+  Image samples = Image::Make(64, 64, 1, Image::PixelType::kU8);
+  size_t sample_px = 0;
+  for (int y = 0; y < 64; ++y)
+    for (int x = 0; x < 64; ++x) {
+      samples.at_u8(x, y, 0) = Disk(x, y, 32, 32, 16) ? 255 : 0;
+      sample_px += samples.at_u8(x, y, 0) != 0;
+    }
+  Expected<CoveredComparison> r = CompareCovered(reference, test, {}, nullptr, nullptr, nullptr, &samples);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  EXPECT_TRUE(r->coverage.sample_mask);
+  EXPECT_EQ(r->coverage.footprint_px, sample_px);
+  EXPECT_EQ(r->coverage.hole_px, 16u);
+  EXPECT_EQ(r->coverage.enclosed_hole_px, 16u);
+  EXPECT_EQ(r->coverage.silhouette_hole_px, 0u);
+  EXPECT_DOUBLE_EQ(r->coverage.hole_fraction, 16.0 / double(sample_px));
+  // The disks' count: the hole and the ring between radius 16 and 20.
+  EXPECT_EQ(r->coverage.splat_hole_px, r->coverage.reference_px - (sample_px - 16));
+  EXPECT_DOUBLE_EQ(r->coverage.splat_hole_fraction,
+                   double(r->coverage.splat_hole_px) / double(r->coverage.reference_px));
+  // Without a mask both counts are the disks'.
+  Expected<CoveredComparison> plain = CompareCovered(reference, test);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_FALSE(plain->coverage.sample_mask);
+  EXPECT_EQ(plain->coverage.hole_px, r->coverage.splat_hole_px);
+  EXPECT_EQ(plain->coverage.footprint_px, plain->coverage.reference_px);
+  // A mask of the wrong size or type is refused.
+  const Image small = Image::Make(32, 32, 1, Image::PixelType::kU8);
+  EXPECT_FALSE(CompareCovered(reference, test, {}, nullptr, nullptr, nullptr, &small).ok());
 }
 
 TEST(CoveredTest, SilhouetteDifferenceDoesNotChangeCoveredPsnr) {

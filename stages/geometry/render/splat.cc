@@ -99,7 +99,7 @@ struct OrientedSplat {
 }  // namespace
 
 Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes, const RenderCamera& camera,
-                             const SplatOptions& options, SplatStats* stats, Image* depth_m) {
+                             const SplatOptions& options, SplatStats* stats, Image* depth_m, Image* samples) {
   PB_RETURN_IF_ERROR(Validate(cloud));
   const std::span<const float> radius_m = shapes.radius_m;
   if (radius_m.size() != cloud.size())
@@ -219,6 +219,9 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
   std::vector<float> color(sample_count * 3, 0.0f);
   std::vector<uint8_t> covered(sample_count, 0);
   std::vector<float> sample_depth(depth_m ? sample_count : 0, 0.0f);
+  // With `samples`: per sample the farthest depth that blends with its front
+  // splat (infinity where no splat covers it).
+  std::vector<double> visible_limit(samples ? sample_count : 0, std::numeric_limits<double>::infinity());
   const float gray = SrgbByteToLinear(kDefaultGray);
   std::array<float, 256> decode{};
   for (int v = 0; v < 256; ++v) decode[v] = SrgbByteToLinear(uint8_t(v));
@@ -311,6 +314,8 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
           for (int c = 0; c < 3; ++c) color[global * 3 + c] = float(acc[c] / acc[3]);
           covered[global] = 1;
           if (depth_m) sample_depth[global] = depth[local];
+          if (samples)
+            visible_limit[global] = double(depth[local]) + options.depth_tolerance * double(radius_m[front[local]]);
         }
     }
   });
@@ -355,7 +360,29 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
         depth_m->f32()[size_t(y) * size + x] = nearest;
       }
   }
+  size_t sample_pixels = 0;
+  if (samples) {
+    // One pass over the points in index order (each writes 255 or nothing,
+    // so the mask does not depend on the order anyway). A point counts only
+    // inside the hull of its pixel's sample centers (ss >= 2): see splat.h.
+    *samples = Image::Make(size, size, 1, Image::PixelType::kU8);
+    uint8_t* mask = samples->u8();
+    const double lo = ss >= 2 ? 0.5 : 0.0, hi = ss >= 2 ? ss - 0.5 : double(ss);
+    for (size_t i = 0; i < n; ++i) {
+      const ScreenSplat& s = splats[i];
+      if (!(s.depth > 0)) continue;  // behind the near plane, or no valid radius
+      if (!(s.x >= 0 && s.y >= 0 && s.x < cam.samples && s.y < cam.samples)) continue;
+      const double fx = s.x - std::floor(s.x / ss) * ss, fy = s.y - std::floor(s.y / ss) * ss;
+      if (!(fx >= lo && fx <= hi && fy >= lo && fy <= hi)) continue;
+      const int sx = int(s.x), sy = int(s.y);
+      if (!(double(s.depth) <= visible_limit[size_t(sy) * cam.samples + sx])) continue;
+      uint8_t& m = mask[size_t(sy / ss) * size + size_t(sx / ss)];
+      sample_pixels += m == 0 ? 1 : 0;
+      m = 255;
+    }
+  }
   if (stats) {
+    stats->sample_pixels = sample_pixels;
     stats->points = n;
     stats->drawn = drawn.load();
     stats->covered_samples = covered_total.load();

@@ -78,6 +78,7 @@ struct SplatStats {
   size_t points = 0;           // points of the cloud
   size_t drawn = 0;            // points in front of the near plane, inside the frame
   size_t covered_samples = 0;  // samples covered by at least one splat
+  size_t sample_pixels = 0;    // pixels of the sample mask (when asked for)
 };
 
 // The splats' shapes, per point of the cloud, in the cloud's frame.
@@ -97,8 +98,28 @@ struct SplatShapes {
 // wrong length.
 // `depth_m` (optional): as RenderMesh's, the smallest front-splat depth of
 // the pixel's samples (meters along the view axis), 0 where none.
+// `samples` (optional): the sample mask, a one-channel kU8 image of
+// camera.size squared, 255 in the pixels into which the center of a visible
+// point projects, 0 elsewhere: the pixels the scan has evidence of, as
+// against the pixels its disks interpolate (a disk covers a whole local
+// spacing around its point, more where the spacing is inflated at a border
+// or a sparse corner). A point is drawn as a splat would be (in front of the
+// near plane, a positive finite radius) and visible when its view depth is
+// at most the front depth of the sample its center falls in + depth_tolerance
+// x the front splat's radius, the rule by which splats blend (a point whose
+// own disk does not cover that sample, e.g. seen edge-on, and that no other
+// splat covers, is visible). With supersample >= 2 a point counts only when
+// its center falls inside the hull of its pixel's sample centers (the middle
+// (s - 1) / s of the pixel per axis): a frame of the same sample grid whose
+// surface reaches the point (its outline, locally a line, through the point
+// or beyond it) then covers at least one of those samples, so the pixel
+// never reads as background by the quantization of an outline that passes
+// the point in the pixel's outer margin (a quarter of the pixels an exact
+// model's outline crosses would otherwise count as holes). The mask thereby
+// samples the evidence (1 - 1/s)^2 of it: uniformly, so fractions measured
+// on it are unbiased. Counted in `stats->sample_pixels`.
 Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
                              const RenderCamera& camera, const SplatOptions& options,
-                             SplatStats* stats = nullptr, Image* depth_m = nullptr);
+                             SplatStats* stats = nullptr, Image* depth_m = nullptr, Image* samples = nullptr);
 
 }  // namespace pb

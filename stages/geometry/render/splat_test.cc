@@ -281,6 +281,39 @@ TEST(SplatTest, ClipLinesCutTheDisksAtTheBorder) {
   for (int x = 0; x < size / 2; ++x) EXPECT_EQ(whole->at_u8(x, size / 2, 3), clipped->at_u8(x, size / 2, 3)) << x;
 }
 
+TEST(SplatTest, SampleMaskHoldsTheVisiblePointsOnly) {
+  // A dense plane (2 cm) 1 m behind a sparse one (0.2 m grid) drawn with
+  // disks that close it: the sparse plane hides the dense one, so the mask
+  // holds the sparse plane's points only (one pixel each where the point
+  // falls in its pixel's middle half), not the dense plane's hundreds; alone,
+  // the dense plane fills its square.
+  const int size = 64;
+  auto mask_pixels = [&](bool front) {
+    PointCloud cloud;
+    AddPlane(cloud, 1.0, 0.02, 1.0f, {0, 200, 0});
+    const size_t dense = cloud.size();
+    if (front) AddPlane(cloud, 1.0, 0.2, 0.0f, {200, 0, 0});
+    std::vector<float> radius(cloud.size(), 0.03f);
+    for (size_t i = dense; i < cloud.size(); ++i) radius[i] = 0.2f;
+    Image samples;
+    SplatStats stats;
+    Expected<Image> image = RenderSplats(cloud, {radius}, HeadOn(size), SplatOptions{}, &stats, nullptr, &samples);
+    EXPECT_TRUE(image.ok()) << image.status().message();
+    EXPECT_EQ(samples.channels, 1);
+    EXPECT_EQ(samples.width, size);
+    size_t count = 0;
+    for (int y = 0; y < size; ++y)
+      for (int x = 0; x < size; ++x) count += samples.at_u8(x, y, 0) == 255;
+    EXPECT_EQ(count, stats.sample_pixels);
+    return count;
+  };
+  const size_t alone = mask_pixels(false), hidden = mask_pixels(true);
+  // The dense square spans 2 / 6 x 55.4 = 18.5 px per side at 6 m.
+  EXPECT_GT(alone, 300u);
+  EXPECT_LE(hidden, 11u * 11u);  // at most one pixel per sparse point
+  EXPECT_GT(hidden, 10u);
+}
+
 TEST(SplatTest, RejectsBadInput) {
   PointCloud cloud;
   AddPlane(cloud, 0.1, 0.05, 0.0f, {1, 2, 3});
