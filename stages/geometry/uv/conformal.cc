@@ -39,9 +39,14 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
                  std::vector<double>* uv) {
   const size_t n = positions.size() / 3, faces = corners.size() / 3;
   uv->assign(2 * n, 0.0);
-  std::vector<uint32_t> used(corners.begin(), corners.end());
-  std::sort(used.begin(), used.end());
-  used.erase(std::unique(used.begin(), used.end()), used.end());
+  // The vertices that some face uses, increasing (marks, not a sort).
+  std::vector<char> is_used(n, 0);
+  for (uint32_t v : corners) is_used[v] = 1;
+  std::vector<uint32_t> used;
+  used.reserve(n);
+  for (size_t v = 0; v < n; ++v) {
+    if (is_used[v]) used.push_back(uint32_t(v));
+  }
   if (used.size() < 2) return false;
   // Two far-apart pins fix the similarity and keep the solve well scaled.
   const uint32_t pin_a = Farthest(positions, used, Farthest(positions, used, used.front()));
