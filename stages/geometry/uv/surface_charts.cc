@@ -475,7 +475,16 @@ std::vector<std::vector<uint32_t>> SplitChart(const Topology& topo,
 
 // After flattening, a chart of fewer than kSmallChartFaces faces joins a
 // neighbouring chart (longest shared border first, up to three tried) if
-// the union flattens validly. Sequential, in order of size then position.
+// the union flattens validly; in order of size then position, each chart
+// seeing the joins before it.
+//
+// The attempts run in parallel, speculatively: a window of the next small
+// charts is tried against the current charts, then the results are taken
+// in order as long as nothing an attempt read (its own chart and every
+// neighbouring chart: their faces, and so the shared borders and the
+// unions) has changed since it was made; the first stale attempt is made
+// again in the next window. So every join is the one the sequential loop
+// makes, whatever the thread count.
 void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_stretch,
                           double crease_cos, std::vector<FlatChart>* charts_io) {
   std::vector<FlatChart>& charts = *charts_io;
@@ -489,10 +498,23 @@ void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_str
     return charts[a].faces.size() < charts[b].faces.size();
   });
   constexpr size_t kMaxTargetFaces = 20000;  // keeps re-solving cheap on huge meshes
-  std::vector<std::pair<uint32_t, double>> shared;
-  for (uint32_t c : small) {
-    if (charts[c].faces.empty() || charts[c].faces.size() >= kSmallChartFaces) continue;
-    shared.clear();
+
+  struct Attempt {
+    bool made = false;
+    uint64_t step = 0;             // joins committed when it was made
+    std::vector<uint32_t> read;    // the charts it depends on
+    uint32_t target = kNone;       // kNone: stays alone
+    FlatChart merged;
+  };
+  // The attempt of small chart c against the current charts.
+  auto attempt = [&](uint32_t c, uint64_t step, Attempt* out) {
+    out->made = true;
+    out->step = step;
+    out->read.assign(1, c);
+    out->target = kNone;
+    out->merged = FlatChart();
+    if (charts[c].faces.empty() || charts[c].faces.size() >= kSmallChartFaces) return;
+    std::vector<std::pair<uint32_t, double>> shared;  // (chart, border length)
     for (uint32_t f : charts[c].faces) {
       for (int k = 0; k < 3; ++k) {
         const uint32_t g = data.topo.neighbor[3 * size_t(f) + k];
@@ -510,6 +532,7 @@ void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_str
         }
       }
     }
+    for (const auto& [other, length] : shared) out->read.push_back(other);
     std::stable_sort(shared.begin(), shared.end(), [](const auto& a, const auto& b) {
       return a.second > b.second || (a.second == b.second && a.first < b.first);
     });
@@ -522,10 +545,49 @@ void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_str
       FlatChart merged = ChartSkeleton(mesh, std::move(faces));
       if (!FlattenChart(mesh, data, max_stretch, &merged)) continue;
       FitRectangle(&merged);
-      for (uint32_t f : charts[c].faces) chart_of[f] = target;
-      charts[target] = std::move(merged);
+      out->target = target;
+      out->merged = std::move(merged);
+      return;
+    }
+  };
+
+  // changed[c]: the number of joins committed when chart c last changed.
+  std::vector<uint64_t> changed(charts.size(), 0);
+  uint64_t step = 0;
+  auto fresh = [&](const Attempt& a) {
+    for (uint32_t c : a.read) {
+      if (changed[c] > a.step) return false;
+    }
+    return true;
+  };
+  constexpr size_t kWindow = 64;
+  std::vector<Attempt> window(kWindow);
+  std::vector<size_t> todo;
+  for (size_t next = 0; next < small.size();) {
+    const size_t count = std::min(kWindow, small.size() - next);
+    // Window slot i holds the attempt of small[next + i]; slots are kept
+    // across windows by rotating them with `next`.
+    todo.clear();
+    for (size_t i = 0; i < count; ++i) {
+      const Attempt& a = window[(next + i) % kWindow];
+      if (!a.made || !fresh(a)) todo.push_back(next + i);
+    }
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, todo.size(), 1), [&](const auto& r) {
+      for (size_t t = r.begin(); t < r.end(); ++t) {
+        attempt(small[todo[t]], step, &window[todo[t] % kWindow]);
+      }
+    });
+    for (size_t i = 0; i < count; ++i, ++next) {
+      Attempt& a = window[next % kWindow];
+      if (!fresh(a)) break;
+      a.made = false;
+      if (a.target == kNone) continue;
+      const uint32_t c = small[next];
+      ++step;
+      changed[c] = changed[a.target] = step;
+      for (uint32_t f : charts[c].faces) chart_of[f] = a.target;
+      charts[a.target] = std::move(a.merged);
       charts[c] = FlatChart();
-      break;
     }
   }
   charts.erase(std::remove_if(charts.begin(), charts.end(),
