@@ -6,10 +6,13 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <deque>
+#include <iterator>
 #include <limits>
 #include <queue>
+#include <thread>
 #include <utility>
 
 #include "stages/geometry/uv/conformal.h"
@@ -560,7 +563,7 @@ void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_str
     }
     return true;
   };
-  constexpr size_t kWindow = 64;
+  constexpr size_t kWindow = 32;
   std::vector<Attempt> window(kWindow);
   std::vector<size_t> todo;
   for (size_t next = 0; next < small.size();) {
@@ -643,47 +646,52 @@ std::vector<FlatChart> MakeSurfaceCharts(const Mesh& mesh, const SurfaceChartOpt
   if (progress) progress(0.3);
 
   // Flatten; split what fails, until nothing does. A split chart's parts
-  // take its place, so the order does not depend on the threads.
-  std::vector<FlatChart> charts;
-  for (int round = 0; !pending.empty(); ++round) {
-    std::vector<FlatChart> flat(pending.size());
-    std::vector<char> ok(pending.size(), 0);
-    std::vector<std::vector<std::vector<uint32_t>>> parts(pending.size());
-    tbb::parallel_for(tbb::blocked_range<size_t>(0, pending.size(), 4), [&](const auto& r) {
-      for (size_t i = r.begin(); i < r.end(); ++i) {
-        flat[i] = ChartSkeleton(mesh, pending[i]);
-        ok[i] = FlattenChart(mesh, data, options.max_chart_stretch, &flat[i]);
-        if (ok[i]) {
-          FitRectangle(&flat[i]);
-        } else {
-          parts[i] = SplitChart(data.topo, pending[i]);
-          flat[i] = FlatChart();
+  // take its place, so the order does not depend on the threads. Each
+  // part is flattened (and split) as soon as it exists, as a task of its
+  // own: no round waits for its largest chart (on a noisy scan the first
+  // rounds were a few huge charts, one core idle).
+  const auto caller = std::this_thread::get_id();
+  const size_t total_faces = std::max<size_t>(1, mesh.face_count());
+  std::atomic<size_t> faces_done{0};
+  double reported = 0.3;
+  std::function<std::vector<FlatChart>(std::vector<uint32_t>)> flatten =
+      [&](std::vector<uint32_t> faces) -> std::vector<FlatChart> {
+    FlatChart chart = ChartSkeleton(mesh, std::move(faces));
+    if (FlattenChart(mesh, data, options.max_chart_stretch, &chart)) {
+      FitRectangle(&chart);
+      faces_done += chart.faces.size();
+      // Progress from the calling thread only (the callback need not be
+      // thread-safe).
+      if (progress && std::this_thread::get_id() == caller) {
+        const double fraction = 0.3 + 0.6 * double(faces_done) / double(total_faces);
+        if (fraction > reported + 0.01) {
+          reported = fraction;
+          progress(fraction);
         }
       }
-    });
-    if (round == 0) charts.resize(flat.size());
-    std::vector<FlatChart> merged;
-    std::vector<std::vector<uint32_t>> next_pending;
-    size_t pi = 0;
-    for (FlatChart& c : charts) {
-      if (!c.faces.empty()) {
-        merged.push_back(std::move(c));
-        continue;
-      }
-      if (ok[pi]) {
-        merged.push_back(std::move(flat[pi]));
-      } else {
-        for (auto& part : parts[pi]) {
-          merged.emplace_back();  // placeholder
-          next_pending.push_back(std::move(part));
-        }
-      }
-      ++pi;
+      std::vector<FlatChart> one;
+      one.push_back(std::move(chart));
+      return one;
     }
-    charts = std::move(merged);
-    pending = std::move(next_pending);
-    if (progress) progress(std::min(0.9, 0.3 + 0.1 * (round + 1)));
-  }
+    std::vector<std::vector<uint32_t>> parts = SplitChart(data.topo, chart.faces);
+    chart = FlatChart();
+    std::vector<std::vector<FlatChart>> flat(parts.size());
+    tbb::parallel_for(size_t(0), parts.size(),
+                      [&](size_t i) { flat[i] = flatten(std::move(parts[i])); });
+    std::vector<FlatChart> all = std::move(flat[0]);
+    for (size_t i = 1; i < flat.size(); ++i) {
+      std::move(flat[i].begin(), flat[i].end(), std::back_inserter(all));
+    }
+    return all;
+  };
+  std::vector<std::vector<FlatChart>> flat(pending.size());
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, pending.size(), 1), [&](const auto& r) {
+    for (size_t i = r.begin(); i < r.end(); ++i) flat[i] = flatten(std::move(pending[i]));
+  });
+  std::vector<FlatChart> charts;
+  for (auto& f : flat) std::move(f.begin(), f.end(), std::back_inserter(charts));
+  flat.clear();
+  if (progress) progress(0.9);
   MergeFlatSmallCharts(mesh, data, options.max_chart_stretch, crease_cos, &charts);
   for (uint32_t f : options.isolated_faces) {
     FlatChart chart = ChartSkeleton(mesh, {f});
