@@ -4,6 +4,7 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <atomic>
@@ -95,13 +96,25 @@ std::vector<uint32_t> GrowCharts(const FaceData& data, double cone_cos,
       }
     }
   });
-  std::vector<uint32_t> order;
-  order.reserve(faces);
+  // Flattest first, then face order: a total order, so a parallel sort of
+  // (flatness, face) keys gives what a stable sort of the faces by flatness
+  // gave (on one core, a fifth of growth on a 10^6-face scan).
+  struct Key {
+    double flatness;
+    uint32_t face;
+    bool operator<(const Key& o) const {
+      return flatness > o.flatness || (flatness == o.flatness && face < o.face);
+    }
+  };
+  std::vector<Key> keys;
+  keys.reserve(faces);
   for (size_t f = 0; f < faces; ++f) {
-    if (chart_of[f] == kNone && data.area[f] > 0) order.push_back(uint32_t(f));
+    if (chart_of[f] == kNone && data.area[f] > 0) keys.push_back({flatness[f], uint32_t(f)});
   }
-  std::stable_sort(order.begin(), order.end(),
-                   [&](uint32_t a, uint32_t b) { return flatness[a] > flatness[b]; });
+  tbb::parallel_sort(keys.begin(), keys.end());
+  std::vector<uint32_t> order(keys.size());
+  for (size_t i = 0; i < keys.size(); ++i) order[i] = keys[i].face;
+  keys = std::vector<Key>();
 
   using Entry = std::pair<double, uint32_t>;  // (1 - cos to the mean, face)
   std::priority_queue<Entry, std::vector<Entry>, std::greater<Entry>> heap;
