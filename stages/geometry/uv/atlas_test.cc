@@ -147,6 +147,21 @@ Mesh MakeBumpySphere(double radius, int levels, double bump) {
   return mesh;
 }
 
+// A bumpy sphere with radial noise of relative amplitude `noise` per
+// vertex (a fixed hash, so the same mesh every run), like a noisy scan:
+// its charts fail the stretch bound, are split round after round and
+// leave many small charts to join.
+Mesh MakeNoisySphere(double radius, int levels, double bump, double noise) {
+  Mesh mesh = MakeBumpySphere(radius, levels, bump);
+  uint32_t state = 12345;
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+    state = state * 1664525u + 1013904223u;
+    const double jitter = 1 + noise * (double(state >> 8) / double(1u << 24) - 0.5);
+    for (int d = 0; d < 3; ++d) mesh.positions[3 * v + d] *= float(jitter);
+  }
+  return mesh;
+}
+
 // Rasterizes the atlas at its texel size (texel centers) and counts texels
 // claimed by two different charts.
 uint64_t TexelsWithTwoOwners(const Mesh& mesh, int size) {
@@ -536,6 +551,30 @@ TEST(UvConformalTest, DeterministicWhateverTheThreads) {
     EXPECT_EQ(one->positions, other->positions);
     EXPECT_EQ(one->uvs, other->uvs);
   }
+}
+
+TEST(UvConformalTest, NoisyMeshDeterministicWhateverTheThreads) {
+  // Splitting and small-chart joining run in parallel (the joins
+  // speculatively, see surface_charts.cc); this noisy sphere (20,480 faces)
+  // goes through both: charts split again and again (eight rounds and more
+  // when splitting went by rounds), then 427 small charts tried in 41
+  // windows, 324 joins, 57 attempts made again because an earlier join
+  // changed what they read.
+  const Mesh sphere = MakeNoisySphere(1.0, 5, 0.08, 0.05);
+  UnwrapOptions options;
+  options.method = UnwrapMethod::kConformal;
+  options.size_texels = 1024;
+  options.threads = 1;
+  AtlasReport report;
+  auto one = UnwrapConformal(sphere, options, &report);
+  options.threads = 2;
+  auto two = UnwrapConformal(sphere, options, nullptr);
+  ASSERT_TRUE(one.ok() && two.ok());
+  ExpectValidAtlas(sphere, *one, options);
+  EXPECT_GT(report.charts, 20u);
+  EXPECT_EQ(one->indices, two->indices);
+  EXPECT_EQ(one->positions, two->positions);
+  EXPECT_EQ(one->uvs, two->uvs);
 }
 
 TEST(UvRasterPackTest, ManySmallIrregularChartsFillTheSquare) {

@@ -39,9 +39,14 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
                  std::vector<double>* uv) {
   const size_t n = positions.size() / 3, faces = corners.size() / 3;
   uv->assign(2 * n, 0.0);
-  std::vector<uint32_t> used(corners.begin(), corners.end());
-  std::sort(used.begin(), used.end());
-  used.erase(std::unique(used.begin(), used.end()), used.end());
+  // The vertices that some face uses, increasing (marks, not a sort).
+  std::vector<char> is_used(n, 0);
+  for (uint32_t v : corners) is_used[v] = 1;
+  std::vector<uint32_t> used;
+  used.reserve(n);
+  for (size_t v = 0; v < n; ++v) {
+    if (is_used[v]) used.push_back(uint32_t(v));
+  }
   if (used.size() < 2) return false;
   // Two far-apart pins fix the similarity and keep the solve well scaled.
   const uint32_t pin_a = Farthest(positions, used, Farthest(positions, used, used.front()));
@@ -60,10 +65,19 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
   double pinned_uv[2][2] = {{0, 0}, {pin_distance, 0}};
   auto pin_index = [&](uint32_t v) { return v == pin_a ? 0 : 1; };
 
-  std::vector<Eigen::Triplet<double>> triplets;
-  triplets.reserve(12 * faces);
-  Eigen::VectorXd rhs_rows = Eigen::VectorXd::Zero(2 * Eigen::Index(faces));
-  Eigen::Index row = 0;
+  // The normal equations AᵀA x = Aᵀb, assembled directly in compressed
+  // columns (lower triangle, all SimplicialLDLT reads): each face gives two
+  // rows of A; every entry of AᵀA and Aᵀb sums its rows' products in
+  // increasing row order, as Eigen's sparse product AᵀA of the row matrix
+  // did (same bits), without building A, its transpose and the product.
+  struct FaceRows {
+    int entries = 0;
+    int column[6];
+    double value[2][6];
+    double b[2] = {0, 0};
+  };
+  std::vector<FaceRows> rows;
+  rows.reserve(faces);
   for (size_t f = 0; f < faces; ++f) {
     const uint32_t v[3] = {corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]};
     double e1[3], e2[3];
@@ -85,28 +99,82 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
     // dU/dz-bar = sum_j W_j U_j / (4 A) with W_j = (y_{j+1} - y_{j+2}) + i (x_{j+2} - x_{j+1});
     // the row is scaled by 1/sqrt(A) so that each face weighs by its area.
     const double scale = 1.0 / std::sqrt(0.5 * twice_area);
+    FaceRows& face = rows.emplace_back();
     for (int j = 0; j < 3; ++j) {
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
       const double a = (y[j1] - y[j2]) * scale, b = (x[j2] - x[j1]) * scale;
       // Re(W U) = a u - b v, Im(W U) = b u + a v.
       if (column[v[j]] == kPinned) {
         const double* p = pinned_uv[pin_index(v[j])];
-        rhs_rows[row] -= a * p[0] - b * p[1];
-        rhs_rows[row + 1] -= b * p[0] + a * p[1];
+        face.b[0] -= a * p[0] - b * p[1];
+        face.b[1] -= b * p[0] + a * p[1];
       } else {
-        const int c = column[v[j]];
-        triplets.emplace_back(row, c, a);
-        triplets.emplace_back(row, c + 1, -b);
-        triplets.emplace_back(row + 1, c, b);
-        triplets.emplace_back(row + 1, c + 1, a);
+        const int c = column[v[j]], e = face.entries;
+        face.column[e] = c;
+        face.column[e + 1] = c + 1;
+        face.value[0][e] = a;
+        face.value[0][e + 1] = -b;
+        face.value[1][e] = b;
+        face.value[1][e + 1] = a;
+        face.entries += 2;
       }
     }
-    row += 2;
   }
   if (cols > 0) {
-    Eigen::SparseMatrix<double> matrix(row, cols);
-    matrix.setFromTriplets(triplets.begin(), triplets.end());
-    Eigen::SparseMatrix<double> normal = matrix.transpose() * matrix;
+    // Pattern: column q holds the rows p >= q of the unknowns that share a
+    // face with it (each unknown vertex's two columns have the same rows).
+    const int vertices = cols / 2;
+    std::vector<std::vector<int>> near(vertices);
+    for (int u = 0; u < vertices; ++u) near[u].push_back(u);  // the diagonal, always
+    for (const FaceRows& face : rows) {
+      for (int p = 0; p < face.entries; p += 2) {
+        for (int q = 0; q < face.entries; q += 2) {
+          if (face.column[p] >= face.column[q]) near[face.column[q] / 2].push_back(face.column[p] / 2);
+        }
+      }
+    }
+    std::vector<int> outer(cols + 1, 0);
+    for (int u = 0; u < vertices; ++u) {
+      std::vector<int>& list = near[u];
+      std::sort(list.begin(), list.end());
+      list.erase(std::unique(list.begin(), list.end()), list.end());
+      // Column 2u: rows 2w, 2w+1 for every w; column 2u+1: the same but 2u.
+      outer[2 * u + 1] = outer[2 * u] + 2 * int(list.size());
+      outer[2 * u + 2] = outer[2 * u + 1] + 2 * int(list.size()) - 1;
+    }
+    Eigen::SparseMatrix<double> normal(cols, cols);
+    normal.resizeNonZeros(outer[cols]);
+    std::copy(outer.begin(), outer.end(), normal.outerIndexPtr());
+    int* inner = normal.innerIndexPtr();
+    double* values = normal.valuePtr();
+    std::fill(values, values + outer[cols], 0.0);
+    for (int u = 0; u < vertices; ++u) {
+      int k = outer[2 * u];
+      for (int w : near[u]) {
+        inner[k++] = 2 * w;
+        inner[k++] = 2 * w + 1;
+      }
+      for (int w : near[u]) {
+        if (w != u) inner[k++] = 2 * w;
+        inner[k++] = 2 * w + 1;
+      }
+    }
+    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cols);
+    for (const FaceRows& face : rows) {
+      for (int r = 0; r < 2; ++r) {
+        for (int p = 0; p < face.entries; ++p) {
+          const int row = face.column[p];
+          for (int q = 0; q < face.entries; ++q) {
+            const int col = face.column[q];
+            if (row < col) continue;
+            int k = outer[col];
+            while (inner[k] != row) ++k;
+            values[k] += face.value[r][p] * face.value[r][q];
+          }
+          rhs[row] += face.value[r][p] * face.b[r];
+        }
+      }
+    }
     // A whisper of regularization keeps vertices that only degenerate faces
     // reach from making the system singular (they land near the origin and
     // the chart's overlap check splits them off).
@@ -114,7 +182,6 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
     for (int k = 0; k < cols; ++k) trace += normal.coeff(k, k);
     const double ridge = 1e-12 * (trace > 0 ? trace / cols : 1.0);
     for (int k = 0; k < cols; ++k) normal.coeffRef(k, k) += ridge;
-    const Eigen::VectorXd rhs = matrix.transpose() * rhs_rows.head(row);
     Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
     if (solver.info() != Eigen::Success) return false;
     const Eigen::VectorXd solution = solver.solve(rhs);

@@ -20,15 +20,18 @@
 //    stretches it by at most 1/50 of the allowed excess (L2 <= 1.0006 by
 //    default: flat or relief walls) keeps that projection (exact rectangles
 //    for walls, and no solve); any other is flattened by LSCM (conformal.h),
-//    or split first if it has more than 60,000 vertices.
+//    or split first if it has more than 10,000 vertices.
 // 4. Validation and splitting. A flattened chart must have every face
 //    counter-clockwise, no two faces overlapping, and its L2 stretch
 //    (Sander et al. 2001, normalized on the chart) at most
 //    `max_chart_stretch`; otherwise it is split in two by a breadth-first
 //    race from two far-apart faces (geodesic halves) and each half is
-//    flattened again. A one-face chart is always valid.
+//    flattened again, each half as a task of its own (no rounds). A
+//    one-face chart is always valid.
 //    Afterwards a chart still under 16 faces joins a neighbour (longest
-//    non-crease border first, three tried) if the union flattens validly.
+//    non-crease border first, three tried) if the union flattens validly:
+//    in order, each seeing the joins before it, the attempts made in
+//    parallel and speculatively (a stale one is made again).
 // 5. Each chart is scaled so that its UV area equals its 3-D area (one texel
 //    density for the whole atlas) and rotated to its minimal-area rectangle.
 //
