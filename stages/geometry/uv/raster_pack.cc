@@ -355,6 +355,33 @@ struct SolidRect {
   int row, lo, width;
 };
 
+// Tall windows: besides windows of 2 gutter + 1 rows, the atlas keeps the
+// free texels common to windows 2, 4, 8 and 16 times as tall, and the
+// search skips rows where a probe's widest solid rectangle of such a
+// height finds no free run wide enough. A pure pruning (the same position
+// is found), and a strong one: a compact chart holds a solid rectangle
+// about as tall as itself, which the fragmented bottom of a nearly full
+// atlas rarely has room for.
+constexpr int kTallLevels = 4;
+constexpr int kTallLevel[kTallLevels] = {2, 4, 8, 16};
+
+// The longest run of set bits of a row of `words` words, limited to
+// `limit` bits: its start and length.
+std::pair<int, int> LongestRun(const uint64_t* row, int words, int limit) {
+  int best_lo = 0, best_len = 0;
+  for (int x = 0; x < limit;) {
+    const int a = NextBit(row, words, limit, x, true);
+    if (a >= limit) break;
+    const int e = NextBit(row, words, limit, a, false);
+    if (e - a > best_len) {
+      best_len = e - a;
+      best_lo = a;
+    }
+    x = e;
+  }
+  return {best_lo, best_len};
+}
+
 // One chart's four turned shapes: the mask to stamp and the dilated one to test.
 struct Shapes {
   Mask stamp[4], probe[4];
@@ -362,6 +389,9 @@ struct Shapes {
   // Solid rectangles [lo, lo + width) x [row, row + 2 gutter] inside
   // probe[k] (see Atlas::LowestWindowWithRun); the widest first.
   std::vector<SolidRect> solid[4];
+  // Per level l of Atlas's tall windows, the widest solid rectangle of
+  // kTallLevel[l] x (2 gutter + 1) rows inside probe[k] (width 0: none).
+  std::array<SolidRect, kTallLevels> tall[4];
 };
 
 Shapes MakeShapes(const FlatChart& chart, const Outline& outline, double s, int gutter) {
@@ -407,6 +437,46 @@ Shapes MakeShapes(const FlatChart& chart, const Outline& outline, double s, int 
         if (!seen) shapes.solid[k].push_back({y, lo[y], len[y] + 2 * gutter});
       }
     }
+    {
+      // The probe's rows ANDed over windows of 2 gutter + 1 rows, then
+      // doubled level by level; each level's widest run.
+      const Mask& m = shapes.probe[k];
+      const int base = 2 * gutter + 1;
+      std::vector<uint64_t> and_rows;
+      int height = 0;  // rows ANDed in and_rows
+      int rows = 0;    // valid windows
+      for (int l = 0; l < kTallLevels; ++l) {
+        shapes.tall[k][l] = {0, 0, 0};
+        const int target = base * kTallLevel[l];
+        if (target > m.h) continue;
+        if (height == 0) {  // base windows first
+          rows = m.h - base + 1;
+          and_rows.assign(size_t(rows) * m.words, 0);
+          for (int r = 0; r < rows; ++r) {
+            uint64_t* dst = and_rows.data() + size_t(r) * m.words;
+            std::copy(m.Row(r), m.Row(r) + m.words, dst);
+            for (int j = 1; j < base; ++j) {
+              const uint64_t* src = m.Row(r + j);
+              for (int i = 0; i < m.words; ++i) dst[i] &= src[i];
+            }
+          }
+          height = base;
+        }
+        while (height < target) {  // window r and window r + height
+          rows -= height;
+          for (int r = 0; r < rows; ++r) {
+            uint64_t* dst = and_rows.data() + size_t(r) * m.words;
+            const uint64_t* up = dst + size_t(height) * m.words;
+            for (int i = 0; i < m.words; ++i) dst[i] &= up[i];
+          }
+          height *= 2;
+        }
+        for (int r = 0; r < rows; ++r) {
+          const auto [lo, len] = LongestRun(and_rows.data() + size_t(r) * m.words, m.words, m.w);
+          if (len > shapes.tall[k][l].width) shapes.tall[k][l] = {r, lo, len};
+        }
+      }
+    }
     const Mask& p = shapes.probe[k];
     std::vector<int>& rows = shapes.check_rows[k];
     // Bottom, top, longest run, then quarters, then every row.
@@ -446,6 +516,18 @@ class Atlas {
     }
     lowest_window_.assign(size_ + 1, 0);
     window_bits_.assign(words_, 0);
+    // Every window starts free but for the bits beyond `size`.
+    level_bits_.assign(kTallLevels + 1, {});
+    for (int l = 0; l <= kTallLevels; ++l) {
+      level_bits_[l].assign(size_t(words_) * size_t(height_), 0);
+      std::copy(bits_.begin(), bits_.end(), level_bits_[l].begin());
+    }
+    for (int l = 0; l < kTallLevels; ++l) {
+      const int rows = window_ * kTallLevel[l];
+      tall_max_free_[l].assign(height_, 0);
+      for (int y = 0; y + rows <= height_; ++y) tall_max_free_[l][y] = size_;
+      lowest_tall_[l].assign(size_ + 1, 0);
+    }
   }
 
   // The lowest-top, then leftmost position of `probe` (its lower-left
@@ -457,8 +539,8 @@ class Atlas {
   };
 
   bool Find(const Mask& probe, const std::vector<int>& check_rows,
-            const std::vector<SolidRect>& solid, int64_t best_top, Scratch* scratch, int* x_out,
-            int* y_out) const {
+            const std::vector<SolidRect>& solid, const std::array<SolidRect, kTallLevels>& tall,
+            int64_t best_top, Scratch* scratch, int* x_out, int* y_out) const {
     if (probe.w > size_) return false;
     scratch->last_fail = 0;
     auto& candidates_ = scratch->candidates;
@@ -476,8 +558,14 @@ class Atlas {
     for (const SolidRect& rect : solid) {
       start = std::max(start, LowestWindowWithRun(rect.width) - rect.row);
     }
+    for (int l = 0; l < kTallLevels; ++l) {
+      if (tall[l].width > 0) start = std::max(start, LowestTallWithRun(l, tall[l].width) - tall[l].row);
+    }
     for (int y = start; y + probe.h <= height_ && y + probe.h <= best_top; ++y) {
       bool possible = true;
+      for (int l = kTallLevels - 1; l >= 0 && possible; --l) {
+        possible = tall_max_free_[l][y + tall[l].row] >= tall[l].width;
+      }
       for (const SolidRect& rect : solid) {
         possible = possible && window_max_free_[y + rect.row] >= rect.width;
       }
@@ -558,6 +646,15 @@ class Atlas {
     return y;
   }
 
+  // LowestWindowWithRun for the tall windows of level l.
+  int LowestTallWithRun(int l, int length) const {
+    if (length <= 0) return 0;
+    if (length > size_) return height_;
+    int& y = lowest_tall_[l][length];
+    while (y < height_ && tall_max_free_[l][y] < length) ++y;
+    return y;
+  }
+
   void Stamp(const Mask& stamp, int x0, int y0) {
     for (int y = 0; y < stamp.h; ++y) {
       uint64_t* row = Row(y0 + y);
@@ -572,6 +669,8 @@ class Atlas {
         const uint64_t* row = Row(y + r);
         for (int i = 0; i < words_; ++i) window_bits_[i] |= row[i];
       }
+      std::copy(window_bits_.begin(), window_bits_.end(),
+                level_bits_[0].begin() + size_t(y) * size_t(words_));
       int best = 0;
       auto& runs = window_runs_[y];
       runs.clear();
@@ -586,6 +685,27 @@ class Atlas {
         x = e;
       }
       window_max_free_[y] = best;
+    }
+    // Each level's windows that contain a stamped row: the OR of two
+    // windows of the level below.
+    for (int l = 0; l < kTallLevels; ++l) {
+      const int half = window_ * (kTallLevel[l] / 2), rows = 2 * half;
+      const int top = std::min(y0 + stamp.h - 1, height_ - rows);
+      for (int y = std::max(0, y0 - rows + 1); y <= top; ++y) {
+        uint64_t* dst = level_bits_[l + 1].data() + size_t(y) * size_t(words_);
+        const uint64_t* a = level_bits_[l].data() + size_t(y) * size_t(words_);
+        const uint64_t* b = a + size_t(half) * size_t(words_);
+        for (int i = 0; i < words_; ++i) dst[i] = a[i] | b[i];
+        int best = 0;
+        for (int x = 0; x < size_;) {
+          const int s = NextBit(dst, words_, size_, x, false);
+          if (s >= size_) break;
+          const int e = NextBit(dst, words_, size_, s, true);
+          best = std::max(best, e - s);
+          x = e;
+        }
+        tall_max_free_[l][y] = best;
+      }
     }
   }
 
@@ -663,6 +783,12 @@ class Atlas {
   std::vector<int> window_max_free_;        // per window of rows y..y + window_ - 1
   mutable std::vector<int> lowest_window_;  // per run length, see LowestWindowWithRun
   std::vector<uint64_t> window_bits_;       // scratch
+  // level_bits_[0]: the windows' taken texels (OR of window_ rows); [l + 1]:
+  // of window_ * kTallLevel[l] rows, whose longest free runs are
+  // tall_max_free_[l].
+  std::vector<std::vector<uint64_t>> level_bits_;
+  std::array<std::vector<int>, kTallLevels> tall_max_free_;
+  mutable std::array<std::vector<int>, kTallLevels> lowest_tall_;
   std::vector<std::vector<std::pair<int, int>>> window_runs_;  // free runs of each window
   std::vector<uint64_t> bits_;
   std::vector<int> max_free_;
@@ -707,8 +833,8 @@ int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint
       int best_x = 0, best_y = 0, best_k = -1;
       for (int k = 0; k < turns; ++k) {
         int x = 0, y = 0;
-        if (!atlas.Find(shape.probe[k], shape.check_rows[k], shape.solid[k], best_top, &scratch, &x,
-                        &y)) {
+        if (!atlas.Find(shape.probe[k], shape.check_rows[k], shape.solid[k], shape.tall[k],
+                        best_top, &scratch, &x, &y)) {
           continue;
         }
         const int64_t top = int64_t(y) + shape.probe[k].h;
