@@ -497,8 +497,13 @@ constexpr int kPruneRows = 6;  // check_rows used to prune candidate x
 // so that an overfull attempt still tells how tall it would be).
 class Atlas {
  public:
-  Atlas(int size, int height, int window)
-      : size_(size), height_(height), words_((size + 63) / 64 + 1), window_(window) {
+  // Empties the atlas. An Atlas is reused from packing to packing: its
+  // tens of megabytes are then allocated (and faulted in) once.
+  void Reset(int size, int height, int window) {
+    size_ = size;
+    height_ = height;
+    words_ = (size + 63) / 64 + 1;
+    window_ = window;
     bits_.assign(size_t(words_) * size_t(height_), 0);
     for (int y = 0; y < height_; ++y) {
       uint64_t* row = Row(y);
@@ -779,7 +784,7 @@ class Atlas {
     max_free_[y] = best;
   }
 
-  int size_, height_, words_, window_;
+  int size_ = 0, height_ = 0, words_ = 0, window_ = 0;
   std::vector<int> window_max_free_;        // per window of rows y..y + window_ - 1
   mutable std::vector<int> lowest_window_;  // per run length, see LowestWindowWithRun
   std::vector<uint64_t> window_bits_;       // scratch
@@ -801,10 +806,11 @@ class Atlas {
 int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint32_t>& order,
                     double s, int size, int gutter, int64_t give_up_height,
                     const std::vector<Outline>& outlines,
-                    std::vector<RasterPlacement>* placements,
+                    Atlas* workspace, std::vector<RasterPlacement>* placements,
                     const std::vector<Shapes>* made = nullptr) {
   // Nothing is placed above the give-up height: no need for those rows.
-  Atlas atlas(size, int(std::min<int64_t>(2 * int64_t(size), give_up_height + 1)), 2 * gutter + 1);
+  Atlas& atlas = *workspace;
+  atlas.Reset(size, int(std::min<int64_t>(2 * int64_t(size), give_up_height + 1)), 2 * gutter + 1);
   int64_t used = 0;
   placements->assign(charts.size(), RasterPlacement());
   // Shapes are made block by block in parallel (an attempt that gives up
@@ -940,7 +946,8 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
   constexpr int64_t kNever = std::numeric_limits<int64_t>::max();
   constexpr double kInf = std::numeric_limits<double>::infinity();
   double lo = 0, hi = kInf;
-  int64_t lo_used = 0;  // the packed height at lo
+  int64_t lo_used = 0;
+  Atlas atlases[2];  // one per trial of a pair  // the packed height at lo
   double a = std::min(std::sqrt(0.70) * s_area, s_limit);
   double b = std::min(std::sqrt(0.80) * s_area, s_limit);
   if (b < a * 1.01) a = b / 1.05;
@@ -953,7 +960,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     trials[1].s = b;
     tbb::parallel_for(0, 2, [&](int i) {
       trials[i].used =
-          PackAtScale(charts, order, trials[i].s, size, g, give_up, outlines,
+          PackAtScale(charts, order, trials[i].s, size, g, give_up, outlines, &atlases[i],
                       &trials[i].placements);
     });
     result.attempts += 2;
@@ -1047,7 +1054,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     Trial trials[2];
     tbb::parallel_for(0, 2, [&](int i) {
       trials[i].used = PackAtScale(charts, others[i], trial_s, size, g, size, outlines,
-                                   &trials[i].placements, &shapes);
+                                   &atlases[i], &trials[i].placements, &shapes);
     });
     result.attempts += 2;
     Trial* fit = trials[0].used <= size   ? &trials[0]
