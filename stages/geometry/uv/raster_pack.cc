@@ -520,7 +520,6 @@ class Atlas {
       window_runs_[y].push_back({0, size_});
     }
     lowest_window_.assign(size_ + 1, 0);
-    window_bits_.assign(words_, 0);
     // Every window starts free but for the bits beyond `size`.
     level_bits_.assign(kTallLevels + 1, {});
     for (int l = 0; l <= kTallLevels; ++l) {
@@ -530,6 +529,7 @@ class Atlas {
     for (int l = 0; l < kTallLevels; ++l) {
       const int rows = window_ * kTallLevel[l];
       tall_max_free_[l].assign(height_, 0);
+      tall_max_lo_[l].assign(height_, 0);
       for (int y = 0; y + rows <= height_; ++y) tall_max_free_[l][y] = size_;
       lowest_tall_[l].assign(size_ + 1, 0);
     }
@@ -660,36 +660,36 @@ class Atlas {
     return y;
   }
 
+  // Takes the stamp's texels, its lower-left corner at (x0, y0), and
+  // updates the rows' and windows' free runs. Texels are only ever taken,
+  // so only the words the stamp covers change, and in each row or window
+  // only the free runs over them (each into shorter runs), and a longest
+  // free run elsewhere stays the longest.
   void Stamp(const Mask& stamp, int x0, int y0) {
+    const int wa = x0 >> 6, wb = std::min(words_ - 1, (x0 + stamp.w - 1) >> 6);
+    const int a = wa * 64, b = std::min(size_, (wb + 1) * 64);
     for (int y = 0; y < stamp.h; ++y) {
       uint64_t* row = Row(y0 + y);
       ShiftOr(row, words_, stamp.Row(y), stamp.words, x0);
-      UpdateRuns(y0 + y);
+      auto& runs = runs_[y0 + y];
+      SpliceRuns(row, a, b, 1, &runs);
+      max_free_[y0 + y] = LongestOf(runs);
     }
     // The windows that contain a stamped row.
     const int last = std::min(y0 + stamp.h - 1, height_ - window_);
     for (int y = std::max(0, y0 - window_ + 1); y <= last; ++y) {
-      std::copy(Row(y), Row(y) + words_, window_bits_.begin());
-      for (int r = 1; r < window_; ++r) {
-        const uint64_t* row = Row(y + r);
-        for (int i = 0; i < words_; ++i) window_bits_[i] |= row[i];
+      uint64_t* dst = level_bits_[0].data() + size_t(y) * size_t(words_);
+      for (int i = wa; i <= wb; ++i) {
+        uint64_t v = 0;
+        for (int r = 0; r < window_; ++r) v |= Row(y + r)[i];
+        dst[i] = v;
       }
-      std::copy(window_bits_.begin(), window_bits_.end(),
-                level_bits_[0].begin() + size_t(y) * size_t(words_));
-      int best = 0;
+      // Runs shorter than the window are of no use (every solid rectangle
+      // is at least 2 gutter + 1 wide): not kept, and a longest run below
+      // the window counts as none.
       auto& runs = window_runs_[y];
-      runs.clear();
-      for (int x = 0; x < size_;) {
-        const int a = NextBit(window_bits_.data(), words_, size_, x, false);
-        if (a >= size_) break;
-        const int e = NextBit(window_bits_.data(), words_, size_, a, true);
-        // Runs shorter than the window are of no use: every solid rectangle
-        // is at least 2 gutter + 1 wide.
-        if (e - a >= window_) runs.push_back({a, e});
-        best = std::max(best, e - a);
-        x = e;
-      }
-      window_max_free_[y] = best;
+      SpliceRuns(dst, a, b, window_, &runs);
+      window_max_free_[y] = LongestOf(runs);
     }
     // Each level's windows that contain a stamped row: the OR of two
     // windows of the level below.
@@ -698,18 +698,24 @@ class Atlas {
       const int top = std::min(y0 + stamp.h - 1, height_ - rows);
       for (int y = std::max(0, y0 - rows + 1); y <= top; ++y) {
         uint64_t* dst = level_bits_[l + 1].data() + size_t(y) * size_t(words_);
-        const uint64_t* a = level_bits_[l].data() + size_t(y) * size_t(words_);
-        const uint64_t* b = a + size_t(half) * size_t(words_);
-        for (int i = 0; i < words_; ++i) dst[i] = a[i] | b[i];
-        int best = 0;
+        const uint64_t* lower = level_bits_[l].data() + size_t(y) * size_t(words_);
+        const uint64_t* upper = lower + size_t(half) * size_t(words_);
+        for (int i = wa; i <= wb; ++i) dst[i] = lower[i] | upper[i];
+        const int lo = tall_max_lo_[l][y];
+        if (lo + tall_max_free_[l][y] <= a || lo >= b) continue;  // the longest is elsewhere
+        int best = 0, best_lo = 0;
         for (int x = 0; x < size_;) {
           const int s = NextBit(dst, words_, size_, x, false);
           if (s >= size_) break;
           const int e = NextBit(dst, words_, size_, s, true);
-          best = std::max(best, e - s);
+          if (e - s > best) {
+            best = e - s;
+            best_lo = s;
+          }
           x = e;
         }
         tall_max_free_[l][y] = best;
+        tall_max_lo_[l][y] = best_lo;
       }
     }
   }
@@ -768,31 +774,47 @@ class Atlas {
     return -1;
   }
 
-  void UpdateRuns(int y) {
-    const uint64_t* row = Row(y);
-    auto& runs = runs_[y];
-    runs.clear();
-    int best = 0;
-    for (int x = 0; x < size_;) {
-      const int s = NextBit(row, words_, size_, x, false);
-      if (s >= size_) break;
-      const int e = NextBit(row, words_, size_, s, true);
-      runs.push_back({s, e});
-      best = std::max(best, e - s);
+  // The free runs (of `min_len` texels or more) of a row of `bits` that
+  // had `runs`, after texels in [a, b) were taken: the runs over [a, b)
+  // are scanned again.
+  void SpliceRuns(const uint64_t* bits, int a, int b, int min_len,
+                  std::vector<std::pair<int, int>>* runs) {
+    auto& all = *runs;
+    auto first = std::partition_point(all.begin(), all.end(),
+                                      [&](const auto& run) { return run.second <= a; });
+    auto last = first;
+    while (last != all.end() && last->first < b) ++last;
+    if (first == last) return;
+    const int from = first->first, to = (last - 1)->second;
+    splice_.clear();
+    for (int x = from; x < to;) {
+      const int s = NextBit(bits, words_, to, x, false);
+      if (s >= to) break;
+      const int e = NextBit(bits, words_, to, s, true);
+      if (e - s >= min_len) splice_.push_back({s, e});
       x = e;
     }
-    max_free_[y] = best;
+    const size_t at = size_t(first - all.begin());
+    all.erase(first, last);
+    all.insert(all.begin() + at, splice_.begin(), splice_.end());
+  }
+
+  static int LongestOf(const std::vector<std::pair<int, int>>& runs) {
+    int best = 0;
+    for (const auto& [s, e] : runs) best = std::max(best, e - s);
+    return best;
   }
 
   int size_ = 0, height_ = 0, words_ = 0, window_ = 0;
   std::vector<int> window_max_free_;        // per window of rows y..y + window_ - 1
   mutable std::vector<int> lowest_window_;  // per run length, see LowestWindowWithRun
-  std::vector<uint64_t> window_bits_;       // scratch
   // level_bits_[0]: the windows' taken texels (OR of window_ rows); [l + 1]:
   // of window_ * kTallLevel[l] rows, whose longest free runs are
   // tall_max_free_[l].
   std::vector<std::vector<uint64_t>> level_bits_;
   std::array<std::vector<int>, kTallLevels> tall_max_free_;
+  std::array<std::vector<int>, kTallLevels> tall_max_lo_;  // where that run starts
+  std::vector<std::pair<int, int>> splice_;                // scratch
   mutable std::array<std::vector<int>, kTallLevels> lowest_tall_;
   std::vector<std::vector<std::pair<int, int>>> window_runs_;  // free runs of each window
   std::vector<uint64_t> bits_;
