@@ -139,24 +139,30 @@ struct Outline {
 Outline MakeOutline(const FlatChart& chart) {
   Outline outline;
   if (chart.isolated) return outline;
-  std::vector<uint64_t> directed(chart.corners.size());
-  for (size_t f = 0; f < chart.faces.size(); ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const uint64_t a = chart.corners[3 * f + k], b = chart.corners[3 * f + (k + 1) % 3];
-      directed[3 * f + k] = a << 32 | b;
+  // Each vertex's outgoing edges (their heads), in face order.
+  const size_t n = chart.vertices.size(), corners = chart.corners.size();
+  std::vector<uint32_t> first(n + 1, 0), heads(corners);
+  for (size_t i = 0; i < corners; ++i) ++first[chart.corners[i] + 1];
+  for (size_t v = 0; v < n; ++v) first[v + 1] += first[v];
+  std::vector<uint32_t> next(first.begin(), first.end() - 1);
+  auto head = [&](size_t i) { return chart.corners[i % 3 == 2 ? i - 2 : i + 1]; };
+  for (size_t i = 0; i < corners; ++i) heads[next[chart.corners[i]]++] = head(i);
+  auto has_edge = [&](uint32_t a, uint32_t b) {
+    return std::find(heads.begin() + first[a], heads.begin() + first[a + 1], b) !=
+           heads.begin() + first[a + 1];
+  };
+  for (size_t v = 0; v < n; ++v) {
+    for (uint32_t i = first[v]; i < first[v + 1]; ++i) {
+      if (std::find(heads.begin() + i + 1, heads.begin() + first[v + 1], heads[i]) !=
+          heads.begin() + first[v + 1]) {
+        outline.closed = false;  // an edge of two faces the same way round
+        return outline;
+      }
     }
   }
-  std::vector<uint64_t> sorted = directed;
-  std::sort(sorted.begin(), sorted.end());
-  if (std::adjacent_find(sorted.begin(), sorted.end()) != sorted.end()) {
-    outline.closed = false;
-    return outline;
-  }
-  for (const uint64_t e : directed) {  // face order: deterministic
-    const uint64_t reverse = e << 32 | e >> 32;
-    if (!std::binary_search(sorted.begin(), sorted.end(), reverse)) {
-      outline.edges.push_back({uint32_t(e >> 32), uint32_t(e & 0xffffffffu)});
-    }
+  for (size_t i = 0; i < corners; ++i) {  // face order: deterministic
+    const uint32_t a = chart.corners[i], b = head(i);
+    if (!has_edge(b, a)) outline.edges.push_back({a, b});
   }
   return outline;
 }
