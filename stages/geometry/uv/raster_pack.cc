@@ -443,7 +443,16 @@ Shapes MakeShapes(const FlatChart& chart, const Outline& outline, double s, int 
         if (!seen) shapes.solid[k].push_back({y, lo[y], len[y] + 2 * gutter});
       }
     }
-    {
+    if (k >= 2) {
+      // The half turn of turn k - 2's rectangles: rows and columns reversed.
+      const Mask& m = shapes.probe[k];
+      for (int l = 0; l < kTallLevels; ++l) {
+        const SolidRect& r = shapes.tall[k - 2][l];
+        const int rows = (2 * gutter + 1) * kTallLevel[l];
+        shapes.tall[k][l] = r.width == 0 ? SolidRect{0, 0, 0}
+                                         : SolidRect{m.h - r.row - rows, m.w - r.lo - r.width, r.width};
+      }
+    } else {
       // The probe's rows ANDed over windows of 2 gutter + 1 rows, then
       // doubled level by level; each level's widest run.
       const Mask& m = shapes.probe[k];
