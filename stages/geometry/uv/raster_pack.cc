@@ -682,7 +682,7 @@ class Atlas {
   // free run elsewhere stays the longest.
   void Stamp(const Mask& stamp, int x0, int y0) {
     const int wa = x0 >> 6, wb = std::min(words_ - 1, (x0 + stamp.w - 1) >> 6);
-    const int a = wa * 64, b = std::min(size_, (wb + 1) * 64);
+    const int a = x0, b = std::min(size_, x0 + stamp.w);  // the texels that change
     for (int y = 0; y < stamp.h; ++y) {
       uint64_t* row = Row(y0 + y);
       ShiftOr(row, words_, stamp.Row(y), stamp.words, x0);
@@ -691,14 +691,30 @@ class Atlas {
       max_free_[y0 + y] = LongestOf(runs);
     }
     // The windows that contain a stamped row.
+    const int first = std::max(0, y0 - window_ + 1);
     const int last = std::min(y0 + stamp.h - 1, height_ - window_);
-    for (int y = std::max(0, y0 - window_ + 1); y <= last; ++y) {
-      uint64_t* dst = level_bits_[0].data() + size_t(y) * size_t(words_);
-      for (int i = wa; i <= wb; ++i) {
-        uint64_t v = 0;
-        for (int r = 0; r < window_; ++r) v |= Row(y + r)[i];
-        dst[i] = v;
+    // Their words wa..wb: the rows' ORed over the window by doubling (row
+    // y of `or_` ORs rows y .. y + span - 1).
+    const int width = wb - wa + 1, count = last - first + 1;
+    if (count > 0) {
+      or_.resize(size_t(count + window_ - 1) * size_t(width));
+      for (int y = 0; y < count + window_ - 1; ++y) {
+        std::copy(Row(first + y) + wa, Row(first + y) + wb + 1, or_.data() + size_t(y) * width);
       }
+      for (int span = 1; span < window_;) {
+        const int step = std::min(span, window_ - span);
+        for (int y = 0; y + step < count + window_ - 1; ++y) {
+          uint64_t* row = or_.data() + size_t(y) * width;
+          const uint64_t* up = row + size_t(step) * width;
+          for (int i = 0; i < width; ++i) row[i] |= up[i];
+        }
+        span += step;
+      }
+    }
+    for (int y = first; y <= last; ++y) {
+      uint64_t* dst = level_bits_[0].data() + size_t(y) * size_t(words_);
+      std::copy(or_.data() + size_t(y - first) * width, or_.data() + size_t(y - first + 1) * width,
+                dst + wa);
       // Runs shorter than the window are of no use (every solid rectangle
       // is at least 2 gutter + 1 wide): not kept, and a longest run below
       // the window counts as none.
@@ -830,6 +846,7 @@ class Atlas {
   std::array<std::vector<int>, kTallLevels> tall_max_free_;
   std::array<std::vector<int>, kTallLevels> tall_max_lo_;  // where that run starts
   std::vector<std::pair<int, int>> splice_;                // scratch
+  std::vector<uint64_t> or_;                               // scratch
   mutable std::array<std::vector<int>, kTallLevels> lowest_tall_;
   std::vector<std::vector<std::pair<int, int>>> window_runs_;  // free runs of each window
   std::vector<uint64_t> bits_;
