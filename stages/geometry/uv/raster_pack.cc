@@ -507,6 +507,7 @@ Shapes MakeShapes(const FlatChart& chart, const Outline& outline, double s, int 
 }
 
 constexpr int kPruneRows = 6;  // check_rows used to prune candidate x
+constexpr int kNearRows = 32;  // rows each side of the last failing one, tried first
 
 // The atlas being filled: `height` rows of `size` texels (twice the square,
 // so that an overfull attempt still tells how tall it would be).
@@ -788,8 +789,22 @@ class Atlas {
       }
       return std::max(x + 1, last + 1 - probe.run_lo[r]);
     };
-    // The row that failed last is likely to fail again one step on.
-    if (last_fail_ < probe.h && !row_fits(last_fail_)) return skip(last_fail_);
+    // The row that failed last is likely to fail again one step on, else
+    // one near it (a probe sliding along a neighbour's edge meets it row
+    // after row); which failing row is found does not change the result,
+    // every skip stops short of the first position that fits.
+    if (last_fail_ < probe.h) {
+      if (!row_fits(last_fail_)) return skip(last_fail_);
+      const int failed = last_fail_;
+      for (int d = 1; d <= kNearRows; ++d) {
+        for (int r : {failed + d, failed - d}) {
+          if (r >= 0 && r < probe.h && !row_fits(r)) {
+            last_fail_ = r;
+            return skip(r);
+          }
+        }
+      }
+    }
     for (int r : check_rows) {
       if (!row_fits(r)) {
         last_fail_ = r;
