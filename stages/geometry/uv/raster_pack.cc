@@ -324,16 +324,23 @@ Mask Dilate(const Mask& in, int g) {
   const int window = 2 * g + 1;
   Mask horizontal;
   horizontal.Reset(in.w + 2 * g, in.h);
-  std::vector<uint64_t> shifted(horizontal.words);
+  const int words = horizontal.words;
   for (int y = 0; y < in.h; ++y) {
     uint64_t* row = horizontal.Row(y);
-    ShiftOr(row, horizontal.words, in.Row(y), in.words, 0);
+    std::copy(in.Row(y), in.Row(y) + in.words, row);
     int span = 1;
     while (span < window) {
+      // row |= row << step, in place from the top word down (each word
+      // reads only lower words, not yet changed).
       const int step = std::min(span, window - span);
-      std::fill(shifted.begin(), shifted.end(), 0);
-      ShiftOr(shifted.data(), horizontal.words, row, horizontal.words, step);
-      for (int i = 0; i < horizontal.words; ++i) row[i] |= shifted[i];
+      const int word_shift = step >> 6, bit_shift = step & 63;
+      for (int i = words - 1; i >= word_shift; --i) {
+        uint64_t v = row[i - word_shift] << bit_shift;
+        if (bit_shift != 0 && i - word_shift - 1 >= 0) {
+          v |= row[i - word_shift - 1] >> (64 - bit_shift);
+        }
+        row[i] |= v;
+      }
       span += step;
     }
   }
