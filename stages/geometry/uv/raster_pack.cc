@@ -456,8 +456,9 @@ Shapes MakeShapes(const FlatChart& chart, const Outline& outline, double s, int 
       for (int l = 0; l < kTallLevels; ++l) {
         const SolidRect& r = shapes.tall[k - 2][l];
         const int rows = (2 * gutter + 1) * kTallLevel[l];
-        shapes.tall[k][l] = r.width == 0 ? SolidRect{0, 0, 0}
-                                         : SolidRect{m.h - r.row - rows, m.w - r.lo - r.width, r.width};
+        shapes.tall[k][l] = r.width == 0
+                                ? SolidRect{0, 0, 0}
+                                : SolidRect{m.h - r.row - rows, m.w - r.lo - r.width, r.width};
       }
     } else {
       // The probe's rows ANDed over windows of 2 gutter + 1 rows, then
@@ -587,7 +588,9 @@ class Atlas {
       start = std::max(start, LowestWindowWithRun(rect.width) - rect.row);
     }
     for (int l = 0; l < kTallLevels; ++l) {
-      if (tall[l].width > 0) start = std::max(start, LowestTallWithRun(l, tall[l].width) - tall[l].row);
+      if (tall[l].width > 0) {
+        start = std::max(start, LowestTallWithRun(l, tall[l].width) - tall[l].row);
+      }
     }
     for (int y = start; y + probe.h <= height_ && y + probe.h <= best_top; ++y) {
       bool possible = true;
@@ -602,6 +605,14 @@ class Atlas {
         possible = max_free_[y + r] >= probe.run_len[r];
       }
       if (!possible) continue;
+      // The next row's run lists are likely read next: fetch them now
+      // (the search waits on memory more than it computes).
+      if (y + 1 + probe.h <= height_) {
+        for (const SolidRect& rect : solid) {
+          __builtin_prefetch(window_runs_[y + 1 + rect.row].data());
+        }
+        for (int i = 0; i < prune; ++i) __builtin_prefetch(runs_[y + 1 + check_rows[i]].data());
+      }
       // Candidate x: where the solid rectangle lies in a free run of its
       // window of rows, and each pruning row's longest run in a free run.
       candidates_.clear();
@@ -881,8 +892,8 @@ class Atlas {
 // the height used (INT64_MAX if a chart fits nowhere) and the placements.
 int64_t PackAtScale(const std::vector<FlatChart>& charts, const std::vector<uint32_t>& order,
                     double s, int size, int gutter, int64_t give_up_height,
-                    const std::vector<Outline>& outlines,
-                    Atlas* workspace, std::vector<RasterPlacement>* placements,
+                    const std::vector<Outline>& outlines, Atlas* workspace,
+                    std::vector<RasterPlacement>* placements,
                     const std::vector<Shapes>* made = nullptr) {
   // Nothing is placed above the give-up height: no need for those rows.
   Atlas& atlas = *workspace;
@@ -1035,9 +1046,8 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     trials[0].s = a;
     trials[1].s = b;
     tbb::parallel_for(0, 2, [&](int i) {
-      trials[i].used =
-          PackAtScale(charts, order, trials[i].s, size, g, give_up, outlines, &atlases[i],
-                      &trials[i].placements);
+      trials[i].used = PackAtScale(charts, order, trials[i].s, size, g, give_up, outlines,
+                                   &atlases[i], &trials[i].placements);
     });
     result.attempts += 2;
     // Measured (s^2, height) pairs of this round, for the secant.
@@ -1125,12 +1135,14 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
     // Both orders pack at the same scale: the masks are made once for both.
     std::vector<Shapes> shapes(charts.size());
     tbb::parallel_for(tbb::blocked_range<size_t>(0, charts.size(), 4), [&](const auto& r) {
-      for (size_t c = r.begin(); c < r.end(); ++c) shapes[c] = MakeShapes(charts[c], outlines[c], trial_s, g);
+      for (size_t c = r.begin(); c < r.end(); ++c) {
+        shapes[c] = MakeShapes(charts[c], outlines[c], trial_s, g);
+      }
     });
     Trial trials[2];
     tbb::parallel_for(0, 2, [&](int i) {
-      trials[i].used = PackAtScale(charts, others[i], trial_s, size, g, size, outlines,
-                                   &atlases[i], &trials[i].placements, &shapes);
+      trials[i].used = PackAtScale(charts, others[i], trial_s, size, g, size, outlines, &atlases[i],
+                                   &trials[i].placements, &shapes);
     });
     result.attempts += 2;
     Trial* fit = trials[0].used <= size   ? &trials[0]
