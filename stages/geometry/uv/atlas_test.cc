@@ -669,6 +669,31 @@ TEST(UvRasterPackTest, SmallChartsNestInsideARing) {
   }
 }
 
+TEST(UvRasterPackTest, AFoldedChartIsRasterizedFaceByFace) {
+  // A unit square (two faces) with a third face folded back over it: its
+  // boundary 0-1-4-2-3 leaves out the notch 1-4-2, which the square's
+  // face 0-1-2 covers. Small squares that would nest in that notch must
+  // not: the folded chart is rasterized face by face.
+  std::vector<FlatChart> charts;
+  FlatChart folded;
+  folded.faces = {0, 1, 2};
+  folded.vertices = {0, 1, 2, 3, 4};
+  folded.uv_m = {0, 0, 1, 0, 1, 1, 0, 1, 0.4, 0.5};
+  folded.corners = {0, 1, 2, 0, 2, 3, 1, 4, 2};  // the last one clockwise
+  folded.width_m = folded.height_m = 1;
+  charts.push_back(std::move(folded));
+  for (int i = 0; i < 12; ++i) {
+    FlatChart square;
+    square.faces = {0, 1};
+    square.vertices = {0, 1, 2, 3};
+    square.uv_m = {0, 0, 0.12, 0, 0.12, 0.12, 0, 0.12};
+    square.corners = {0, 1, 2, 0, 2, 3};
+    square.width_m = square.height_m = 0.12;
+    charts.push_back(std::move(square));
+  }
+  ExpectValidRasterPacking(charts, 128, 2);
+}
+
 TEST(UvAtlasTest, PerTriangleBaseline) {
   const Mesh cylinder = MakeCylinder(0.5, 1.0, 24, 5);
   UnwrapOptions options;

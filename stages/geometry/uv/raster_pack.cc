@@ -128,9 +128,9 @@ Mask HalfTurn(const Mask& in) {
 // A chart's boundary: the directed edges (corner k to k + 1 of a face,
 // local vertex ids) whose reverse is no edge of the chart. Found once per
 // chart, whatever the scale. `closed` is false when some directed edge
-// belongs to two faces (a fold or a non-manifold fan): then the union of the
-// faces is not what the boundary encloses, and the chart is rasterized face
-// by face.
+// belongs to two faces (a fold or a non-manifold fan) or some face is not
+// counter-clockwise: then the union of the faces may not be what the
+// boundary encloses, and the chart is rasterized face by face.
 struct Outline {
   std::vector<std::array<uint32_t, 2>> edges;
   bool closed = true;
@@ -139,6 +139,17 @@ struct Outline {
 Outline MakeOutline(const FlatChart& chart) {
   Outline outline;
   if (chart.isolated) return outline;
+  // A face turned clockwise (flipped, or flat) folds over its neighbours:
+  // the boundary no longer encloses the union of the faces.
+  for (size_t f = 0; f < chart.faces.size(); ++f) {
+    const double* a = &chart.uv_m[2 * chart.corners[3 * f]];
+    const double* b = &chart.uv_m[2 * chart.corners[3 * f + 1]];
+    const double* c = &chart.uv_m[2 * chart.corners[3 * f + 2]];
+    if (!((b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]) > 0)) {
+      outline.closed = false;
+      return outline;
+    }
+  }
   // Each vertex's outgoing edges (their heads), in face order.
   const size_t n = chart.vertices.size(), corners = chart.corners.size();
   std::vector<uint32_t> first(n + 1, 0), heads(corners);
