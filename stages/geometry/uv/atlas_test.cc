@@ -577,6 +577,48 @@ TEST(UvConformalTest, NoisyMeshDeterministicWhateverTheThreads) {
   EXPECT_EQ(one->uvs, two->uvs);
 }
 
+// Packs `charts` and checks the atlas: every chart inside the border
+// gutter, no two charts closer than the gutter. Returns the packing.
+RasterPackResult ExpectValidRasterPacking(const std::vector<FlatChart>& charts, int size,
+                                          int gutter) {
+  auto packed = RasterPackCharts(charts, size, gutter);
+  EXPECT_TRUE(packed.ok()) << packed.status().message();
+  if (!packed.ok()) return {};
+  const double s = packed->texels_per_meter;
+  std::vector<Box2> boxes;
+  std::vector<std::array<double, 6>> triangles;
+  std::vector<uint32_t> owner;
+  for (size_t c = 0; c < charts.size(); ++c) {
+    for (size_t f = 0; f < charts[c].faces.size(); ++f) {
+      std::array<double, 6> t;
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = charts[c].corners[3 * f + k];
+        const auto p = PlacedTexel(packed->placements[c], s, charts[c].uv_m[2 * v],
+                                   charts[c].uv_m[2 * v + 1]);
+        t[2 * k] = p[0];
+        t[2 * k + 1] = p[1];
+        EXPECT_GE(std::min(p[0], p[1]), gutter - 1e-9);
+        EXPECT_LE(std::max(p[0], p[1]), size - gutter + 1e-9);
+      }
+      triangles.push_back(t);
+      owner.push_back(uint32_t(c));
+      boxes.push_back({std::min({t[0], t[2], t[4]}) - gutter / 2.0,
+                       std::min({t[1], t[3], t[5]}) - gutter / 2.0,
+                       std::max({t[0], t[2], t[4]}) + gutter / 2.0,
+                       std::max({t[1], t[3], t[5]}) + gutter / 2.0});
+    }
+  }
+  int too_close = 0;
+  ForEachIntersectingBoxPair(boxes, [&](uint32_t i, uint32_t j) {
+    if (owner[i] != owner[j] && TriangleDistance(triangles[i], triangles[j]) < gutter - 1e-6) {
+      ++too_close;
+    }
+    return true;
+  });
+  EXPECT_EQ(too_close, 0);
+  return *packed;
+}
+
 TEST(UvRasterPackTest, ManySmallIrregularChartsFillTheSquare) {
   // 600 small charts: irregular convex polygons (fans of 5-9 triangles) of
   // varied size, as a curved mesh's atlas has.
@@ -614,42 +656,81 @@ TEST(UvRasterPackTest, ManySmallIrregularChartsFillTheSquare) {
     charts.push_back(std::move(chart));
   }
   const int size = 2048, gutter = 2;
-  auto packed = RasterPackCharts(charts, size, gutter);
-  ASSERT_TRUE(packed.ok()) << packed.status().message();
-  const double s = packed->texels_per_meter;
+  const RasterPackResult packed = ExpectValidRasterPacking(charts, size, gutter);
+  const double s = packed.texels_per_meter;
   EXPECT_GE(area * s * s / (double(size) * size), 0.75);
-  // Every chart inside the border gutter; no two charts closer than the gutter.
-  std::vector<Box2> boxes;
-  std::vector<std::array<double, 6>> triangles;
-  std::vector<uint32_t> owner;
-  for (size_t c = 0; c < charts.size(); ++c) {
-    for (size_t f = 0; f < charts[c].faces.size(); ++f) {
-      std::array<double, 6> t;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = charts[c].corners[3 * f + k];
-        const auto p = PlacedTexel(packed->placements[c], s, charts[c].uv_m[2 * v],
-                                   charts[c].uv_m[2 * v + 1]);
-        t[2 * k] = p[0];
-        t[2 * k + 1] = p[1];
-        EXPECT_GE(std::min(p[0], p[1]), gutter - 1e-9);
-        EXPECT_LE(std::max(p[0], p[1]), size - gutter + 1e-9);
-      }
-      triangles.push_back(t);
-      owner.push_back(uint32_t(c));
-      boxes.push_back({std::min({t[0], t[2], t[4]}) - gutter / 2.0,
-                       std::min({t[1], t[3], t[5]}) - gutter / 2.0,
-                       std::max({t[0], t[2], t[4]}) + gutter / 2.0,
-                       std::max({t[1], t[3], t[5]}) + gutter / 2.0});
+}
+
+TEST(UvRasterPackTest, SmallChartsNestInsideARing) {
+  // A ring (a chart with a hole: two boundary loops) and four squares that
+  // fit only in its hole. The packer rasterizes a chart by its boundary
+  // loops, filling between them by the even-odd rule: the hole must stay
+  // free, and be used.
+  std::vector<FlatChart> charts;
+  const int kSides = 24;
+  FlatChart ring;
+  for (int k = 0; k < kSides; ++k) {
+    const double a = 2 * M_PI * k / kSides;
+    for (double r : {1.0, 0.75}) {  // outer vertex 2k, inner 2k + 1
+      ring.vertices.push_back(uint32_t(ring.vertices.size()));
+      ring.uv_m.insert(ring.uv_m.end(), {r * std::cos(a), r * std::sin(a)});
     }
   }
-  int too_close = 0;
-  ForEachIntersectingBoxPair(boxes, [&](uint32_t i, uint32_t j) {
-    if (owner[i] != owner[j] && TriangleDistance(triangles[i], triangles[j]) < gutter - 1e-6) {
-      ++too_close;
-    }
-    return true;
-  });
-  EXPECT_EQ(too_close, 0);
+  for (int k = 0; k < kSides; ++k) {
+    const uint32_t o = 2 * k, in = 2 * k + 1, o2 = 2 * ((k + 1) % kSides), in2 = o2 + 1;
+    ring.faces.insert(ring.faces.end(), {uint32_t(2 * k), uint32_t(2 * k + 1)});
+    ring.corners.insert(ring.corners.end(), {o, o2, in2, o, in2, in});
+  }
+  FitRectangle(&ring);
+  charts.push_back(std::move(ring));
+  for (int i = 0; i < 4; ++i) {
+    FlatChart square;
+    square.faces = {0, 1};
+    square.vertices = {0, 1, 2, 3};
+    square.uv_m = {0, 0, 0.4, 0, 0.4, 0.4, 0, 0.4};
+    square.corners = {0, 1, 2, 0, 2, 3};
+    FitRectangle(&square);
+    charts.push_back(std::move(square));
+  }
+  const int size = 256, gutter = 2;
+  const RasterPackResult packed = ExpectValidRasterPacking(charts, size, gutter);
+  // As boxes, the squares would need a strip beside the ring's square:
+  // 2.4 m a side. In the hole, the ring alone sets the scale.
+  EXPECT_FALSE(packed.boxes);
+  EXPECT_GT(packed.texels_per_meter, (size - 2.0 * gutter) / 2.2);
+  const double s = packed.texels_per_meter;
+  const auto centre = PlacedTexel(packed.placements[0], s, 0.5 * charts[0].width_m,
+                                  0.5 * charts[0].height_m);
+  for (size_t c = 1; c < charts.size(); ++c) {
+    const auto p = PlacedTexel(packed.placements[c], s, 0.5 * charts[c].width_m,
+                               0.5 * charts[c].height_m);
+    EXPECT_LT(std::hypot(p[0] - centre[0], p[1] - centre[1]), 0.75 * s) << "square " << c;
+  }
+}
+
+TEST(UvRasterPackTest, AFoldedChartIsRasterizedFaceByFace) {
+  // A unit square (two faces) with a third face folded back over it: its
+  // boundary 0-1-4-2-3 leaves out the notch 1-4-2, which the square's
+  // face 0-1-2 covers. Small squares that would nest in that notch must
+  // not: the folded chart is rasterized face by face.
+  std::vector<FlatChart> charts;
+  FlatChart folded;
+  folded.faces = {0, 1, 2};
+  folded.vertices = {0, 1, 2, 3, 4};
+  folded.uv_m = {0, 0, 1, 0, 1, 1, 0, 1, 0.4, 0.5};
+  folded.corners = {0, 1, 2, 0, 2, 3, 1, 4, 2};  // the last one clockwise
+  folded.width_m = folded.height_m = 1;
+  charts.push_back(std::move(folded));
+  for (int i = 0; i < 12; ++i) {
+    FlatChart square;
+    square.faces = {0, 1};
+    square.vertices = {0, 1, 2, 3};
+    square.uv_m = {0, 0, 0.12, 0, 0.12, 0.12, 0, 0.12};
+    square.corners = {0, 1, 2, 0, 2, 3};
+    square.width_m = square.height_m = 0.12;
+    charts.push_back(std::move(square));
+  }
+  ExpectValidRasterPacking(charts, 128, 2);
 }
 
 TEST(UvAtlasTest, PerTriangleBaseline) {
