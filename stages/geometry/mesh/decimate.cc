@@ -470,17 +470,24 @@ double Decimator::Place(uint32_t a, uint32_t b, Vec3d* p) const {
   // need lie on it: a border vertex off its chord (see BuildQuadrics) is.
   // The point of the minimizing set nearest the midpoint: the optimum of the
   // quadric plus a tiny pull towards the midpoint, kept if it halves the
-  // error (not on flat regions, where the midpoint is exact already).
+  // error. Not tried where the error is already negligible against the
+  // tie-breaking length term of Entry (flat regions, where the midpoint is
+  // exact): that would cost a solve per edge for nothing.
+  const Vec3d e = Sub(pb, pa);
+  const double e2 = Dot(e, e);
+  if (best <= 1e-8 * e2 * e2) return best;
   Quadric pulled = q;
   const double pull = 1e-6 * (q.q[0] + q.q[4] + q.q[7]);
-  pulled.Add(Quadric::Plane({1, 0, 0}, -mid[0], pull));
-  pulled.Add(Quadric::Plane({0, 1, 0}, -mid[1], pull));
-  pulled.Add(Quadric::Plane({0, 0, 1}, -mid[2], pull));
+  pulled.q[0] += pull;
+  pulled.q[4] += pull;
+  pulled.q[7] += pull;
+  pulled.q[3] -= pull * mid[0];
+  pulled.q[6] -= pull * mid[1];
+  pulled.q[8] -= pull * mid[2];
   if (pulled.Optimum(&opt)) {
     const Vec3d d = Sub(opt, mid);
-    const Vec3d e = Sub(pb, pa);
     const double err = q.Error(opt);
-    if (Dot(d, d) <= Dot(e, e) && err < 0.5 * best) {
+    if (Dot(d, d) <= e2 && err < 0.5 * best) {
       *p = opt;
       return err;
     }
