@@ -38,10 +38,18 @@ constexpr const char* kSchema = R"({
       "default": 1000,
       "description": "How strongly open borders (holes, openings, sheet edges) keep their shape, relative to the surface error; 0 lets them erode."
     },
-    "smooth_boundary": {
-      "type": "boolean",
-      "default": true,
-      "description": "Border constraints follow the border's course smoothed over about half an output edge (corners excepted) instead of every input edge, so a border cut face by face (a staircase) is simplified to the output's resolution instead of keeping every step (docs/mesh.md). false: planes through the input's own border edges."
+    "boundary_tolerance": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.2,
+      "description": "Border constraints run along the border simplified to within this fraction of the output's mean edge length (Douglas-Peucker chords; corners and larger bends stay), instead of through every input edge, so a border cut face by face (a staircase) or wavering by a fraction of a cell keeps about as many edges as the output's resolution needs (docs/mesh.md). The border moves by at most about this much. 0: planes through the input's own border edges."
+    },
+    "boundary_erosion": {
+      "type": "number",
+      "minimum": 0,
+      "maximum": 1,
+      "default": 0.5,
+      "description": "The part of `boundary_tolerance` by which the simplified border may cut into the surface (a border vertex outside its chord is cut off); bridging a notch takes the whole tolerance. 1: symmetric; 0: the border only grows."
     },
     "min_normal_dot": {
       "type": "number",
@@ -63,7 +71,8 @@ Status Run(StageContext& ctx) {
   }
   DecimateOptions options;
   PB_ASSIGN_OR_RETURN(options.boundary_weight, NumberParam(ctx, kId, "boundary_weight"));
-  PB_ASSIGN_OR_RETURN(options.smooth_boundary, BoolParam(ctx, kId, "smooth_boundary"));
+  PB_ASSIGN_OR_RETURN(options.boundary_tolerance, NumberParam(ctx, kId, "boundary_tolerance"));
+  PB_ASSIGN_OR_RETURN(options.boundary_erosion, NumberParam(ctx, kId, "boundary_erosion"));
   PB_ASSIGN_OR_RETURN(options.min_normal_dot, NumberParam(ctx, kId, "min_normal_dot"));
   double ratio = 0;
   int64_t target = 0;
@@ -117,7 +126,7 @@ Status Run(StageContext& ctx) {
 StageType DecimateStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;  // 2: smooth_boundary
+  type.version = 3;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it
   type.summary = "Quadric edge-collapse decimation to a face budget, keeping the mesh manifold";
   type.doc =
       "Collapses edges in order of quadric error (Garland & Heckbert 1997) until the face count "
@@ -125,7 +134,8 @@ StageType DecimateStage() {
       "vertex moves to the point minimizing the merged quadric (or the best of the endpoints "
       "and the midpoint on flat regions). A collapse is skipped when it would make the mesh "
       "non-manifold (link condition), flip or degenerate a face; open borders are held by "
-      "constraint planes (`boundary_weight`). Colors, normals, uvs and tangents are "
+      "constraint planes (`boundary_weight`) along the border simplified to the output's "
+      "resolution (`boundary_tolerance`). Colors, normals, uvs and tangents are "
       "interpolated along the collapsed edge. Deterministic: equal inputs give equal outputs. "
       "The budget can be missed when every remaining collapse is rejected.\n\n"
       "Counters: `faces_in`, `faces_out`.";

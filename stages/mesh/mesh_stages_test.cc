@@ -57,11 +57,13 @@ class MeshStagesTest : public StageTest {
 TEST_F(MeshStagesTest, DecimateIsWellFormed) {
   const StageType* type = registry_.Find("mesh.decimate");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 2);
+  EXPECT_EQ(type->version, 3);
   const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["type"], "object");
   EXPECT_EQ(schema["properties"]["target_faces"]["type"], "integer");
   EXPECT_EQ(schema["properties"]["boundary_weight"]["default"], 1000);
+  EXPECT_EQ(schema["properties"]["boundary_tolerance"]["default"], 0.2);
+  EXPECT_EQ(schema["properties"]["boundary_erosion"]["default"], 0.5);
   EXPECT_EQ(schema["properties"]["min_normal_dot"]["default"], 0.2);
   EXPECT_EQ(schema["oneOf"].size(), 2u);
   ASSERT_EQ(type->inputs.size(), 1u);

@@ -266,79 +266,154 @@ void Decimator::BuildQuadrics() {
     }
   }
   if (options_.boundary_weight <= 0) return;
-  // The border's course, for the smoothed constraint planes: next/previous
-  // vertex along the border where a vertex has exactly one border half-edge
-  // out and one in.
+  // The border simplified to the output's resolution (Douglas & Peucker,
+  // "Algorithms for the reduction of the number of points required to
+  // represent a digitized line", 1973): each simple course of the border
+  // (vertices with one border edge in and one out; closed loops and the
+  // stretches between vertices where several borders meet) is replaced by
+  // chords that pass within `tolerance` outside and `boundary_erosion` times
+  // that inside of every vertex, measured across the border in the surface
+  // (perpendicular to the chord and to the vertex's face normal; a waver
+  // along the normal is the face planes' business).
+  // Every border edge's plane then runs through its chord instead of itself,
+  // so the edges of one chord share a line and collapse along it at no
+  // boundary cost, and the vertices between its ends move onto it.
   constexpr uint32_t kNoVertex = UINT32_MAX;
-  std::vector<uint32_t> next(n, kNoVertex), prev(n, kNoVertex);
+  const size_t border_count = border.size();
+  std::vector<uint32_t> next(n, kNoVertex), prev(n, kNoVertex), in_edge(n, kNoVertex);
   std::vector<uint8_t> outs(n, 0), ins(n, 0);
-  for (const BorderEdge& e : border) {
+  for (uint32_t i = 0; i < border_count; ++i) {
+    const BorderEdge& e = border[i];
     next[e.a] = e.b;
     prev[e.b] = e.a;
+    in_edge[e.b] = i;
     outs[e.a] = static_cast<uint8_t>(std::min(outs[e.a] + 1, 2));
     ins[e.b] = static_cast<uint8_t>(std::min(ins[e.b] + 1, 2));
   }
   const auto simple = [&](uint32_t v) { return outs[v] == 1 && ins[v] == 1; };
   const size_t face_total = faces_.size() / 3;
-  const int window =
-      options_.smooth_boundary && options_.target_faces > 0 && options_.target_faces < face_total
-          ? static_cast<int>(0.5 * std::sqrt(double(face_total) / double(options_.target_faces)))
-          : 0;
-  // Smoothed border positions, for the planes only (the mesh is not moved):
-  // `window`^2 Laplacian steps (lambda 0.5) along the border's course, which
-  // straighten a staircase (one step removes a one-cell staircase exactly)
-  // and let the border's course diffuse over about `window` edges. A vertex
-  // where the course turns by more than 30 degrees between the chords to the
-  // vertices 2 * window edges before and after it (a corner; a
-  // staircase's alternating steps do not turn the chords) stays put, and so
-  // does a vertex where the border is not a simple course.
-  std::vector<Vec3d> smooth(positions_);
-  if (window > 0) {
-    const int reach = 2 * window;
-    const double corner_cos = std::cos(M_PI / 6);
-    std::vector<uint32_t> course;  // the vertices that move
-    for (const BorderEdge& e : border) {
-      const uint32_t v = e.a;
-      if (!simple(v)) continue;
-      uint32_t first = v, last = v;
-      bool ok = true;
-      for (int k = 0; k < reach && ok; ++k) {
-        ok = simple(first) && simple(last);
-        if (!ok) break;
-        first = prev[first];
-        last = next[last];
-        ok = first != kNoVertex && last != kNoVertex && first != v && last != v;
+  double tolerance = 0;
+  if (options_.boundary_tolerance > 0 && options_.target_faces > 0 &&
+      options_.target_faces < face_total) {
+    double area = 0;
+    for (size_t f = 0; f < face_total; ++f) area += 0.5 * Norm(FaceCross(static_cast<uint32_t>(f)));
+    // Mean edge of `target_faces` equilateral triangles covering the area.
+    const double output_edge =
+        std::sqrt(4 * area / (std::sqrt(3.0) * static_cast<double>(options_.target_faces)));
+    tolerance = options_.boundary_tolerance * output_edge;
+  }
+  // chord[i]: the (start, end) vertices of the chord of border edge i; by
+  // default the edge itself.
+  std::vector<std::pair<uint32_t, uint32_t>> chord(border_count);
+  for (uint32_t i = 0; i < border_count; ++i) chord[i] = {border[i].a, border[i].b};
+  if (tolerance > 0) {
+    const auto face_normal = [this](uint32_t f) {
+      return Vec3d{face_normal_in_[3 * f], face_normal_in_[3 * f + 1], face_normal_in_[3 * f + 2]};
+    };
+    // How far x lies from the chord s-t across the border (see above), in
+    // units of its tolerance: `tolerance` where the chord passes outside x
+    // (bridging a notch adds a sliver of surface), `inward` where it would
+    // cut x off (taking surface away). Where that plane is undefined, the
+    // 3D distance to the segment in units of the smaller one.
+    const double inward = options_.boundary_erosion * tolerance;
+    const auto excess = [&](uint32_t x, uint32_t s, uint32_t t, uint32_t x_face) {
+      const Vec3d d = Sub(positions_[t], positions_[s]), w = Sub(positions_[x], positions_[s]);
+      // Faces turn counterclockwise about their normal, so their inside lies
+      // left of a border half-edge: perp points out of the surface.
+      const Vec3d perp = Cross(d, face_normal(x_face));
+      const double len = Norm(perp);
+      const double dd = Dot(d, d);
+      if (len > 1e-12 * dd && len > 0) {
+        const double out = Dot(perp, w) / len;
+        return out > 0 ? (inward > 0 ? out / inward : HUGE_VAL) : -out / tolerance;
       }
-      if (!ok) continue;  // a short loop or the end of a simple course
-      const Vec3d d1 = Sub(positions_[v], positions_[first]), d2 = Sub(positions_[last], positions_[v]);
-      const double l1 = Norm(d1), l2 = Norm(d2);
-      if (l1 > 0 && l2 > 0 && Dot(d1, d2) >= corner_cos * l1 * l2) course.push_back(v);
-    }
-    std::vector<Vec3d> step(n);
-    for (int iteration = 0; iteration < window * window; ++iteration) {
-      for (const uint32_t v : course) {
-        const Vec3d& p = smooth[prev[v]];
-        const Vec3d& q = smooth[next[v]];
-        for (int c = 0; c < 3; ++c) step[v][c] = 0.5 * smooth[v][c] + 0.25 * (p[c] + q[c]);
+      const double u = dd > 0 ? std::clamp(Dot(w, d) / dd, 0.0, 1.0) : 0.0;
+      const double dist = Norm(Sub(w, Vec3d{u * d[0], u * d[1], u * d[2]}));
+      return dist == 0 ? 0.0 : inward > 0 ? dist / inward : HUGE_VAL;
+    };
+    std::vector<uint8_t> seen(n, 0);
+    std::vector<uint32_t> course, edges;  // vertices c[0..m), edges c[k] -> c[k+1]
+    std::vector<uint8_t> keep;
+    std::vector<std::pair<size_t, size_t>> stack;
+    const auto simplify = [&]() {
+      const size_t m = course.size();
+      keep.assign(m, 0);
+      keep[0] = keep[m - 1] = 1;
+      stack.clear();
+      if (course.front() == course.back()) {
+        // A closed loop: split at its start and the vertex farthest from it.
+        size_t far = 0;
+        double best = -1;
+        for (size_t k = 1; k + 1 < m; ++k) {
+          const double d = Norm(Sub(positions_[course[k]], positions_[course[0]]));
+          if (d > best) best = d, far = k;
+        }
+        if (far == 0) return;
+        keep[far] = 1;
+        stack.push_back({far, m - 1});
+        stack.push_back({0, far});
+      } else {
+        stack.push_back({0, m - 1});
       }
-      for (const uint32_t v : course) smooth[v] = step[v];
+      while (!stack.empty()) {
+        const auto [i, j] = stack.back();
+        stack.pop_back();
+        size_t far = 0;
+        double best = 1;
+        for (size_t k = i + 1; k < j; ++k) {
+          const double d = excess(course[k], course[i], course[j], border[edges[k]].f);
+          if (d > best) best = d, far = k;
+        }
+        if (far == 0) continue;
+        keep[far] = 1;
+        stack.push_back({far, j});
+        stack.push_back({i, far});
+      }
+      for (size_t i = 0; i + 1 < m;) {
+        size_t j = i + 1;
+        while (!keep[j]) ++j;
+        for (size_t k = i; k < j; ++k) chord[edges[k]] = {course[i], course[j]};
+        i = j;
+      }
+    };
+    // Courses between meeting points first, then closed simple loops, each
+    // from its lowest vertex (deterministic).
+    for (const bool loops : {false, true}) {
+      for (uint32_t v = 0; v < n; ++v) {
+        if (!simple(v) || seen[v] || (!loops && simple(prev[v]))) continue;
+        course.assign(1, loops ? v : prev[v]);
+        edges.clear();
+        uint32_t w = v;
+        if (loops) {
+          seen[v] = 1;
+          w = next[v];
+        }
+        while (true) {
+          edges.push_back(in_edge[w]);
+          course.push_back(w);
+          if (!simple(w) || seen[w]) break;
+          seen[w] = 1;
+          w = next[w];
+        }
+        simplify();
+      }
     }
   }
-  for (const BorderEdge& e : border) {
-    const uint32_t a = e.a, b = e.b;
-    const Vec3d edge = Sub(positions_[b], positions_[a]);
-    const double len2 = Dot(edge, edge);
+  for (uint32_t i = 0; i < border_count; ++i) {
+    const BorderEdge& e = border[i];
+    const Vec3d edge = Sub(positions_[e.b], positions_[e.a]);
     const Vec3d nrm = {face_normal_in_[3 * e.f], face_normal_in_[3 * e.f + 1], face_normal_in_[3 * e.f + 2]};
-    Vec3d perp = Cross(Sub(smooth[b], smooth[a]), nrm);
+    const auto [s, t] = chord[i];
+    Vec3d perp = Cross(Sub(positions_[t], positions_[s]), nrm);
     const double plen = Norm(perp);
     if (!(plen > 0)) continue;
     perp = {perp[0] / plen, perp[1] / plen, perp[2] / plen};
-    const Quadric plane = Quadric::Plane(perp, -Dot(perp, smooth[a]), options_.boundary_weight * len2);
-    quadrics_[a].Add(plane);
-    quadrics_[b].Add(plane);
+    const Quadric plane =
+        Quadric::Plane(perp, -Dot(perp, positions_[s]), options_.boundary_weight * Dot(edge, edge));
+    quadrics_[e.a].Add(plane);
+    quadrics_[e.b].Add(plane);
   }
 }
-
 void Decimator::Faces(uint32_t v, std::vector<uint32_t>* out) {
   out->clear();
   uint32_t* list = &pool_[offset_[v]];
@@ -388,6 +463,33 @@ double Decimator::Place(uint32_t a, uint32_t b, Vec3d* p) const {
     if (err < best) {
       best = err;
       *p = c;
+    }
+  }
+  // Where the minimizers form a line or a plane (a straight border on a
+  // flat region: the border's plane and the face plane), none of the three
+  // need lie on it: a border vertex off its chord (see BuildQuadrics) is.
+  // The point of the minimizing set nearest the midpoint: the optimum of the
+  // quadric plus a tiny pull towards the midpoint, kept if it halves the
+  // error. Not tried where the error is already negligible against the
+  // tie-breaking length term of Entry (flat regions, where the midpoint is
+  // exact): that would cost a solve per edge for nothing.
+  const Vec3d e = Sub(pb, pa);
+  const double e2 = Dot(e, e);
+  if (best <= 1e-8 * e2 * e2) return best;
+  Quadric pulled = q;
+  const double pull = 1e-6 * (q.q[0] + q.q[4] + q.q[7]);
+  pulled.q[0] += pull;
+  pulled.q[4] += pull;
+  pulled.q[7] += pull;
+  pulled.q[3] -= pull * mid[0];
+  pulled.q[6] -= pull * mid[1];
+  pulled.q[8] -= pull * mid[2];
+  if (pulled.Optimum(&opt)) {
+    const Vec3d d = Sub(opt, mid);
+    const double err = q.Error(opt);
+    if (Dot(d, d) <= e2 && err < 0.5 * best) {
+      *p = opt;
+      return err;
     }
   }
   return best;
@@ -700,6 +802,14 @@ Expected<Mesh> DecimateMesh(const Mesh& mesh, const DecimateOptions& options,
   if (!(options.boundary_weight >= 0) || !std::isfinite(options.boundary_weight)) {
     return Status::Invalid("decimate: boundary_weight must be finite and >= 0, got " +
                            std::to_string(options.boundary_weight));
+  }
+  if (!(options.boundary_tolerance >= 0) || !std::isfinite(options.boundary_tolerance)) {
+    return Status::Invalid("decimate: boundary_tolerance must be finite and >= 0, got " +
+                           std::to_string(options.boundary_tolerance));
+  }
+  if (!(options.boundary_erosion >= 0 && options.boundary_erosion <= 1)) {
+    return Status::Invalid("decimate: boundary_erosion must be in [0, 1], got " +
+                           std::to_string(options.boundary_erosion));
   }
   if (!(options.min_normal_dot >= -1 && options.min_normal_dot <= 1)) {
     return Status::Invalid("decimate: min_normal_dot must be in [-1, 1], got " +

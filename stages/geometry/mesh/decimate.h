@@ -8,18 +8,25 @@
 //  * Cost: each vertex carries the sum of the area-weighted plane quadrics of
 //    its faces; an edge's cost is the error of the merged quadric at the
 //    optimal point (3x3 solve; when singular or far from the edge, the best
-//    of the midpoint and the two endpoints, the midpoint winning ties), plus
+//    of the midpoint and the two endpoints, the midpoint winning ties, or
+//    the minimizer nearest the midpoint if that halves the error), plus
 //    1e-6 * length^4 so that on flat regions, where every error is zero,
 //    short edges go first and triangles stay well shaped.
 //  * Boundaries: every boundary edge (one face) adds a plane along the edge,
 //    perpendicular to its face, weighted by `boundary_weight` times the edge
 //    length squared, so boundary vertices stay on the boundary line and
-//    corners stay put. With `smooth_boundary` the plane follows the border's
-//    course smoothed over about half an output edge instead of the single
-//    input edge: a border cut face by face (mesh.trim) is a staircase
-//    at the input's resolution, and planes through every step held every
-//    step, so a finer mesh decimated to a budget kept more border edges than
-//    a coarser one (the living room: 1.6x, a synthetic sculpture 2.4x).
+//    corners stay put. The planes run along the border simplified to the
+//    output's resolution (`boundary_tolerance`, Douglas-Peucker chords that
+//    cut less into the surface than they bridge: `boundary_erosion`)
+//    instead of through every input edge: a border cut face by face
+//    (mesh.trim) is a staircase at the input's resolution, and on a
+//    marching-cubes mesh every border vertex wavers by a fraction of a cell
+//    besides; planes through every step or waver held them all, so a finer
+//    mesh decimated to a budget kept more border edges than a coarser one
+//    (a synthetic sculpture: 2.6x; version 2's Laplacian-smoothed planes
+//    straightened staircases but not the waver). Where the minimizers of an
+//    edge's quadric form a line or a plane, the collapse goes to the point
+//    of it nearest the edge's midpoint, so vertices move onto their chord.
 //  * Manifoldness: a collapse is rejected when it fails the link condition
 //    (the common neighbors of the two endpoints must be exactly the opposite
 //    vertices of the edge's faces, and no edge may be in both links: this
@@ -62,15 +69,22 @@ struct DecimateOptions {
   // (both scale with length squared, so this is unitless). 0 frees the
   // boundary.
   double boundary_weight = 1000.0;
-  // Boundary planes follow the border's course at the output's resolution:
-  // each boundary edge's plane runs through the edge's endpoints after w^2
-  // Laplacian steps (lambda 0.5) along the border, w = floor(0.5 *
-  // sqrt(input faces / target_faces)) (about half an output edge in input
-  // edges); corners (the chords to the vertices 2w edges before and after
-  // turn by more than 30 degrees) and vertices off a simple border course
-  // stay put. Only the planes move, never the mesh. false: planes through
-  // the input's own edges.
-  bool smooth_boundary = true;
+  // Boundary planes run along the border simplified to within this
+  // fraction of the output's mean edge length (sqrt(4 area / (sqrt(3)
+  // target_faces))): each simple course of the border (closed loops, and
+  // stretches between vertices where several borders meet) is replaced by
+  // Douglas-Peucker chords that pass within the tolerance of its vertices,
+  // measured across the border in the surface, and every border edge's
+  // plane runs through its chord. Corners and bends larger than the
+  // tolerance are chord ends and stay put. Only the planes move, then the
+  // collapses: the border moves by at most about the tolerance. 0: planes
+  // through the input's own edges (version 1).
+  double boundary_tolerance = 0.2;
+  // The part of boundary_tolerance by which a chord may cut into the surface
+  // (a vertex outside its chord is cut off when the collapses move it
+  // there); bridging a notch (a vertex inside its chord) takes the whole
+  // tolerance. 1: symmetric; 0: the border only grows.
+  double boundary_erosion = 0.5;
   // Reject a collapse that makes a face's unit normal have a dot product
   // below this with its normal before the collapse or in the input.
   double min_normal_dot = 0.2;

@@ -113,9 +113,9 @@ TEST(MeshDecimate, AStaircaseBorderIsSimplifiedToTheOutputsResolution) {
   // A 64 x 64 grid without the cells above the diagonal: a border of 128
   // one-cell steps along x + y = 1, as a face-by-face cut leaves it. Planes
   // through every step hold every step (150 border edges at 300 faces);
-  // planes along the smoothed course let the decimation straighten it (60),
-  // and the border stays within a cell of the diagonal (the axes' borders
-  // and the corners stay exact).
+  // planes along chords of the simplified course let the decimation
+  // straighten it (62), and the border stays within a cell of the diagonal
+  // (the axes' borders and the corners stay exact).
   const int n = 64;
   Mesh grid = Grid(n);
   std::vector<uint32_t> kept;
@@ -129,7 +129,7 @@ TEST(MeshDecimate, AStaircaseBorderIsSimplifiedToTheOutputsResolution) {
     SCOPED_TRACE(smooth);
     DecimateOptions options;
     options.target_faces = 300;
-    options.smooth_boundary = smooth;
+    if (!smooth) options.boundary_tolerance = 0;
     auto out = DecimateMesh(grid, options, nullptr);
     ASSERT_TRUE(out.ok()) << out.status().message();
     const Topology topo = Check(*out);
@@ -143,6 +143,71 @@ TEST(MeshDecimate, AStaircaseBorderIsSimplifiedToTheOutputsResolution) {
       }
   }
   EXPECT_LT(border_edges[1], border_edges[0] * 3 / 4) << border_edges[1] << " vs " << border_edges[0];
+}
+
+// A disc of radius 0.45 cut face by face from an n x n grid on [0,1]^2 (a
+// staircase border), its border vertices moved in the plane by up to
+// `jitter` cells (hash noise: the sub-cell waver of a marching-cubes
+// border) and its inside bumped in z, so that interior collapses cost
+// something too (as on a scanned object, not a flat floor).
+Mesh WavyDisc(int n, double jitter) {
+  Mesh grid = Grid(n);
+  std::vector<uint32_t> kept;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double x = (i + 0.5) / n - 0.5, y = (j + 0.5) / n - 0.5;
+      if (x * x + y * y < 0.45 * 0.45)
+        kept.insert(kept.end(), &grid.indices[6 * size_t(j * n + i)], &grid.indices[6 * size_t(j * n + i) + 6]);
+    }
+  grid.indices = kept;
+  std::vector<int> uses(grid.vertex_count(), 0);
+  for (const uint32_t v : grid.indices) ++uses[v];
+  for (size_t v = 0; v < grid.vertex_count(); ++v) {
+    float* p = &grid.positions[3 * v];
+    // Grid vertices are in 6 faces inside, fewer on the border.
+    if (uses[v] > 0 && uses[v] < 6) {
+      for (int c = 0; c < 2; ++c) {
+        const uint32_t h = static_cast<uint32_t>(v * 2654435761u + c * 40503u) >> 8;
+        p[c] += static_cast<float>(jitter / n * ((h % 2001) / 1000.0 - 1.0));
+      }
+    }
+    p[2] = static_cast<float>(0.01 * std::sin(17 * p[0]) * std::sin(13 * p[1]));
+  }
+  DropUnreferencedVertices(grid);
+  return grid;
+}
+
+TEST(MeshDecimate, AWaveringBorderIsSimplifiedLikeACoarserMeshsBorder) {
+  // The same disc meshed at 90 and at 30 cells across (9x fewer faces), both
+  // decimated to the coarse one's half: the fine mesh's border wavers by a
+  // quarter of its cell, a twelfth of an output edge, so it should end with
+  // about as many border edges as the coarse one (issue 15: a Remeshing mesh
+  // kept 2.6x the LPM's border edges). Planes along the border's course
+  // smoothed over half an output edge (version 2) held every waver: the
+  // fine border kept 264 of its 320 edges, 2.6x the coarse one's 100; with
+  // chords, 103 against 80.
+  const Mesh fine = WavyDisc(90, 0.25), coarse = WavyDisc(30, 0.25);
+  size_t border[2] = {0, 0};
+  size_t border_in_fine = Check(fine).boundary_edges;
+  for (const bool is_fine : {false, true}) {
+    DecimateOptions options;
+    options.target_faces = coarse.face_count() / 2;
+    auto out = DecimateMesh(is_fine ? fine : coarse, options, nullptr);
+    ASSERT_TRUE(out.ok()) << out.status().message();
+    const Topology topo = Check(*out);
+    EXPECT_EQ(topo.nonmanifold_edges, 0u);
+    border[is_fine] = topo.boundary_edges;
+    // The border stays within a cell of the coarse mesh of the circle
+    // (a staircase and its waver lie within one cell of it).
+    for (const auto& [a, b] : topo.boundary)
+      for (const uint32_t v : {a, b}) {
+        const float* p = &out->positions[3 * v];
+        const double r = std::hypot(p[0] - 0.5, p[1] - 0.5);
+        EXPECT_NEAR(r, 0.45, 1.5 / 30) << p[0] << " " << p[1];
+      }
+  }
+  EXPECT_LE(border[1], border[0] * 3 / 2) << "fine " << border[1] << " (of " << border_in_fine
+                                          << " in) vs coarse " << border[0];
 }
 
 TEST(MeshDecimate, SphereStaysClosedManifoldAndOriented) {
@@ -329,6 +394,12 @@ TEST(MeshDecimate, RejectsBadInput) {
             std::string::npos)
       << nan.status().message();
   options.min_normal_dot = 2;
+  EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
+  options.min_normal_dot = 0.2;
+  options.boundary_tolerance = -1;
+  EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
+  options.boundary_tolerance = 0.2;
+  options.boundary_erosion = 1.5;
   EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
 }
 
