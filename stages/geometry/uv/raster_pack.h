@@ -36,6 +36,11 @@ struct RasterPlacement {
   int box_width = 0;     // the chart's integer box before turning, texels
   int box_height = 0;
   int quarter_turns = 0;  // 0..3, counter-clockwise
+  // A turn by `angle` (radians, counter-clockwise, a fraction of a quarter
+  // turn) before the quarter turns: chart point (u, v) becomes
+  // (cos u - sin v - min_u, sin u + cos v - min_v), whose box is the one
+  // above. 0 for the minimal rectangle's own orientation.
+  double angle = 0, min_u = 0, min_v = 0;
 };
 
 struct RasterPackResult {
