@@ -1267,7 +1267,7 @@ Expected<RasterPackResult> RasterPackCharts(const std::vector<FlatChart>& charts
   constexpr size_t kTurnMaxCharts = 64;
   constexpr double kTurnMaxFill = 0.8;  // chart area / box area
   constexpr double kTurnStep = 1.004;
-  constexpr int kTurnRounds = 4;
+  constexpr int kTurnRounds = 3;
   size_t shaped = 0;
   double box_m2 = 0;
   for (const FlatChart& chart : charts) {

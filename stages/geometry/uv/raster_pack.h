@@ -17,6 +17,9 @@
 // of trial packings run side by side (each packing is sequential), aimed by
 // a secant on the packed height, to 0.8 %; then the orders longest side
 // first and shortest side first climb by 1.2 % steps while one fits. The
+// At most 64 irregular charts (covering under 0.8 of their boxes) then
+// also try, above the best scale, turns by multiples of 30, 15 or 45
+// degrees besides the quarter turns (RasterPlacement::angle). The
 // bounding boxes are also packed by pack.h's skyline; the larger of the
 // scales wins (a few large rectangular charts, like a room's walls, pack
 // better so).
