@@ -763,8 +763,8 @@ TEST(UvRasterPackTest, FewIrregularChartsAlsoTryOtherAngles) {
         const uint32_t v = charts[c].corners[3 * f + k];
         t[k] = PlacedTexel(p, s, charts[c].uv_m[2 * v], charts[c].uv_m[2 * v + 1]);
       }
-      const double cross = (t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) -
-                           (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]);
+      const double cross =
+          (t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]);
       if (!(cross > 0)) ++not_ccw;
     }
     EXPECT_EQ(p.x, two.placements[c].x);
