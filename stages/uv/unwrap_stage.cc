@@ -152,7 +152,7 @@ Status Run(StageContext& ctx) {
 StageType UnwrapStage() {
   StageType type;
   type.id = kId;
-  type.version = 4;  // 4: the packer skips the climb when the best packing fills the square
+  type.version = 5;  // 5: few irregular charts also try turns of 30 and 15 degrees
   type.summary =
       "UV atlas: conformal charts that follow the surface (or planar ones), one square texture";
   type.doc =

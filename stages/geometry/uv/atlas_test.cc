@@ -1,6 +1,7 @@
 #include "stages/geometry/uv/atlas.h"
 
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cmath>
 #include <cstdio>
@@ -706,6 +707,75 @@ TEST(UvRasterPackTest, SmallChartsNestInsideARing) {
                                0.5 * charts[c].height_m);
     EXPECT_LT(std::hypot(p[0] - centre[0], p[1] - centre[1]), 0.75 * s) << "square " << c;
   }
+}
+
+// `count` star-shaped charts (fans of 12 triangles around a centre, radii
+// 0.35-1 m at random): concave, about half their box, as a scan's charts.
+std::vector<FlatChart> MakeStarCharts(int count, uint32_t seed) {
+  auto random = [&]() {
+    seed = seed * 1664525u + 1013904223u;
+    return double(seed >> 8) / double(1u << 24);
+  };
+  std::vector<FlatChart> charts;
+  for (int i = 0; i < count; ++i) {
+    FlatChart chart;
+    const int sides = 12;
+    const double scale = 0.5 + random();
+    chart.vertices.push_back(0);
+    chart.uv_m = {0, 0};
+    for (int k = 0; k < sides; ++k) {
+      const double a = 2 * M_PI * k / sides;
+      const double r = scale * (k % 2 == 0 ? 0.6 + 0.4 * random() : 0.35 + 0.2 * random());
+      chart.vertices.push_back(uint32_t(k + 1));
+      chart.uv_m.insert(chart.uv_m.end(), {r * std::cos(a), r * std::sin(a)});
+    }
+    for (int k = 0; k < sides; ++k) {
+      chart.faces.push_back(uint32_t(k));
+      chart.corners.insert(chart.corners.end(),
+                           {0u, uint32_t(k + 1), uint32_t((k + 1) % sides + 1)});
+    }
+    FitRectangle(&chart);
+    charts.push_back(std::move(chart));
+  }
+  return charts;
+}
+
+TEST(UvRasterPackTest, FewIrregularChartsAlsoTryOtherAngles) {
+  // Few concave charts: besides the quarter turns of their minimal
+  // rectangles, the packer tries turns by multiples of 30 and 15 degrees
+  // at larger scales, kept only when they fit. On these charts they do:
+  // some chart ends up turned by another angle, the atlas still valid
+  // (inside the border gutter, gutters between charts, every triangle
+  // counter-clockwise) and the same for one and two threads.
+  const std::vector<FlatChart> charts = MakeStarCharts(24, 777);
+  const int size = 512, gutter = 2;
+  RasterPackResult one, two;
+  tbb::task_arena(1).execute([&]() { one = ExpectValidRasterPacking(charts, size, gutter); });
+  tbb::task_arena(2).execute([&]() { two = ExpectValidRasterPacking(charts, size, gutter); });
+  int turned = 0, not_ccw = 0;
+  const double s = one.texels_per_meter;
+  for (size_t c = 0; c < charts.size(); ++c) {
+    const RasterPlacement& p = one.placements[c];
+    if (p.angle != 0) ++turned;
+    for (size_t f = 0; f < charts[c].faces.size(); ++f) {
+      std::array<double, 2> t[3];
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t v = charts[c].corners[3 * f + k];
+        t[k] = PlacedTexel(p, s, charts[c].uv_m[2 * v], charts[c].uv_m[2 * v + 1]);
+      }
+      const double cross =
+          (t[1][0] - t[0][0]) * (t[2][1] - t[0][1]) - (t[2][0] - t[0][0]) * (t[1][1] - t[0][1]);
+      if (!(cross > 0)) ++not_ccw;
+    }
+    EXPECT_EQ(p.x, two.placements[c].x);
+    EXPECT_EQ(p.y, two.placements[c].y);
+    EXPECT_EQ(p.quarter_turns, two.placements[c].quarter_turns);
+    EXPECT_EQ(p.angle, two.placements[c].angle);
+  }
+  EXPECT_EQ(one.texels_per_meter, two.texels_per_meter);
+  EXPECT_FALSE(one.boxes);
+  EXPECT_GT(turned, 0);
+  EXPECT_EQ(not_ccw, 0);
 }
 
 TEST(UvRasterPackTest, AFoldedChartIsRasterizedFaceByFace) {

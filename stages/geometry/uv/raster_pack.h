@@ -17,6 +17,9 @@
 // of trial packings run side by side (each packing is sequential), aimed by
 // a secant on the packed height, to 0.8 %; then the orders longest side
 // first and shortest side first climb by 1.2 % steps while one fits. The
+// At most 64 irregular charts (covering under 0.8 of their boxes) then
+// also try, above the best scale, turns by multiples of 30, 15 or 45
+// degrees besides the quarter turns (RasterPlacement::angle). The
 // bounding boxes are also packed by pack.h's skyline; the larger of the
 // scales wins (a few large rectangular charts, like a room's walls, pack
 // better so).
@@ -36,6 +39,11 @@ struct RasterPlacement {
   int box_width = 0;     // the chart's integer box before turning, texels
   int box_height = 0;
   int quarter_turns = 0;  // 0..3, counter-clockwise
+  // A turn by `angle` (radians, counter-clockwise, a fraction of a quarter
+  // turn) before the quarter turns: chart point (u, v) becomes
+  // (cos u - sin v - min_u, sin u + cos v - min_v), whose box is the one
+  // above. 0 for the minimal rectangle's own orientation.
+  double angle = 0, min_u = 0, min_v = 0;
 };
 
 struct RasterPackResult {
