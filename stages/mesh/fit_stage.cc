@@ -21,7 +21,7 @@ constexpr const char* kSchema = R"({
       "type": "integer",
       "minimum": 1,
       "maximum": 100,
-      "default": 4,
+      "default": 12,
       "description": "Rounds of: assign each scan point to its nearest face, move the vertices."
     },
     "support_spacings": {
@@ -46,7 +46,7 @@ constexpr const char* kSchema = R"({
     "smoothness": {
       "type": "number",
       "minimum": 0,
-      "default": 1,
+      "default": 0.25,
       "description": "Weight of the smoothness of the displacement (membrane energy, relative to a vertex's mean data weight): noise averages over neighbours; 0 fits each vertex alone."
     },
     "smooth_sweeps": {

@@ -54,11 +54,11 @@
 namespace pb {
 
 struct FitOptions {
-  int iterations = 4;               // assignment + step rounds, >= 1
+  int iterations = 12;              // assignment + step rounds, >= 1
   double support_spacings = 3.0;    // support distance in local spacings, >= 0
   double support_edges = 0.5;       // ... floored by this many mean edge lengths, >= 0
   double min_normal_cosine = 0.0;   // point normal vs face normal (cloud with normals), [-1, 1]
-  double smoothness = 1.0;          // lambda of the displacement smoothing, >= 0
+  double smoothness = 0.25;         // lambda of the displacement smoothing, >= 0
   int smooth_sweeps = 8;            // Jacobi sweeps of the smoothing, >= 0
   double damping = 0.8;             // fraction of the solved step taken, (0, 1]
   double max_step_edges = 0.25;     // step clamp per round, in mean incident edge lengths, > 0
