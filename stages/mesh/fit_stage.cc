@@ -47,14 +47,14 @@ constexpr const char* kSchema = R"({
       "type": "number",
       "minimum": 0,
       "default": 0.25,
-      "description": "Weight of the smoothness of the displacement (membrane energy, relative to a vertex's mean data weight): noise averages over neighbours; 0 fits each vertex alone."
+      "description": "Weight of the smoothness of the displacement (membrane energy, relative to a vertex's mean data weight): noise averages over neighbours; 0 fits the points alone."
     },
-    "smooth_sweeps": {
+    "sweeps": {
       "type": "integer",
-      "minimum": 0,
+      "minimum": 1,
       "maximum": 1000,
-      "default": 8,
-      "description": "Jacobi sweeps of the displacement smoothing per round."
+      "default": 20,
+      "description": "Gauss-Seidel sweeps of the least-squares solve per round."
     },
     "damping": {
       "type": "number",
@@ -68,6 +68,12 @@ constexpr const char* kSchema = R"({
       "exclusiveMinimum": 0,
       "default": 0.25,
       "description": "Largest move of a vertex per round, in mean lengths of its edges."
+    },
+    "max_offset_edges": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 0.5,
+      "description": "Farthest a vertex may end from its input position, in mean lengths of its edges in the input: a chord's sagitta is a fraction of an edge, and a vertex pulled farther is pulled by the points of another surface."
     },
     "max_turn_deg": {
       "type": "number",
@@ -101,10 +107,11 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.support_edges, NumberParam(ctx, kId, "support_edges"));
   PB_ASSIGN_OR_RETURN(options.min_normal_cosine, NumberParam(ctx, kId, "min_normal_cosine"));
   PB_ASSIGN_OR_RETURN(options.smoothness, NumberParam(ctx, kId, "smoothness"));
-  PB_ASSIGN_OR_RETURN(const int64_t sweeps, IntegerParam(ctx, kId, "smooth_sweeps", {0, 1000}));
-  options.smooth_sweeps = static_cast<int>(sweeps);
+  PB_ASSIGN_OR_RETURN(const int64_t sweeps, IntegerParam(ctx, kId, "sweeps", {1, 1000}));
+  options.sweeps = static_cast<int>(sweeps);
   PB_ASSIGN_OR_RETURN(options.damping, NumberParam(ctx, kId, "damping"));
   PB_ASSIGN_OR_RETURN(options.max_step_edges, NumberParam(ctx, kId, "max_step_edges"));
+  PB_ASSIGN_OR_RETURN(options.max_offset_edges, NumberParam(ctx, kId, "max_offset_edges"));
   PB_ASSIGN_OR_RETURN(options.max_turn_deg, NumberParam(ctx, kId, "max_turn_deg"));
   PB_ASSIGN_OR_RETURN(const int64_t neighbors,
                       IntegerParam(ctx, kId, "spacing_neighbors", {1, 64}));
@@ -164,16 +171,19 @@ StageType FitStage() {
       "This stage fits the mesh to the points: each round, every scan point within "
       "`support_spacings` local spacings (or `support_edges` mean edges) of the mesh is assigned "
       "to its nearest face (exact point-triangle distance; with point normals, only a face "
-      "facing the same side, `min_normal_cosine`), and each vertex takes the "
-      "barycentric-weighted mean of its points' signed distances along the face normals; that "
-      "displacement field is smoothed (`smoothness`, `smooth_sweeps` Jacobi sweeps of the "
-      "membrane energy: the displacement is smoothed, not the positions, so the mesh does not "
-      "shrink) and each vertex moves along its normal by `damping` of it, at most "
-      "`max_step_edges` of its mean edge per round. Border vertices move the same way, along "
+      "facing the same side, `min_normal_cosine`) with its signed distance along the face "
+      "normal, and the vertices' displacements along their normals solve the least-squares "
+      "problem of those distances (the face moving by the barycentric blend of its corners) "
+      "plus `smoothness` times the membrane energy of the displacement (`sweeps` Gauss-Seidel "
+      "sweeps; the displacement is smoothed, not the positions, so the mesh does not "
+      "shrink), and each vertex moves along its normal by `damping` of it, at most "
+      "`max_step_edges` of its mean edge per round and at most `max_offset_edges` from where it "
+      "started. Border vertices move the same way, along "
       "the normal only. A move that would turn a face by more than `max_turn_deg` (from the "
       "input or the round before) or collapse it is halved until none does. Faces, vertex "
-      "order, colors and uvs are kept; normals, when present, are recomputed from the new "
-      "positions. Place it after the low mesh's decimation, before uv.unwrap. Deterministic "
+      "order, colors and uvs are kept; normals, when present, are the input's turned by the "
+      "rotation of each vertex's face normal (recomputing them would light every facet of a "
+      "decimated mesh). Place it after the low mesh's decimation, before uv.unwrap. Deterministic "
       "for any thread count.\n\n"
       "Counters: `supported_points`, `mean_abs_distance_before_m`, `mean_abs_distance_after_m` "
       "(mean |signed distance| of the supported points to the input and to the output), "

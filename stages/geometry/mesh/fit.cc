@@ -148,11 +148,11 @@ Status CheckOptions(const FitOptions& o) {
     return bad("min_normal_cosine must be in [-1, 1]");
   }
   if (!(o.smoothness >= 0)) return bad("smoothness must be >= 0");
-  if (o.smooth_sweeps < 0) return bad("smooth_sweeps must be >= 0");
+  if (o.sweeps < 1) return bad("sweeps must be >= 1");
   if (!(o.damping > 0 && o.damping <= 1)) return bad("damping must be in (0, 1]");
   if (!(o.max_step_edges > 0)) return bad("max_step_edges must be > 0");
+  if (!(o.max_offset_edges > 0)) return bad("max_offset_edges must be > 0");
   if (!(o.max_turn_deg > 0 && o.max_turn_deg < 180)) return bad("max_turn_deg must be in (0, 180)");
-  if (!(o.min_weight > 0)) return bad("min_weight must be > 0");
   if (o.spacing_neighbors < 1) return bad("spacing_neighbors must be >= 1");
   return Status::Ok();
 }
@@ -214,6 +214,25 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
     for (size_t i = 0; i < pairs.size(); ++i) nb[i] = pairs[i].second;
   }
 
+  // Each vertex's mean edge length in the input: the unit of its step per
+  // round and of its total offset (the input's, so a vertex that moves and
+  // lengthens its edges does not earn a longer leash).
+  std::vector<double> input_edge(nv, 0);
+  for (size_t v = 0; v < nv; ++v) {
+    const uint32_t s = nb_start[v], e = nb_start[v + 1];
+    if (s == e) continue;
+    const V3 p = Position(mesh.positions, static_cast<uint32_t>(v));
+    for (uint32_t j = s; j < e; ++j) input_edge[v] += Norm(Sub(Position(mesh.positions, nb[j]), p));
+    input_edge[v] /= static_cast<double>(e - s);
+  }
+  // Vertex -> face corners (3 f + corner), CSR, in face order.
+  std::vector<uint32_t> vf_start(nv + 1, 0), vf(3 * nf);
+  for (size_t i = 0; i < 3 * nf; ++i) ++vf_start[mesh.indices[i] + 1];
+  for (size_t v = 0; v < nv; ++v) vf_start[v + 1] += vf_start[v];
+  {
+    std::vector<uint32_t> fill(vf_start.begin(), vf_start.end() - 1);
+    for (size_t i = 0; i < 3 * nf; ++i) vf[fill[mesh.indices[i]]++] = static_cast<uint32_t>(i);
+  }
   const double cos_turn = std::cos(options.max_turn_deg * std::numbers::pi / 180);
   const std::vector<V3> input_crosses = FaceCrosses(mesh, mesh.positions);
   std::vector<float> positions = mesh.positions;
@@ -238,68 +257,89 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
         report.mean_signed_distance_before_m = sum / report.supported_before;
       }
     }
-    // Data term: barycentric-weighted sums, in point order.
-    std::vector<double> weight(nv, 0), weighted_d(nv, 0);
+    // The least-squares problem of the round, in the displacements u along
+    // the vertex normals: sum over points of (sum_k b_k u_k - d)^2, gathered
+    // per face as the 3 x 3 matrix sum b b^T and the vector sum b d (in point
+    // order), plus lambda W sum over edges of (u_i - u_j)^2.
+    std::vector<std::array<double, 6>> face_m(nf, std::array<double, 6>{});  // 00 11 22 01 02 12
+    std::vector<std::array<double, 3>> face_r(nf, std::array<double, 3>{});
     for (const Assignment& a : assigned) {
       if (a.face == UINT32_MAX) continue;
-      for (int k = 0; k < 3; ++k) {
-        const uint32_t v = mesh.indices[3 * size_t{a.face} + k];
-        weight[v] += a.b[k];
-        weighted_d[v] += a.b[k] * a.d;
-      }
+      auto& m = face_m[a.face];
+      const double b0 = a.b[0], b1 = a.b[1], b2 = a.b[2];
+      m[0] += b0 * b0;
+      m[1] += b1 * b1;
+      m[2] += b2 * b2;
+      m[3] += b0 * b1;
+      m[4] += b0 * b2;
+      m[5] += b1 * b2;
+      face_r[a.face][0] += b0 * a.d;
+      face_r[a.face][1] += b1 * a.d;
+      face_r[a.face][2] += b2 * a.d;
     }
-    std::vector<double> target(nv, 0);
+    std::vector<double> diagonal(nv, 0);
+    for (size_t f = 0; f < nf; ++f) {
+      for (int k = 0; k < 3; ++k) diagonal[mesh.indices[3 * f + k]] += face_m[f][k];
+    }
     double weight_sum = 0;
     size_t with_data = 0;
     for (size_t v = 0; v < nv; ++v) {
-      if (weight[v] < options.min_weight) {
-        weight[v] = 0;
-        continue;
+      if (diagonal[v] > 0) {
+        weight_sum += diagonal[v];
+        ++with_data;
       }
-      target[v] = weighted_d[v] / weight[v];
-      weight_sum += weight[v];
-      ++with_data;
     }
     if (with_data == 0) break;
     const double lambda_w = options.smoothness * weight_sum / static_cast<double>(with_data);
-    // Smoothing of the displacement field (Jacobi sweeps).
-    std::vector<double> u = target, next(nv);
-    for (int sweep = 0; sweep < options.smooth_sweeps && lambda_w > 0; ++sweep) {
-      ParallelRanges(nv, [&](size_t begin, size_t end) {
-        for (size_t v = begin; v < end; ++v) {
-          const uint32_t s = nb_start[v], e = nb_start[v + 1];
-          if (s == e) {
-            next[v] = u[v];
-            continue;
+    // Gauss-Seidel sweeps in vertex order (sequential: the same result for
+    // any thread count), from u = 0.
+    std::vector<double> u(nv, 0);
+    const auto m_at = [&](uint32_t f, int i, int j) {
+      if (i == j) return face_m[f][i];
+      const int lo = std::min(i, j), hi = std::max(i, j);
+      return face_m[f][lo == 0 ? (hi == 1 ? 3 : 4) : 5];
+    };
+    for (int sweep = 0; sweep < options.sweeps; ++sweep) {
+      for (size_t v = 0; v < nv; ++v) {
+        double numerator = 0, denominator = 0;
+        for (uint32_t j = vf_start[v]; j < vf_start[v + 1]; ++j) {
+          const uint32_t f = vf[j] / 3;
+          const int c = static_cast<int>(vf[j] % 3);
+          denominator += m_at(f, c, c);
+          numerator += face_r[f][c];
+          for (int k = 0; k < 3; ++k) {
+            if (k != c) numerator -= m_at(f, c, k) * u[mesh.indices[3 * size_t{f} + k]];
           }
-          double mean = 0;
-          for (uint32_t j = s; j < e; ++j) mean += u[nb[j]];
-          mean /= static_cast<double>(e - s);
-          next[v] = (weight[v] * target[v] + lambda_w * mean) / (weight[v] + lambda_w);
         }
-      });
-      u.swap(next);
+        const uint32_t s = nb_start[v], e = nb_start[v + 1];
+        for (uint32_t j = s; j < e; ++j) numerator += lambda_w * u[nb[j]];
+        denominator += lambda_w * static_cast<double>(e - s);
+        u[v] = denominator > 0 ? numerator / denominator : 0.0;
+      }
     }
     // Steps, clamped to a fraction of each vertex's mean edge.
     std::vector<double> step(nv, 0);
     for (size_t v = 0; v < nv; ++v) {
-      const uint32_t s = nb_start[v], e = nb_start[v + 1];
-      if (s == e || vnormals[v] == V3{0, 0, 0}) continue;
-      double edge = 0;
-      const V3 p = Position(positions, static_cast<uint32_t>(v));
-      for (uint32_t j = s; j < e; ++j) edge += Norm(Sub(Position(positions, nb[j]), p));
-      edge /= static_cast<double>(e - s);
-      const double limit = options.max_step_edges * edge;
+      if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
+      const double limit = options.max_step_edges * input_edge[v];
       step[v] = options.damping * std::clamp(u[v], -limit, limit);
     }
     // The face-turn guard: halve the steps of the vertices of faces that turn
-    // too far (or lose their area), then drop them.
+    // too far (or lose their area), then drop them. A vertex never ends
+    // farther than max_offset_edges of its edge from where it started.
     std::vector<float> moved(positions.size());
     const auto apply = [&] {
       for (size_t v = 0; v < nv; ++v) {
-        for (int c = 0; c < 3; ++c) {
-          moved[3 * v + c] = static_cast<float>(positions[3 * v + c] + step[v] * vnormals[v][c]);
+        V3 p;
+        for (int c = 0; c < 3; ++c) p[c] = positions[3 * v + c] + step[v] * vnormals[v][c];
+        const V3 p0 = Position(mesh.positions, static_cast<uint32_t>(v));
+        const V3 offset = Sub(p, p0);
+        const double length = Norm(offset);
+        const double limit = options.max_offset_edges * input_edge[v];
+        if (step[v] != 0 && length > limit) {
+          for (int c = 0; c < 3; ++c) p[c] = p0[c] + offset[c] * (limit / length);
         }
+        for (int c = 0; c < 3; ++c) moved[3 * v + c] = static_cast<float>(p[c]);
       }
     };
     const auto bad_faces = [&] {
@@ -379,10 +419,26 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
   }
   report.mean_move_m = nv > 0 ? total_move / static_cast<double>(nv) : 0;
   if (out.has_normals()) {
-    const std::vector<V3> normals = VertexNormals(out, FaceCrosses(out, out.positions));
+    // The input's normals (a Poisson surface's, smoother than the decimated
+    // faces) turned by the rotation that takes each vertex's geometric
+    // normal before to the one after: recomputing them from the faces
+    // instead would show every facet of the decimated mesh in the lighting.
+    const std::vector<V3> before = VertexNormals(mesh, input_crosses);
+    const std::vector<V3> after = VertexNormals(out, FaceCrosses(out, out.positions));
     for (size_t v = 0; v < nv; ++v) {
-      if (normals[v] == V3{0, 0, 0}) continue;  // keeps a vertex of no face's own
-      for (int c = 0; c < 3; ++c) out.normals[3 * v + c] = static_cast<float>(normals[v][c]);
+      const V3& a = before[v];
+      const V3& b = after[v];
+      const double c = Dot(a, b);
+      if (a == V3{0, 0, 0} || b == V3{0, 0, 0} || c < -0.99) continue;
+      const V3 axis = Cross(a, b);
+      const V3 n = {mesh.normals[3 * v], mesh.normals[3 * v + 1], mesh.normals[3 * v + 2]};
+      const V3 turned_axis = Cross(axis, n);
+      const double k = Dot(axis, n) / (1 + c);
+      V3 r;
+      for (int i = 0; i < 3; ++i) r[i] = n[i] * c + turned_axis[i] + axis[i] * k;
+      r = Unit(r);
+      if (r == V3{0, 0, 0}) continue;
+      for (int i = 0; i < 3; ++i) out.normals[3 * v + i] = static_cast<float>(r[i]);
     }
   }
   return out;

@@ -19,27 +19,37 @@
 //    (a point seen from the other side of a thin part does not pull).
 //  * The point's signed distance d = (p - q) . n_f, n_f the face's unit
 //    normal (positive: the point lies outside the surface).
-//  * Data term per vertex v: the barycentric-weighted mean of d over the
-//    points of its incident faces, t_v = sum b_v d / sum b_v, with weight
-//    W_v = sum b_v; vertices with W_v < min_weight have no data.
-//  * Regularizer: the displacement field is smoothed, not the positions (a
-//    Laplacian on positions would shrink the mesh, which is the very error
-//    being corrected): `smooth_sweeps` Jacobi sweeps of
-//      u_v = (W_v t_v + lambda W u_mean(neighbours)) / (W_v + lambda W)
-//    with W the mean W_v over vertices with data and lambda = `smoothness`,
-//    the minimizer of sum W_v (u_v - t_v)^2 + lambda W sum_edges (u_i - u_j)^2
-//    restricted to one vertex (noise averages over neighbours; vertices
-//    without data follow their neighbours).
+//  * Per round, the displacements u along the vertex normals solve the
+//    least-squares problem
+//      sum over points of (b0 u_0 + b1 u_1 + b2 u_2 - d)^2
+//        + lambda W sum over edges (u_i - u_j)^2
+//    (the face moves by the barycentric blend of its corners' moves; W the
+//    mean diagonal data weight of the vertices with points, lambda =
+//    `smoothness`) by `sweeps` Gauss-Seidel sweeps in vertex order from
+//    u = 0. The smoothness term acts on the displacement, not on the
+//    positions (a Laplacian on positions would shrink the mesh, which is the
+//    very error being corrected); vertices without points follow their
+//    neighbours. Solving the coupled problem, not each vertex's mean
+//    distance alone, matters: a checkerboard of moves (a vertex up, its
+//    neighbours down) leaves each vertex's barycentric-weighted mean
+//    residual at zero, so a per-vertex estimate lets noise accumulate there
+//    and a flat noisy wall comes out faceted.
 //  * Step: v += damping x clamp(u_v, +-max_step_edges x the mean length of v's
-//    edges) x n_v, n_v the area-weighted vertex normal. Border vertices move
+//    edges in the input) x n_v, n_v the area-weighted vertex normal, and v
+//    never ends farther than max_offset_edges of that length from its input
+//    position (a chord's sagitta is a fraction of an edge; a vertex pulled
+//    farther is pulled by another surface's points). Border vertices move
 //    the same way, along the normal only: that widens a pipe's outline
 //    without growing the mesh's borders into unscanned space.
 //  * No face may turn by more than `max_turn_deg` from its normal before the
 //    step or in the input, nor lose its area: the steps of the vertices of
 //    such faces are halved (up to 6 times, then dropped) until none does.
 // Faces, vertex order and every attribute but positions and normals are
-// kept (normals, when present, are recomputed, area-weighted, from the new
-// positions; uvs are not touched: it runs before unwrapping). Deterministic
+// kept; normals, when present, are the input's turned by the rotation that
+// takes the vertex's area-weighted face normal before the fit to the one
+// after (recomputing them from the faces would show every facet of a
+// decimated mesh in the lighting, where the input's normals are the
+// smoother surface's); uvs are not touched: it runs before unwrapping. Deterministic
 // for any thread count: every point's assignment is independent, and the
 // sums run in point order.
 #pragma once
@@ -59,11 +69,11 @@ struct FitOptions {
   double support_edges = 0.5;       // ... floored by this many mean edge lengths, >= 0
   double min_normal_cosine = 0.0;   // point normal vs face normal (cloud with normals), [-1, 1]
   double smoothness = 0.25;         // lambda of the displacement smoothing, >= 0
-  int smooth_sweeps = 8;            // Jacobi sweeps of the smoothing, >= 0
+  int sweeps = 20;                  // Gauss-Seidel sweeps of the solve per round, >= 1
   double damping = 0.8;             // fraction of the solved step taken, (0, 1]
   double max_step_edges = 0.25;     // step clamp per round, in mean incident edge lengths, > 0
+  double max_offset_edges = 0.5;    // farthest a vertex ends from its input position, same unit, > 0
   double max_turn_deg = 60.0;       // largest turn of a face normal, (0, 180)
-  double min_weight = 1.0;          // vertices with less barycentric weight have no data, > 0
   int spacing_neighbors = 8;        // k of the local spacing, >= 1
   int threads = 0;                  // 0: TBB's default (all cores)
 };
