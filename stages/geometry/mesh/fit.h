@@ -29,11 +29,10 @@
 //    u = 0. The smoothness term acts on the displacement, not on the
 //    positions (a Laplacian on positions would shrink the mesh, which is the
 //    very error being corrected); vertices without points follow their
-//    neighbours. Solving the coupled problem, not each vertex's mean
-//    distance alone, matters: a checkerboard of moves (a vertex up, its
-//    neighbours down) leaves each vertex's barycentric-weighted mean
-//    residual at zero, so a per-vertex estimate lets noise accumulate there
-//    and a flat noisy wall comes out faceted.
+//    neighbours. (The coupled problem rather than each vertex's own
+//    barycentric-weighted mean distance: that estimate does not see a
+//    checkerboard of moves, a vertex up and its neighbours down, which
+//    leaves its weighted mean residual at zero.)
 //  * Step: v += damping x clamp(u_v, +-max_step_edges x the mean length of v's
 //    edges in the input) x n_v, n_v the area-weighted vertex normal, and v
 //    never ends farther than max_offset_edges of that length from its input
