@@ -12,7 +12,7 @@ constexpr StageType (*kBuiltinStages[])() = {
     OutliersStage,     NormalsStage,      SpacingStage,          SmoothStage,
     PoissonStage,
     TrimStage,
-    DecimateStage,     CleanStage,        UnwrapStage,           VertexColorsBakeStage,
+    DecimateStage,     CleanStage,        FitStage,        UnwrapStage,           VertexColorsBakeStage,
     FromMeshBakeStage, FromPointsBakeStage, GltfExportStage,     ObjExportStage,
     VtpExportStage,
     FramesStage,       SplatsStage,       GeometryMetricsStage, ImageMetricsStage,

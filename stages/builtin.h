@@ -37,6 +37,8 @@ StageType TrimStage();
 StageType DecimateStage();
 // mesh.clean: removes degenerate and duplicate faces, small components.
 StageType CleanStage();
+// mesh.fit: moves a mesh's vertices along their normals onto the scan.
+StageType FitStage();
 
 // uv.unwrap: charts or per-triangle UV atlas (stages/geometry/uv/atlas.h).
 StageType UnwrapStage();

@@ -8,11 +8,12 @@ Reads report/results.json and, for every scene (or those named), checks:
   - every shipped workflow's final mesh: invented area < 2 % of its area,
     hole pixels < --max-holes of the scan's sample footprint (metrics.image
     v4 hole_fraction: pixels a visible scan point projects into where the
-    model shows background; default 0.002, issue 15's goal, met by HPM but
-    not by the low meshes on the pump: 0.13 % HPM, 0.34 % LPM and point
-    transfer, 0.49 % Remeshing, most of it their outline a pixel inside the
-    outermost samples of curved pipes; ctest guards the current level with
-    --max-holes 0.0075, docs/real-scans.md). The line also gives the part
+    model shows background; default 0.002, issue 15's goal, met on the pump
+    by every workflow since mesh.fit moves the low meshes onto the scan:
+    0.13 % HPM, 0.19 % LPM and point transfer, 0.18 % Remeshing (0.34 and
+    0.49 % before, their outline a pixel inside the outermost samples of
+    curved pipes); ctest guards it with --max-holes 0.002,
+    docs/real-scans.md). The line also gives the part
     enclosed by the model (background seen through it: missing faces), the
     part at its silhouette, and the count on the splats' disks (the old
     definition, splat_hole_fraction);

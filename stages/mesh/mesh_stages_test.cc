@@ -349,5 +349,69 @@ TEST_F(MeshStagesTest, TrimRemovesUnsupportedFacesAndCleanFillsPinHoles) {
   EXPECT_EQ(clean.counters_["faces_out"], trim.counters_["faces_out"] + 2);
 }
 
+// mesh.fit: a grid 4 mm under points on z = 0 is lifted onto them, every
+// vertex along its normal; faces and colors are kept; the counters say so.
+// Points that do not fit (too few) give a clear error naming the files.
+TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
+  const StageType* type = registry_.Find("mesh.fit");
+  ASSERT_NE(type, nullptr);
+  EXPECT_EQ(type->version, 1);
+  const nlohmann::json schema = CheckedSchema(*type, true);
+  EXPECT_EQ(schema["properties"]["iterations"]["default"], 12);
+  ASSERT_EQ(type->inputs.size(), 2u);
+  EXPECT_EQ(type->inputs[1].name, "points");
+
+  PointCloud points;
+  for (int j = 0; j <= 100; ++j) {
+    for (int i = 0; i <= 100; ++i) {
+      points.positions.insert(points.positions.end(), {i / 100.0f, j / 100.0f, 0.0f});
+    }
+  }
+  Mesh grid;
+  const int n = 10;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      grid.positions.insert(grid.positions.end(),
+                            {static_cast<float>(i) / n, static_cast<float>(j) / n, -0.004f});
+      grid.colors.insert(grid.colors.end(), {static_cast<uint8_t>(i), 7, 9});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      grid.indices.insert(grid.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  FakeContext fit(dir_ / "fit", nlohmann::json::object(), 2);
+  fit.AddInput("mesh", "mesh", WriteInputMesh("grid", grid), {{"source", "test"}});
+  fit.AddInput("points", "points", WriteInputPoints("points", points));
+  const Status status = Run("mesh.fit", fit);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_NEAR(fit.counters_["mean_abs_distance_before_m"], 0.004, 1e-4);
+  EXPECT_LT(fit.counters_["mean_abs_distance_after_m"], 2e-4);
+  EXPECT_EQ(fit.counters_["vertices_moved"], (n + 1) * (n + 1));
+  EXPECT_NEAR(fit.counters_["max_move_m"], 0.004, 5e-4);
+  EXPECT_EQ(fit.phases_, (std::set<std::string>{"io", "compute"}));
+  EXPECT_EQ(fit.meta_["mesh"]["source"], "test");
+  auto fitted = ReadPlyMesh(fit.outputs_["mesh"]);
+  ASSERT_TRUE(fitted.ok());
+  EXPECT_EQ(fitted->mesh.indices, grid.indices);
+  EXPECT_EQ(fitted->mesh.colors, grid.colors);
+  for (size_t v = 0; v < fitted->mesh.vertex_count(); ++v) {
+    EXPECT_NEAR(fitted->mesh.positions[3 * v + 2], 0.0, 2e-4) << "vertex " << v;
+    EXPECT_NEAR(fitted->mesh.positions[3 * v], grid.positions[3 * v], 1e-6);
+  }
+
+  PointCloud few;
+  few.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};
+  FakeContext bad(dir_ / "bad", nlohmann::json::object(), 1);
+  bad.AddInput("mesh", "mesh", WriteInputMesh("grid2", grid));
+  bad.AddInput("points", "points", WriteInputPoints("few", few));
+  const Status bad_status = Run("mesh.fit", bad);
+  EXPECT_EQ(bad_status.code(), Status::Code::kInvalid);
+  EXPECT_THAT(bad_status.message(), HasSubstr("mesh fit: needs more than 8 points"));
+  EXPECT_THAT(bad_status.message(), HasSubstr("few"));
+}
+
 }  // namespace
 }  // namespace pb

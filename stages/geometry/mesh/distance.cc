@@ -122,9 +122,11 @@ Vec3 ClosestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 
 TriangleBvh::TriangleBvh(const Mesh& mesh) : origin_(mesh.origin) {
   triangles_.resize(mesh.face_count());
+  faces_.resize(mesh.face_count());
   const std::array<double, 3> zero{};
   for (size_t f = 0; f < triangles_.size(); ++f) {
     for (int k = 0; k < 3; ++k) triangles_[f][k] = Corner(mesh, mesh.indices[3 * f + k], zero);
+    faces_[f] = static_cast<uint32_t>(f);
   }
   if (triangles_.empty()) return;
   nodes_.reserve(2 * triangles_.size() / 4 + 2);
@@ -169,11 +171,27 @@ void TriangleBvh::Build() {
       if (cmax[a] - cmin[a] > cmax[axis] - cmin[axis]) axis = a;
     }
     const uint32_t mid = task.begin + (task.end - task.begin) / 2;
-    std::nth_element(triangles_.begin() + task.begin, triangles_.begin() + mid,
-                     triangles_.begin() + task.end, [axis](const auto& x, const auto& y) {
+    // The split moves each triangle's face index with it (a permutation
+    // sorted alongside, then applied).
+    std::vector<uint32_t> order(task.end - task.begin);
+    for (uint32_t i = 0; i < order.size(); ++i) order[i] = task.begin + i;
+    std::nth_element(order.begin(), order.begin() + (mid - task.begin), order.end(),
+                     [this, axis](uint32_t i, uint32_t j) {
+                       const auto& x = triangles_[i];
+                       const auto& y = triangles_[j];
                        return x[0][axis] + x[1][axis] + x[2][axis] <
                               y[0][axis] + y[1][axis] + y[2][axis];
                      });
+    {
+      std::vector<std::array<Vec3, 3>> tris(order.size());
+      std::vector<uint32_t> faces(order.size());
+      for (size_t i = 0; i < order.size(); ++i) {
+        tris[i] = triangles_[order[i]];
+        faces[i] = faces_[order[i]];
+      }
+      std::copy(tris.begin(), tris.end(), triangles_.begin() + task.begin);
+      std::copy(faces.begin(), faces.end(), faces_.begin() + task.begin);
+    }
     node.first = static_cast<uint32_t>(nodes_.size());
     node.count = 0;
     nodes_[task.node] = node;
@@ -215,6 +233,48 @@ double TriangleBvh::Distance(const Vec3& point) const {
     }
   }
   return std::sqrt(best2);
+}
+
+TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point) const {
+  Hit hit;
+  if (triangles_.empty()) return hit;
+  const Vec3 p = Sub(point, origin_);
+  double best2 = std::numeric_limits<double>::infinity();
+  Vec3 best_q{};
+  uint32_t stack[64];
+  int top = 0;
+  stack[top++] = 0;
+  while (top > 0) {
+    const Node& node = nodes_[stack[--top]];
+    if (BoxDistance2(p, node.min, node.max) > best2) continue;  // ties may still win
+    if (node.count > 0) {
+      for (uint32_t t = node.first; t < node.first + node.count; ++t) {
+        const auto& tri = triangles_[t];
+        const Vec3 q = ClosestPointOnTriangle(p, tri[0], tri[1], tri[2]);
+        const double d2 = Norm2(Sub(p, q));
+        if (d2 < best2 || (d2 == best2 && faces_[t] < hit.face)) {
+          best2 = d2;
+          best_q = q;
+          hit.face = faces_[t];
+        }
+      }
+      continue;
+    }
+    const Node& left = nodes_[node.first];
+    const Node& right = nodes_[node.first + 1];
+    const double dl = BoxDistance2(p, left.min, left.max);
+    const double dr = BoxDistance2(p, right.min, right.max);
+    if (dl < dr) {
+      if (dr <= best2) stack[top++] = node.first + 1;
+      if (dl <= best2) stack[top++] = node.first;
+    } else {
+      if (dl <= best2) stack[top++] = node.first;
+      if (dr <= best2) stack[top++] = node.first + 1;
+    }
+  }
+  hit.closest = {best_q[0] + origin_[0], best_q[1] + origin_[1], best_q[2] + origin_[2]};
+  hit.squared_distance_m2 = best2;
+  return hit;
 }
 
 std::vector<Vec3> SampleMeshSurface(const Mesh& mesh, size_t count, uint64_t seed) {

@@ -39,6 +39,17 @@ class TriangleBvh {
   // triangle; +infinity for an empty mesh.
   double Distance(const Vec3& point) const;
 
+  // The nearest triangle to `point` (absolute coordinates): its face index in
+  // the mesh given to the constructor, the closest point on it (absolute) and
+  // the squared distance. Ties go to the lowest face index, so the answer
+  // does not depend on the tree's layout. face = UINT32_MAX for an empty mesh.
+  struct Hit {
+    uint32_t face = UINT32_MAX;
+    Vec3 closest{};
+    double squared_distance_m2 = 0;
+  };
+  Hit Nearest(const Vec3& point) const;
+
  private:
   struct Node {
     std::array<double, 3> min, max;
@@ -49,6 +60,7 @@ class TriangleBvh {
 
   std::array<double, 3> origin_{};
   std::vector<std::array<Vec3, 3>> triangles_;  // corners relative to origin_
+  std::vector<uint32_t> faces_;                  // mesh face of each of triangles_
   std::vector<Node> nodes_;
 };
 

@@ -96,7 +96,31 @@ TEST(MeshDistanceTest, BvhMatchesBruteForceOverAllTriangles) {
     }
     const Vec3 absolute = {local[0] + 1000, local[1] - 2000, local[2] + 50};
     ASSERT_NEAR(bvh.Distance(absolute), best, 1e-9) << "query " << i;
+    // Nearest names the face: its own distance is the best, the closest
+    // point is in absolute coordinates.
+    const TriangleBvh::Hit hit = bvh.Nearest(absolute);
+    ASSERT_LT(hit.face, soup.face_count());
+    Vec3 corner[3];
+    for (int k = 0; k < 3; ++k) {
+      for (int a = 0; a < 3; ++a) corner[k][a] = soup.positions[9 * hit.face + 3 * k + a];
+    }
+    EXPECT_NEAR(BruteForceDistance(local, corner[0], corner[1], corner[2]), best, 1e-9);
+    EXPECT_NEAR(std::sqrt(hit.squared_distance_m2), best, 1e-9);
+    EXPECT_NEAR(Dist(hit.closest, absolute), best, 1e-9);
   }
+  EXPECT_EQ(TriangleBvh(Mesh{}).Nearest({0, 0, 0}).face, UINT32_MAX);
+}
+
+// Ties go to the lowest face index: two copies of one triangle.
+TEST(MeshDistanceTest, NearestBreaksTiesByFaceIndex) {
+  Mesh mesh;
+  for (int copy = 0; copy < 6; ++copy) {
+    mesh.positions.insert(mesh.positions.end(), {0, 0, 0, 1, 0, 0, 0, 1, 0});
+    for (int k = 0; k < 3; ++k) mesh.indices.push_back(static_cast<uint32_t>(3 * copy + k));
+  }
+  const TriangleBvh bvh(mesh);
+  EXPECT_EQ(bvh.Nearest({0.2, 0.2, 1}).face, 0u);
+  EXPECT_EQ(bvh.Nearest({-3, 5, -1}).face, 0u);
 }
 
 TEST(MeshDistanceTest, SamplingIsDeterministicAndOnTheSurface) {

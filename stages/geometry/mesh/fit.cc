@@ -1,0 +1,464 @@
+// Fitting a mesh to its scan (see fit.h). The data term is the point-to-plane
+// distance of ICP (Chen & Medioni 1992) with the vertices moving along their
+// normals, as in normal-displacement fitting of a coarse surface to samples
+// (Krishnamurthy & Levoy 1996, "Fitting smooth surfaces to dense polygon
+// meshes", section 4); the smoothness term is the membrane energy of the
+// displacement field, solved by Jacobi sweeps.
+#include "stages/geometry/mesh/fit.h"
+
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <vector>
+
+#include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/mesh/trim.h"  // MeanEdgeLength
+#include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/spacing.h"
+
+namespace pb {
+namespace {
+
+using V3 = std::array<double, 3>;
+
+V3 Sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
+double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
+V3 Cross(const V3& a, const V3& b) {
+  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
+}
+double Norm(const V3& a) { return std::sqrt(Dot(a, a)); }
+
+template <typename Body>
+void ParallelRanges(size_t n, const Body& body) {
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024),
+                    [&](const tbb::blocked_range<size_t>& r) { body(r.begin(), r.end()); });
+}
+
+V3 Position(const std::vector<float>& positions, uint32_t v) {
+  return {positions[3 * size_t{v}], positions[3 * size_t{v} + 1], positions[3 * size_t{v} + 2]};
+}
+
+// Non-normalized face normals (twice the area), one per face.
+std::vector<V3> FaceCrosses(const Mesh& mesh, const std::vector<float>& positions) {
+  std::vector<V3> crosses(mesh.face_count());
+  for (size_t f = 0; f < crosses.size(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    const V3 a = Position(positions, t[0]);
+    crosses[f] = Cross(Sub(Position(positions, t[1]), a), Sub(Position(positions, t[2]), a));
+  }
+  return crosses;
+}
+
+V3 Unit(const V3& a) {
+  const double n = Norm(a);
+  return n > 0 ? V3{a[0] / n, a[1] / n, a[2] / n} : V3{0, 0, 0};
+}
+
+// Area-weighted vertex normals (unit; zero for a vertex of no face or of
+// faces without area).
+std::vector<V3> VertexNormals(const Mesh& mesh, const std::vector<V3>& crosses) {
+  std::vector<V3> normals(mesh.vertex_count(), V3{0, 0, 0});
+  for (size_t f = 0; f < crosses.size(); ++f) {
+    for (int k = 0; k < 3; ++k) {
+      V3& n = normals[mesh.indices[3 * f + k]];
+      for (int c = 0; c < 3; ++c) n[c] += crosses[f][c];
+    }
+  }
+  for (V3& n : normals) n = Unit(n);
+  return normals;
+}
+
+// Barycentric coordinates of q (on the triangle) in (a, b, c); thirds for a
+// triangle without area.
+std::array<double, 3> Barycentric(const V3& q, const V3& a, const V3& b, const V3& c) {
+  const V3 v0 = Sub(b, a), v1 = Sub(c, a), v2 = Sub(q, a);
+  const double d00 = Dot(v0, v0), d01 = Dot(v0, v1), d11 = Dot(v1, v1);
+  const double d20 = Dot(v2, v0), d21 = Dot(v2, v1);
+  const double den = d00 * d11 - d01 * d01;
+  if (!(den > 1e-30)) return {1.0 / 3, 1.0 / 3, 1.0 / 3};
+  double v = (d11 * d20 - d01 * d21) / den;
+  double w = (d00 * d21 - d01 * d20) / den;
+  v = std::clamp(v, 0.0, 1.0);
+  w = std::clamp(w, 0.0, 1.0 - v);
+  return {1 - v - w, v, w};
+}
+
+// One point's assignment to its nearest face.
+struct Assignment {
+  uint32_t face = UINT32_MAX;  // UINT32_MAX: not supported
+  float b[3] = {0, 0, 0};
+  double d = 0;  // signed distance along the face normal, meters
+};
+
+// Assigns every point (mesh frame, `local`) to its nearest face of the mesh
+// with `positions`; unsupported points get face UINT32_MAX.
+std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& positions,
+                               const std::vector<V3>& local, const std::vector<float>& spacing,
+                               const PointCloud& points, const FitOptions& options,
+                               double edge_floor_m) {
+  Mesh work;
+  work.positions = positions;
+  work.indices = mesh.indices;
+  const TriangleBvh bvh(work);
+  const std::vector<V3> crosses = FaceCrosses(mesh, positions);
+  std::vector<Assignment> out(local.size());
+  ParallelRanges(local.size(), [&](size_t begin, size_t end) {
+    for (size_t i = begin; i < end; ++i) {
+      const TriangleBvh::Hit hit = bvh.Nearest(local[i]);
+      if (hit.face == UINT32_MAX) continue;
+      const double support =
+          std::max(options.support_spacings * spacing[i], edge_floor_m);
+      if (hit.squared_distance_m2 > support * support) continue;
+      const V3 n = Unit(crosses[hit.face]);
+      if (n == V3{0, 0, 0}) continue;
+      if (points.has_normals()) {
+        const V3 pn = {points.normals[3 * i], points.normals[3 * i + 1], points.normals[3 * i + 2]};
+        if (Dot(pn, n) < options.min_normal_cosine * Norm(pn)) continue;
+      }
+      const uint32_t* t = &mesh.indices[3 * size_t{hit.face}];
+      const auto b = Barycentric(hit.closest, Position(positions, t[0]),
+                                 Position(positions, t[1]), Position(positions, t[2]));
+      Assignment& a = out[i];
+      a.face = hit.face;
+      for (int k = 0; k < 3; ++k) a.b[k] = static_cast<float>(b[k]);
+      a.d = Dot(Sub(local[i], hit.closest), n);
+    }
+  });
+  return out;
+}
+
+Status CheckOptions(const FitOptions& o) {
+  const auto bad = [](const std::string& what) {
+    return Status::Invalid("mesh fit: option " + what);
+  };
+  if (o.iterations < 1) return bad("iterations must be >= 1");
+  if (!(o.support_spacings >= 0)) return bad("support_spacings must be >= 0");
+  if (!(o.support_edges >= 0)) return bad("support_edges must be >= 0");
+  if (!(o.support_spacings > 0 || o.support_edges > 0)) {
+    return bad("support_spacings and support_edges cannot both be 0");
+  }
+  if (!(o.min_normal_cosine >= -1 && o.min_normal_cosine <= 1)) {
+    return bad("min_normal_cosine must be in [-1, 1]");
+  }
+  if (!(o.smoothness >= 0)) return bad("smoothness must be >= 0");
+  if (o.sweeps < 1) return bad("sweeps must be >= 1");
+  if (!(o.damping > 0 && o.damping <= 1)) return bad("damping must be in (0, 1]");
+  if (!(o.max_step_edges > 0)) return bad("max_step_edges must be > 0");
+  if (!(o.max_offset_edges > 0)) return bad("max_offset_edges must be > 0");
+  if (!(o.max_turn_deg > 0 && o.max_turn_deg < 180)) return bad("max_turn_deg must be in (0, 180)");
+  if (o.spacing_neighbors < 1) return bad("spacing_neighbors must be >= 1");
+  return Status::Ok();
+}
+
+Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions& options,
+                   FitReport& report) {
+  PB_RETURN_IF_ERROR(Validate(mesh));
+  PB_RETURN_IF_ERROR(Validate(points));
+  PB_RETURN_IF_ERROR(CheckOptions(options));
+  if (mesh.face_count() == 0) return Status::Invalid("mesh fit: the mesh has no faces");
+  PB_RETURN_IF_ERROR(CheckFinitePositions(points, "mesh fit"));
+  if (points.size() <= static_cast<size_t>(options.spacing_neighbors)) {
+    return Status::Invalid("mesh fit: needs more than " +
+                           std::to_string(options.spacing_neighbors) +
+                           " points for the local spacing, the cloud has " +
+                           std::to_string(points.size()));
+  }
+  for (float x : mesh.positions) {
+    if (!std::isfinite(x)) return Status::Invalid("mesh fit: the mesh has a non-finite position");
+  }
+  PB_ASSIGN_OR_RETURN(KnnIndex index, KnnIndex::Build(points.positions));
+  PB_ASSIGN_OR_RETURN(std::vector<float> spacing, LocalSpacing(index, options.spacing_neighbors));
+  {
+    std::vector<float> sorted = spacing;
+    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+    report.median_spacing_m = sorted[sorted.size() / 2];
+  }
+  report.points = points.size();
+  report.mean_edge_m = MeanEdgeLength(mesh);
+  const double edge_floor = options.support_edges * report.mean_edge_m;
+
+  // The points in the mesh's frame.
+  std::vector<V3> local(points.size());
+  const V3 shift = {points.origin[0] - mesh.origin[0], points.origin[1] - mesh.origin[1],
+                    points.origin[2] - mesh.origin[2]};
+  for (size_t i = 0; i < local.size(); ++i) {
+    for (int c = 0; c < 3; ++c) local[i][c] = points.positions[3 * i + c] + shift[c];
+  }
+
+  const size_t nv = mesh.vertex_count();
+  const size_t nf = mesh.face_count();
+  // Vertex neighbours (CSR, sorted, unique) and each vertex's mean edge length.
+  std::vector<uint32_t> nb_start(nv + 1, 0), nb;
+  {
+    std::vector<std::pair<uint32_t, uint32_t>> pairs;
+    pairs.reserve(6 * nf);
+    for (size_t f = 0; f < nf; ++f) {
+      for (int k = 0; k < 3; ++k) {
+        const uint32_t a = mesh.indices[3 * f + k], b = mesh.indices[3 * f + (k + 1) % 3];
+        pairs.emplace_back(a, b);
+        pairs.emplace_back(b, a);
+      }
+    }
+    std::sort(pairs.begin(), pairs.end());
+    pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    for (const auto& p : pairs) ++nb_start[p.first + 1];
+    for (size_t v = 0; v < nv; ++v) nb_start[v + 1] += nb_start[v];
+    nb.resize(pairs.size());
+    for (size_t i = 0; i < pairs.size(); ++i) nb[i] = pairs[i].second;
+  }
+
+  // Each vertex's mean edge length in the input: the unit of its step per
+  // round and of its total offset (the input's, so a vertex that moves and
+  // lengthens its edges does not earn a longer leash).
+  std::vector<double> input_edge(nv, 0);
+  for (size_t v = 0; v < nv; ++v) {
+    const uint32_t s = nb_start[v], e = nb_start[v + 1];
+    if (s == e) continue;
+    const V3 p = Position(mesh.positions, static_cast<uint32_t>(v));
+    for (uint32_t j = s; j < e; ++j) input_edge[v] += Norm(Sub(Position(mesh.positions, nb[j]), p));
+    input_edge[v] /= static_cast<double>(e - s);
+  }
+  // Vertex -> face corners (3 f + corner), CSR, in face order.
+  std::vector<uint32_t> vf_start(nv + 1, 0), vf(3 * nf);
+  for (size_t i = 0; i < 3 * nf; ++i) ++vf_start[mesh.indices[i] + 1];
+  for (size_t v = 0; v < nv; ++v) vf_start[v + 1] += vf_start[v];
+  {
+    std::vector<uint32_t> fill(vf_start.begin(), vf_start.end() - 1);
+    for (size_t i = 0; i < 3 * nf; ++i) vf[fill[mesh.indices[i]]++] = static_cast<uint32_t>(i);
+  }
+  const double cos_turn = std::cos(options.max_turn_deg * std::numbers::pi / 180);
+  const std::vector<V3> input_crosses = FaceCrosses(mesh, mesh.positions);
+  std::vector<float> positions = mesh.positions;
+  std::vector<uint8_t> supported_before(points.size(), 0);
+
+  for (int round = 0; round < options.iterations; ++round) {
+    const std::vector<V3> crosses = FaceCrosses(mesh, positions);
+    const std::vector<V3> vnormals = VertexNormals(mesh, crosses);
+    const std::vector<Assignment> assigned =
+        Assign(mesh, positions, local, spacing, points, options, edge_floor);
+    if (round == 0) {
+      double sum_abs = 0, sum = 0;
+      for (size_t i = 0; i < assigned.size(); ++i) {
+        if (assigned[i].face == UINT32_MAX) continue;
+        supported_before[i] = 1;
+        ++report.supported_before;
+        sum_abs += std::abs(assigned[i].d);
+        sum += assigned[i].d;
+      }
+      if (report.supported_before > 0) {
+        report.mean_abs_distance_before_m = sum_abs / report.supported_before;
+        report.mean_signed_distance_before_m = sum / report.supported_before;
+      }
+    }
+    // The least-squares problem of the round, in the displacements u along
+    // the vertex normals: sum over points of (sum_k b_k u_k - d)^2, gathered
+    // per face as the 3 x 3 matrix sum b b^T and the vector sum b d (in point
+    // order), plus lambda W sum over edges of (u_i - u_j)^2.
+    std::vector<std::array<double, 6>> face_m(nf, std::array<double, 6>{});  // 00 11 22 01 02 12
+    std::vector<std::array<double, 3>> face_r(nf, std::array<double, 3>{});
+    for (const Assignment& a : assigned) {
+      if (a.face == UINT32_MAX) continue;
+      auto& m = face_m[a.face];
+      const double b0 = a.b[0], b1 = a.b[1], b2 = a.b[2];
+      m[0] += b0 * b0;
+      m[1] += b1 * b1;
+      m[2] += b2 * b2;
+      m[3] += b0 * b1;
+      m[4] += b0 * b2;
+      m[5] += b1 * b2;
+      face_r[a.face][0] += b0 * a.d;
+      face_r[a.face][1] += b1 * a.d;
+      face_r[a.face][2] += b2 * a.d;
+    }
+    std::vector<double> diagonal(nv, 0);
+    for (size_t f = 0; f < nf; ++f) {
+      for (int k = 0; k < 3; ++k) diagonal[mesh.indices[3 * f + k]] += face_m[f][k];
+    }
+    double weight_sum = 0;
+    size_t with_data = 0;
+    for (size_t v = 0; v < nv; ++v) {
+      if (diagonal[v] > 0) {
+        weight_sum += diagonal[v];
+        ++with_data;
+      }
+    }
+    if (with_data == 0) break;
+    const double lambda_w = options.smoothness * weight_sum / static_cast<double>(with_data);
+    // Gauss-Seidel sweeps in vertex order (sequential: the same result for
+    // any thread count), from u = 0.
+    std::vector<double> u(nv, 0);
+    const auto m_at = [&](uint32_t f, int i, int j) {
+      if (i == j) return face_m[f][i];
+      const int lo = std::min(i, j), hi = std::max(i, j);
+      return face_m[f][lo == 0 ? (hi == 1 ? 3 : 4) : 5];
+    };
+    for (int sweep = 0; sweep < options.sweeps; ++sweep) {
+      for (size_t v = 0; v < nv; ++v) {
+        double numerator = 0, denominator = 0;
+        for (uint32_t j = vf_start[v]; j < vf_start[v + 1]; ++j) {
+          const uint32_t f = vf[j] / 3;
+          const int c = static_cast<int>(vf[j] % 3);
+          denominator += m_at(f, c, c);
+          numerator += face_r[f][c];
+          for (int k = 0; k < 3; ++k) {
+            if (k != c) numerator -= m_at(f, c, k) * u[mesh.indices[3 * size_t{f} + k]];
+          }
+        }
+        const uint32_t s = nb_start[v], e = nb_start[v + 1];
+        for (uint32_t j = s; j < e; ++j) numerator += lambda_w * u[nb[j]];
+        denominator += lambda_w * static_cast<double>(e - s);
+        u[v] = denominator > 0 ? numerator / denominator : 0.0;
+      }
+    }
+    // Steps, clamped to a fraction of each vertex's mean edge.
+    std::vector<double> step(nv, 0);
+    for (size_t v = 0; v < nv; ++v) {
+      if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
+      const double limit = options.max_step_edges * input_edge[v];
+      step[v] = options.damping * std::clamp(u[v], -limit, limit);
+    }
+    // The face-turn guard: halve the steps of the vertices of faces that turn
+    // too far (or lose their area), then drop them. A vertex never ends
+    // farther than max_offset_edges of its edge from where it started.
+    std::vector<float> moved(positions.size());
+    const auto apply = [&] {
+      for (size_t v = 0; v < nv; ++v) {
+        V3 p;
+        for (int c = 0; c < 3; ++c) p[c] = positions[3 * v + c] + step[v] * vnormals[v][c];
+        const V3 p0 = Position(mesh.positions, static_cast<uint32_t>(v));
+        const V3 offset = Sub(p, p0);
+        const double length = Norm(offset);
+        const double limit = options.max_offset_edges * input_edge[v];
+        if (step[v] != 0 && length > limit) {
+          for (int c = 0; c < 3; ++c) p[c] = p0[c] + offset[c] * (limit / length);
+        }
+        for (int c = 0; c < 3; ++c) moved[3 * v + c] = static_cast<float>(p[c]);
+      }
+    };
+    const auto bad_faces = [&] {
+      std::vector<uint32_t> bad;
+      const std::vector<V3> now = FaceCrosses(mesh, moved);
+      for (size_t f = 0; f < nf; ++f) {
+        const uint32_t* t = &mesh.indices[3 * f];
+        if (step[t[0]] == 0 && step[t[1]] == 0 && step[t[2]] == 0) continue;
+        const double len = Norm(now[f]);
+        const double before = Norm(crosses[f]), input = Norm(input_crosses[f]);
+        bool ok = len > 0;
+        if (ok && before > 0) ok = Dot(now[f], crosses[f]) >= cos_turn * len * before;
+        if (ok && input > 0) ok = Dot(now[f], input_crosses[f]) >= cos_turn * len * input;
+        if (!ok) bad.push_back(static_cast<uint32_t>(f));
+      }
+      return bad;
+    };
+    apply();
+    for (int pass = 0;; ++pass) {
+      const std::vector<uint32_t> bad = bad_faces();
+      if (bad.empty()) break;
+      std::vector<uint8_t> mark(nv, 0);
+      for (uint32_t f : bad) {
+        for (int k = 0; k < 3; ++k) mark[mesh.indices[3 * size_t{f} + k]] = 1;
+      }
+      for (size_t v = 0; v < nv; ++v) {
+        if (!mark[v] || step[v] == 0) continue;
+        step[v] = pass < 6 ? 0.5 * step[v] : 0.0;
+        ++report.steps_halved;
+      }
+      apply();
+    }
+    positions.swap(moved);
+  }
+
+  // The figures after, on the points supported before.
+  {
+    const std::vector<Assignment> assigned =
+        Assign(mesh, positions, local, spacing, points, options, edge_floor);
+    double sum_abs = 0, sum = 0;
+    size_t count = 0;
+    Mesh work;
+    work.positions = positions;
+    work.indices = mesh.indices;
+    const TriangleBvh bvh(work);
+    const std::vector<V3> crosses = FaceCrosses(mesh, positions);
+    std::vector<double> d(points.size(), 0);
+    ParallelRanges(points.size(), [&](size_t begin, size_t end) {
+      for (size_t i = begin; i < end; ++i) {
+        if (!supported_before[i]) continue;
+        const TriangleBvh::Hit hit = bvh.Nearest(local[i]);
+        d[i] = Dot(Sub(local[i], hit.closest), Unit(crosses[hit.face]));
+      }
+    });
+    for (size_t i = 0; i < points.size(); ++i) {
+      if (assigned[i].face != UINT32_MAX) ++report.supported_after;
+      if (!supported_before[i]) continue;
+      sum_abs += std::abs(d[i]);
+      sum += d[i];
+      ++count;
+    }
+    if (count > 0) {
+      report.mean_abs_distance_after_m = sum_abs / count;
+      report.mean_signed_distance_after_m = sum / count;
+    }
+  }
+
+  Mesh out = mesh;
+  out.positions = positions;
+  double total_move = 0;
+  for (size_t v = 0; v < nv; ++v) {
+    const double move = Norm(Sub(Position(positions, static_cast<uint32_t>(v)),
+                                 Position(mesh.positions, static_cast<uint32_t>(v))));
+    if (move > 0) ++report.vertices_moved;
+    report.max_move_m = std::max(report.max_move_m, move);
+    total_move += move;
+  }
+  report.mean_move_m = nv > 0 ? total_move / static_cast<double>(nv) : 0;
+  if (out.has_normals()) {
+    // The input's normals (a Poisson surface's, smoother than the decimated
+    // faces) turned by the rotation that takes each vertex's geometric
+    // normal before to the one after: recomputing them from the faces
+    // instead would show every facet of the decimated mesh in the lighting.
+    const std::vector<V3> before = VertexNormals(mesh, input_crosses);
+    const std::vector<V3> after = VertexNormals(out, FaceCrosses(out, out.positions));
+    for (size_t v = 0; v < nv; ++v) {
+      const V3& a = before[v];
+      const V3& b = after[v];
+      const double c = Dot(a, b);
+      if (a == V3{0, 0, 0} || b == V3{0, 0, 0} || c < -0.99) continue;
+      const V3 axis = Cross(a, b);
+      const V3 n = {mesh.normals[3 * v], mesh.normals[3 * v + 1], mesh.normals[3 * v + 2]};
+      const V3 turned_axis = Cross(axis, n);
+      const double k = Dot(axis, n) / (1 + c);
+      V3 r;
+      for (int i = 0; i < 3; ++i) r[i] = n[i] * c + turned_axis[i] + axis[i] * k;
+      r = Unit(r);
+      if (r == V3{0, 0, 0}) continue;
+      for (int i = 0; i < 3; ++i) out.normals[3 * v + i] = static_cast<float>(r[i]);
+    }
+  }
+  return out;
+}
+
+}  // namespace
+
+Expected<Mesh> FitMeshToPoints(const Mesh& mesh, const PointCloud& points,
+                               const FitOptions& options, FitReport* report) {
+  FitReport local_report;
+  FitReport& r = report != nullptr ? *report : local_report;
+  r = FitReport{};
+  Expected<Mesh> result = Status::Internal("not run");
+  if (options.threads > 0) {
+    tbb::task_arena arena(options.threads);
+    arena.execute([&] { result = Fit(mesh, points, options, r); });
+  } else {
+    result = Fit(mesh, points, options, r);
+  }
+  return result;
+}
+
+}  // namespace pb

@@ -1,0 +1,103 @@
+// Fitting a mesh to its scan: moves the vertices of a (low) mesh along their
+// normals so that the surface passes through the scan's points instead of
+// being inscribed in a smoothed surface.
+//
+// Why: a decimated mesh's vertices sit on the surface it was decimated from
+// (here a Poisson surface), so its chords cut inside every convex part (a
+// pipe of radius r drawn with edges of length e loses up to e^2 / 8r), and a
+// coarse Poisson solve rounds thin parts inward on its own. Seen from the
+// side, the mesh's outline lies a pixel or two inside the outermost scan
+// points: hole pixels on the scan's footprint (docs/real-scans.md, item 5).
+//
+// The fit, for `iterations` rounds:
+//  * Each supported scan point p is assigned to its nearest face f (exact
+//    point-triangle distance, TriangleBvh::Nearest; ties to the lowest face)
+//    with closest point q and its barycentric coordinates (b0, b1, b2) in f.
+//    Supported: |p - q| <= max(support_spacings x the point's local spacing
+//    (points/spacing.h LocalSpacing), support_edges x the mesh's mean edge
+//    length), and, when the cloud has normals, n_p . n_f >= min_normal_cosine
+//    (a point seen from the other side of a thin part does not pull).
+//  * The point's signed distance d = (p - q) . n_f, n_f the face's unit
+//    normal (positive: the point lies outside the surface).
+//  * Per round, the displacements u along the vertex normals solve the
+//    least-squares problem
+//      sum over points of (b0 u_0 + b1 u_1 + b2 u_2 - d)^2
+//        + lambda W sum over edges (u_i - u_j)^2
+//    (the face moves by the barycentric blend of its corners' moves; W the
+//    mean diagonal data weight of the vertices with points, lambda =
+//    `smoothness`) by `sweeps` Gauss-Seidel sweeps in vertex order from
+//    u = 0. The smoothness term acts on the displacement, not on the
+//    positions (a Laplacian on positions would shrink the mesh, which is the
+//    very error being corrected); vertices without points follow their
+//    neighbours. (The coupled problem rather than each vertex's own
+//    barycentric-weighted mean distance: that estimate does not see a
+//    checkerboard of moves, a vertex up and its neighbours down, which
+//    leaves its weighted mean residual at zero.)
+//  * Step: v += damping x clamp(u_v, +-max_step_edges x the mean length of v's
+//    edges in the input) x n_v, n_v the area-weighted vertex normal, and v
+//    never ends farther than max_offset_edges of that length from its input
+//    position (a chord's sagitta is a fraction of an edge; a vertex pulled
+//    farther is pulled by another surface's points). Border vertices move
+//    the same way, along the normal only: that widens a pipe's outline
+//    without growing the mesh's borders into unscanned space.
+//  * No face may turn by more than `max_turn_deg` from its normal before the
+//    step or in the input, nor lose its area: the steps of the vertices of
+//    such faces are halved (up to 6 times, then dropped) until none does.
+// Faces, vertex order and every attribute but positions and normals are
+// kept; normals, when present, are the input's turned by the rotation that
+// takes the vertex's area-weighted face normal before the fit to the one
+// after (recomputing them from the faces would show every facet of a
+// decimated mesh in the lighting, where the input's normals are the
+// smoother surface's); uvs are not touched: it runs before unwrapping. Deterministic
+// for any thread count: every point's assignment is independent, and the
+// sums run in point order.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+
+#include "base/status.h"
+#include "stages/geometry/core/mesh.h"
+#include "stages/geometry/core/point_cloud.h"
+
+namespace pb {
+
+struct FitOptions {
+  int iterations = 12;              // assignment + step rounds, >= 1
+  double support_spacings = 3.0;    // support distance in local spacings, >= 0
+  double support_edges = 0.5;       // ... floored by this many mean edge lengths, >= 0
+  double min_normal_cosine = 0.0;   // point normal vs face normal (cloud with normals), [-1, 1]
+  double smoothness = 0.25;         // lambda of the displacement smoothing, >= 0
+  int sweeps = 20;                  // Gauss-Seidel sweeps of the solve per round, >= 1
+  double damping = 0.8;             // fraction of the solved step taken, (0, 1]
+  double max_step_edges = 0.25;     // step clamp per round, in mean incident edge lengths, > 0
+  double max_offset_edges = 0.5;    // farthest a vertex ends from its input position, same unit, > 0
+  double max_turn_deg = 60.0;       // largest turn of a face normal, (0, 180)
+  int spacing_neighbors = 8;        // k of the local spacing, >= 1
+  int threads = 0;                  // 0: TBB's default (all cores)
+};
+
+struct FitReport {
+  uint64_t points = 0;              // scan points
+  uint64_t supported_before = 0;    // points within support of the input mesh
+  uint64_t supported_after = 0;     // ... of the output mesh (same test)
+  double mean_abs_distance_before_m = 0;  // mean |d| of the points supported before
+  double mean_abs_distance_after_m = 0;   // the same points, against the output
+  double mean_signed_distance_before_m = 0;
+  double mean_signed_distance_after_m = 0;
+  uint64_t vertices_moved = 0;      // vertices whose position changed
+  double max_move_m = 0;            // largest displacement of a vertex, input to output
+  double mean_move_m = 0;           // over all vertices
+  uint64_t steps_halved = 0;        // vertex steps halved by the face-turn guard, all rounds
+  double mean_edge_m = 0;
+  double median_spacing_m = 0;      // of the points' local spacings
+};
+
+// The fitted mesh. The mesh and the points may have different origins.
+// Status::Invalid if either fails Validate, the mesh has no faces, the cloud
+// has at most spacing_neighbors points or a non-finite coordinate, or an
+// option is out of range. `report` may be null.
+Expected<Mesh> FitMeshToPoints(const Mesh& mesh, const PointCloud& points,
+                               const FitOptions& options, FitReport* report);
+
+}  // namespace pb

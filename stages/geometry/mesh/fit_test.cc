@@ -1,0 +1,262 @@
+#include "stages/geometry/mesh/fit.h"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <numbers>
+
+namespace pb {
+namespace {
+
+// An open cylinder of radius r along z in [0, h], `sides` around and `rings`
+// rings of vertices, its vertices ON the cylinder: every chord cuts inside,
+// as a decimated mesh's edges cut inside a pipe. Faces wound outward.
+Mesh InscribedCylinder(double r, double h, int sides, int rings) {
+  Mesh mesh;
+  for (int j = 0; j < rings; ++j) {
+    for (int i = 0; i < sides; ++i) {
+      const double a = 2 * std::numbers::pi * i / sides;
+      mesh.positions.insert(mesh.positions.end(),
+                            {static_cast<float>(r * std::cos(a)), static_cast<float>(r * std::sin(a)),
+                             static_cast<float>(h * j / (rings - 1))});
+    }
+  }
+  for (int j = 0; j + 1 < rings; ++j) {
+    for (int i = 0; i < sides; ++i) {
+      const uint32_t a = j * sides + i, b = j * sides + (i + 1) % sides;
+      const uint32_t c = b + sides, d = a + sides;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  return mesh;
+}
+
+// Points on the true cylinder every ~`step` meters, with outward normals.
+PointCloud CylinderPoints(double r, double h, double step) {
+  PointCloud cloud;
+  const int around = static_cast<int>(std::round(2 * std::numbers::pi * r / step));
+  const int along = static_cast<int>(std::round(h / step));
+  for (int j = 0; j <= along; ++j) {
+    for (int i = 0; i < around; ++i) {
+      const double a = 2 * std::numbers::pi * (i + 0.5 * (j % 2)) / around;
+      cloud.positions.insert(cloud.positions.end(),
+                             {static_cast<float>(r * std::cos(a)),
+                              static_cast<float>(r * std::sin(a)), static_cast<float>(h * j / along)});
+      cloud.normals.insert(cloud.normals.end(),
+                           {static_cast<float>(std::cos(a)), static_cast<float>(std::sin(a)), 0.0f});
+    }
+  }
+  return cloud;
+}
+
+// Mean over the points of their signed radial offset from the mesh along
+// the ray from the axis: the mesh's radius there minus r (negative: inside).
+double MeanRadiusOfFaces(const Mesh& mesh) {
+  double sum = 0;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    double x = 0, y = 0;
+    for (int k = 0; k < 3; ++k) {
+      x += mesh.positions[3 * mesh.indices[3 * f + k]] / 3.0;
+      y += mesh.positions[3 * mesh.indices[3 * f + k] + 1] / 3.0;
+    }
+    sum += std::hypot(x, y);
+  }
+  return sum / static_cast<double>(mesh.face_count());
+}
+
+TEST(FitTest, MovesAnInscribedCylinderOntoItsPoints) {
+  const double r = 0.1;
+  const Mesh mesh = InscribedCylinder(r, 0.3, 12, 7);  // chords 5.2 cm, sagitta 3.4 mm
+  const PointCloud points = CylinderPoints(r, 0.3, 0.004);
+  FitReport report;
+  Expected<Mesh> fitted = FitMeshToPoints(mesh, points, FitOptions{}, &report);
+  ASSERT_TRUE(fitted.ok()) << fitted.status().message();
+  // Faces, order and vertex count kept.
+  EXPECT_EQ(fitted->indices, mesh.indices);
+  EXPECT_EQ(fitted->vertex_count(), mesh.vertex_count());
+  // The chords lay inside (points outside, positive distance); after the fit
+  // the mesh straddles the points.
+  EXPECT_GT(report.supported_before, points.size() * 9 / 10);
+  EXPECT_GT(report.mean_signed_distance_before_m, 0.001);
+  EXPECT_LT(std::abs(report.mean_signed_distance_after_m), 0.0003);
+  EXPECT_LT(report.mean_abs_distance_after_m, 0.6 * report.mean_abs_distance_before_m);
+  EXPECT_EQ(report.vertices_moved, mesh.vertex_count());  // border rings too
+  EXPECT_LT(report.max_move_m, 0.01);
+  // The faces' mean radius moved outward to about r (it was r cos(15 deg)
+  // at the face centroids, less than r - 2 mm).
+  EXPECT_LT(MeanRadiusOfFaces(mesh), r - 0.002);
+  EXPECT_GT(MeanRadiusOfFaces(*fitted), r - 0.001);
+  EXPECT_LT(MeanRadiusOfFaces(*fitted), r + 0.002);
+}
+
+TEST(FitTest, SameBytesForAnyThreadCount) {
+  const Mesh mesh = InscribedCylinder(0.1, 0.3, 10, 5);
+  const PointCloud points = CylinderPoints(0.1, 0.3, 0.005);
+  FitOptions one, two;
+  one.threads = 1;
+  two.threads = 2;
+  Expected<Mesh> a = FitMeshToPoints(mesh, points, one, nullptr);
+  Expected<Mesh> b = FitMeshToPoints(mesh, points, two, nullptr);
+  ASSERT_TRUE(a.ok() && b.ok());
+  EXPECT_EQ(a->positions, b->positions);
+}
+
+// A flat grid 5 mm under noisy points on z = 0: the fit lifts it onto the
+// plane and the smoothing keeps it flat (the noise does not make it bumpy).
+TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
+  Mesh mesh;
+  const int n = 10;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      mesh.positions.insert(mesh.positions.end(),
+                            {static_cast<float>(0.1 * i), static_cast<float>(0.1 * j), -0.005f});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  // Normals tilted 10 degrees from the faces' (a smoother surface's, as
+  // Poisson's are for a decimated mesh): kept, since the faces do not turn.
+  const float tilt = static_cast<float>(10 * std::numbers::pi / 180);
+  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
+    mesh.normals.insert(mesh.normals.end(), {std::sin(tilt), 0.0f, std::cos(tilt)});
+  }
+  PointCloud points;
+  uint64_t state = 12345;
+  for (int j = 0; j <= 200; ++j) {
+    for (int i = 0; i <= 200; ++i) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      const double noise = (static_cast<double>(state >> 11) * 0x1.0p-53 - 0.5) * 0.004;
+      points.positions.insert(points.positions.end(),
+                              {static_cast<float>(0.005 * i), static_cast<float>(0.005 * j),
+                               static_cast<float>(noise)});
+    }
+  }
+  FitOptions options;
+  options.iterations = 6;
+  FitReport report;
+  Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
+  ASSERT_TRUE(fitted.ok()) << fitted.status().message();
+  double lo = 1, hi = -1;
+  for (size_t v = 0; v < fitted->vertex_count(); ++v) {
+    lo = std::min<double>(lo, fitted->positions[3 * v + 2]);
+    hi = std::max<double>(hi, fitted->positions[3 * v + 2]);
+    EXPECT_NEAR(fitted->positions[3 * v], mesh.positions[3 * v], 1e-6);  // along the normal only
+    EXPECT_NEAR(fitted->normals[3 * v], std::sin(tilt), 5e-3);
+    EXPECT_NEAR(fitted->normals[3 * v + 2], std::cos(tilt), 5e-3);
+  }
+  EXPECT_GT(lo, -0.0015);
+  EXPECT_LT(hi, 0.0015);
+  EXPECT_LT(hi - lo, 0.0015);  // noise amplitude 4 mm
+  EXPECT_LT(report.mean_abs_distance_after_m, report.mean_abs_distance_before_m);
+}
+
+// Unit normals of every face.
+std::vector<std::array<double, 3>> FaceNormals(const Mesh& mesh) {
+  std::vector<std::array<double, 3>> normals;
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    double u[3], w[3];
+    for (int c = 0; c < 3; ++c) {
+      u[c] = mesh.positions[3 * t[1] + c] - mesh.positions[3 * t[0] + c];
+      w[c] = mesh.positions[3 * t[2] + c] - mesh.positions[3 * t[0] + c];
+    }
+    std::array<double, 3> n = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2],
+                               u[0] * w[1] - u[1] * w[0]};
+    const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+    for (double& x : n) x /= len;
+    normals.push_back(n);
+  }
+  return normals;
+}
+
+Mesh FlatGrid(int n, double step) {
+  Mesh mesh;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      mesh.positions.insert(mesh.positions.end(),
+                            {static_cast<float>(step * i), static_cast<float>(step * j), 0.0f});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  return mesh;
+}
+
+// A cluster of points 8 cm above the middle vertex of a grid of 10 cm
+// faces pulls it up by 8 cm, which would turn its faces by ~38 degrees: the
+// guard halves the step until no face turns by more than the limit.
+TEST(FitTest, NeverTurnsAFaceByMoreThanTheLimit) {
+  const Mesh mesh = FlatGrid(4, 0.1);  // middle vertex 12 at (0.2, 0.2)
+  PointCloud points;
+  for (int j = -3; j <= 3; ++j) {
+    for (int i = -3; i <= 3; ++i) {
+      points.positions.insert(points.positions.end(),
+                              {0.2f + 0.002f * i, 0.2f + 0.002f * j, 0.08f});
+    }
+  }
+  FitOptions options;
+  options.iterations = 1;
+  options.support_edges = 1.5;
+  options.smoothness = 0;
+  options.max_step_edges = 2;
+  options.max_offset_edges = 2;
+  options.damping = 1;
+  options.max_turn_deg = 20;
+  FitReport report;
+  Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
+  ASSERT_TRUE(fitted.ok()) << fitted.status().message();
+  EXPECT_GT(report.steps_halved, 0u);
+  EXPECT_GT(fitted->positions[3 * 12 + 2], 0.01);  // moved, as far as allowed
+  const auto before = FaceNormals(mesh), after = FaceNormals(*fitted);
+  for (size_t f = 0; f < before.size(); ++f) {
+    EXPECT_GE(before[f][0] * after[f][0] + before[f][1] * after[f][1] + before[f][2] * after[f][2],
+              std::cos(20.0 * std::numbers::pi / 180) - 1e-6)
+        << "face " << f;
+  }
+  // Without the limit (179 degrees) the same pull goes the whole way.
+  options.max_turn_deg = 179;
+  Expected<Mesh> free = FitMeshToPoints(mesh, points, options, nullptr);
+  ASSERT_TRUE(free.ok());
+  EXPECT_NEAR(free->positions[3 * 12 + 2], 0.08, 0.002);
+  // The offset limit holds it at half its mean edge (10 cm; the middle
+  // vertex's six edges average 11.4 cm) however many rounds pull.
+  options.max_offset_edges = 0.5;
+  options.iterations = 8;
+  options.max_step_edges = 0.25;
+  Expected<Mesh> held = FitMeshToPoints(mesh, points, options, nullptr);
+  ASSERT_TRUE(held.ok());
+  const double edge = (4 * 0.1 + 2 * 0.1 * std::sqrt(2.0)) / 6;
+  EXPECT_NEAR(held->positions[3 * 12 + 2], 0.5 * edge, 1e-5);
+}
+
+TEST(FitTest, RejectsBadInput) {
+  const Mesh mesh = InscribedCylinder(0.1, 0.3, 8, 3);
+  const PointCloud points = CylinderPoints(0.1, 0.3, 0.01);
+  Mesh no_faces = mesh;
+  no_faces.indices.clear();
+  EXPECT_NE(FitMeshToPoints(no_faces, points, {}, nullptr).status().message().find("no faces"),
+            std::string::npos);
+  PointCloud few;
+  few.positions = {0, 0, 0, 1, 0, 0};
+  EXPECT_EQ(FitMeshToPoints(mesh, few, {}, nullptr).status().code(), Status::Code::kInvalid);
+  FitOptions bad;
+  bad.damping = 0;
+  EXPECT_NE(FitMeshToPoints(mesh, points, bad, nullptr).status().message().find("damping"),
+            std::string::npos);
+  Mesh broken = mesh;
+  broken.indices.push_back(1000);
+  broken.indices.push_back(0);
+  broken.indices.push_back(1);
+  EXPECT_EQ(FitMeshToPoints(broken, points, {}, nullptr).status().code(), Status::Code::kInvalid);
+}
+
+}  // namespace
+}  // namespace pb

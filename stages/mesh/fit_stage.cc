@@ -1,0 +1,200 @@
+// mesh.fit: moves the vertices of a (low) mesh along their normals so the
+// surface fits the scan's points instead of being inscribed in the smoothed
+// surface it was decimated from (stages/geometry/mesh/fit.h).
+#include "stages/builtin.h"
+
+#include "stages/geometry/mesh/fit.h"
+#include "stages/mesh_io.h"
+#include "stages/params.h"
+#include "stages/points_io.h"
+
+namespace pb {
+namespace {
+
+constexpr const char* kId = "mesh.fit";
+
+constexpr const char* kSchema = R"({
+  "type": "object",
+  "additionalProperties": false,
+  "properties": {
+    "iterations": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 100,
+      "default": 12,
+      "description": "Rounds of: assign each scan point to its nearest face, move the vertices."
+    },
+    "support_spacings": {
+      "type": "number",
+      "minimum": 0,
+      "default": 3,
+      "description": "A scan point pulls on its nearest face only within this many of its local spacings (the spacing of its k nearest neighbours) ..."
+    },
+    "support_edges": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.5,
+      "description": "... or within this many mean edge lengths of the mesh, whichever is larger: a coarse mesh's chords lie up to a fraction of an edge from the points."
+    },
+    "min_normal_cosine": {
+      "type": "number",
+      "minimum": -1,
+      "maximum": 1,
+      "default": 0,
+      "description": "When the points have normals: a point pulls only on a face whose normal is within this cosine of its own (a point of the other side of a thin part does not)."
+    },
+    "smoothness": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.25,
+      "description": "Weight of the smoothness of the displacement (membrane energy, relative to a vertex's mean data weight): noise averages over neighbours; 0 fits the points alone."
+    },
+    "sweeps": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 1000,
+      "default": 20,
+      "description": "Gauss-Seidel sweeps of the least-squares solve per round."
+    },
+    "damping": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "maximum": 1,
+      "default": 0.8,
+      "description": "Fraction of the solved displacement taken per round."
+    },
+    "max_step_edges": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 0.25,
+      "description": "Largest move of a vertex per round, in mean lengths of its edges."
+    },
+    "max_offset_edges": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 0.5,
+      "description": "Farthest a vertex may end from its input position, in mean lengths of its edges in the input: a chord's sagitta is a fraction of an edge, and a vertex pulled farther is pulled by the points of another surface."
+    },
+    "max_turn_deg": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "exclusiveMaximum": 180,
+      "default": 60,
+      "description": "No face may turn further than this from its normal in the input (or before the round): the moves of its vertices are halved until none does."
+    },
+    "spacing_neighbors": {
+      "type": "integer",
+      "minimum": 1,
+      "maximum": 64,
+      "default": 8,
+      "description": "k of the local spacing: spacing = r_k * sqrt(pi / k), r_k the distance to the k-th nearest other point."
+    },
+    "threads": {
+      "type": "integer",
+      "minimum": 0,
+      "default": 0,
+      "x-affects-output": false,
+      "description": "Worker threads; 0 takes the engine's --threads. The output does not depend on it."
+    }
+  }
+})";
+
+Status Run(StageContext& ctx) {
+  FitOptions options;
+  PB_ASSIGN_OR_RETURN(const int64_t iterations, IntegerParam(ctx, kId, "iterations", {1, 100}));
+  options.iterations = static_cast<int>(iterations);
+  PB_ASSIGN_OR_RETURN(options.support_spacings, NumberParam(ctx, kId, "support_spacings"));
+  PB_ASSIGN_OR_RETURN(options.support_edges, NumberParam(ctx, kId, "support_edges"));
+  PB_ASSIGN_OR_RETURN(options.min_normal_cosine, NumberParam(ctx, kId, "min_normal_cosine"));
+  PB_ASSIGN_OR_RETURN(options.smoothness, NumberParam(ctx, kId, "smoothness"));
+  PB_ASSIGN_OR_RETURN(const int64_t sweeps, IntegerParam(ctx, kId, "sweeps", {1, 1000}));
+  options.sweeps = static_cast<int>(sweeps);
+  PB_ASSIGN_OR_RETURN(options.damping, NumberParam(ctx, kId, "damping"));
+  PB_ASSIGN_OR_RETURN(options.max_step_edges, NumberParam(ctx, kId, "max_step_edges"));
+  PB_ASSIGN_OR_RETURN(options.max_offset_edges, NumberParam(ctx, kId, "max_offset_edges"));
+  PB_ASSIGN_OR_RETURN(options.max_turn_deg, NumberParam(ctx, kId, "max_turn_deg"));
+  PB_ASSIGN_OR_RETURN(const int64_t neighbors,
+                      IntegerParam(ctx, kId, "spacing_neighbors", {1, 64}));
+  options.spacing_neighbors = static_cast<int>(neighbors);
+  PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", {0}));
+  options.threads = threads > 0 ? static_cast<int>(threads) : ctx.threads();
+
+  PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.2));
+  PB_ASSIGN_OR_RETURN(InputPoints points, ReadInputPoints(ctx, kId, 0.4));
+  FitReport report;
+  Mesh fitted;
+  {
+    PB_PHASE(ctx, "compute");
+    Expected<Mesh> result = FitMeshToPoints(input.mesh, points.cloud, options, &report);
+    if (!result.ok()) return result.status().WithContext(input.path + " with " + points.path);
+    fitted = std::move(result).value();
+  }
+  ctx.progress(0.9);
+  ctx.counter("supported_points", static_cast<double>(report.supported_before));
+  ctx.counter("mean_abs_distance_before_m", report.mean_abs_distance_before_m);
+  ctx.counter("mean_abs_distance_after_m", report.mean_abs_distance_after_m);
+  ctx.counter("mean_signed_distance_before_m", report.mean_signed_distance_before_m);
+  ctx.counter("mean_signed_distance_after_m", report.mean_signed_distance_after_m);
+  ctx.counter("vertices_moved", static_cast<double>(report.vertices_moved));
+  ctx.counter("max_move_m", report.max_move_m);
+  ctx.counter("mean_move_m", report.mean_move_m);
+  nlohmann::json changes = {{"fit",
+                             {{"points", report.points},
+                              {"supported_before", report.supported_before},
+                              {"supported_after", report.supported_after},
+                              {"mean_abs_distance_before_m", report.mean_abs_distance_before_m},
+                              {"mean_abs_distance_after_m", report.mean_abs_distance_after_m},
+                              {"mean_signed_distance_before_m", report.mean_signed_distance_before_m},
+                              {"mean_signed_distance_after_m", report.mean_signed_distance_after_m},
+                              {"vertices_moved", report.vertices_moved},
+                              {"max_move_m", report.max_move_m},
+                              {"mean_move_m", report.mean_move_m},
+                              {"steps_halved", report.steps_halved},
+                              {"mean_edge_m", report.mean_edge_m},
+                              {"median_local_spacing_m", report.median_spacing_m}}}};
+  PB_RETURN_IF_ERROR(WriteOutputMesh(ctx, fitted, InputMeshMetaWith(ctx, fitted, changes)));
+  ctx.progress(1.0);
+  return Status::Ok();
+}
+
+}  // namespace
+
+StageType FitStage() {
+  StageType type;
+  type.id = kId;
+  type.version = 1;
+  type.summary = "Moves a mesh's vertices along their normals so the surface fits the scan's points";
+  type.doc =
+      "A decimated mesh's vertices lie on the surface it was decimated from, so its chords cut "
+      "inside every convex part (pipes), and a coarse Poisson solve rounds thin parts inward: "
+      "seen from the side the outline lies a pixel or two inside the scan's outermost points. "
+      "This stage fits the mesh to the points: each round, every scan point within "
+      "`support_spacings` local spacings (or `support_edges` mean edges) of the mesh is assigned "
+      "to its nearest face (exact point-triangle distance; with point normals, only a face "
+      "facing the same side, `min_normal_cosine`) with its signed distance along the face "
+      "normal, and the vertices' displacements along their normals solve the least-squares "
+      "problem of those distances (the face moving by the barycentric blend of its corners) "
+      "plus `smoothness` times the membrane energy of the displacement (`sweeps` Gauss-Seidel "
+      "sweeps; the displacement is smoothed, not the positions, so the mesh does not "
+      "shrink), and each vertex moves along its normal by `damping` of it, at most "
+      "`max_step_edges` of its mean edge per round and at most `max_offset_edges` from where it "
+      "started. Border vertices move the same way, along "
+      "the normal only. A move that would turn a face by more than `max_turn_deg` (from the "
+      "input or the round before) or collapse it is halved until none does. Faces, vertex "
+      "order, colors and uvs are kept; normals, when present, are the input's turned by the "
+      "rotation of each vertex's face normal (recomputing them would light every facet of a "
+      "decimated mesh). Place it after the low mesh's decimation, before uv.unwrap. Deterministic "
+      "for any thread count.\n\n"
+      "Counters: `supported_points`, `mean_abs_distance_before_m`, `mean_abs_distance_after_m` "
+      "(mean |signed distance| of the supported points to the input and to the output), "
+      "`mean_signed_distance_before_m`, `mean_signed_distance_after_m` (positive: points "
+      "outside), `vertices_moved`, `max_move_m`, `mean_move_m`. Phases: `io`, `compute`.";
+  type.params_schema = kSchema;
+  type.inputs = {{"mesh", "mesh", "The mesh to fit (mesh.ply), e.g. the decimated low mesh.", false},
+                 {"points", "points", "The scan (points.ply; normals used when present).", false}};
+  type.outputs = {{"mesh", "mesh", "The mesh with its vertices moved onto the points.", false}};
+  type.run = &Run;
+  return type;
+}
+
+}  // namespace pb
