@@ -23,6 +23,11 @@ struct VertexAmdOrdering {
   template <typename MatrixType>
   void operator()(const MatrixType& full, PermutationType& perm) {
     const int cols = int(full.cols()), vertices = cols / 2;
+    perm.resize(cols);
+    if (vertices < 2) {  // nothing to order
+      perm.setIdentity();
+      return;
+    }
     Eigen::SparseMatrix<double, Eigen::ColMajor, int> graph(vertices, vertices);
     std::vector<int> outer(vertices + 1, 0), inner;
     inner.reserve(full.nonZeros() / 4 + vertices);
@@ -38,7 +43,6 @@ struct VertexAmdOrdering {
     std::fill(graph.valuePtr(), graph.valuePtr() + inner.size(), 1.0);
     PermutationType vertex_perm;
     Eigen::internal::minimum_degree_ordering(graph, vertex_perm);
-    perm.resize(cols);
     for (int i = 0; i < vertices; ++i) {
       perm.indices()[2 * i] = 2 * vertex_perm.indices()[i];
       perm.indices()[2 * i + 1] = 2 * vertex_perm.indices()[i] + 1;
@@ -218,7 +222,8 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
     for (int k = 0; k < cols; ++k) trace += normal.coeff(k, k);
     const double ridge = 1e-12 * (trace > 0 ? trace / cols : 1.0);
     for (int k = 0; k < cols; ++k) normal.coeffRef(k, k) += ridge;
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, VertexAmdOrdering> solver(normal);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, VertexAmdOrdering> solver(
+        normal);
     if (solver.info() != Eigen::Success) return false;
     const Eigen::VectorXd solution = solver.solve(rhs);
     if (solver.info() != Eigen::Success) return false;
