@@ -152,7 +152,8 @@ Status Run(StageContext& ctx) {
 StageType UnwrapStage() {
   StageType type;
   type.id = kId;
-  type.version = 5;  // 5: few irregular charts also try turns of 30 and 15 degrees
+  type.version = 6;  // 6: LSCM ordered by vertices (same charts and packing, UVs within
+                     // a float ulp); 5: few irregular charts also try 30/15-degree turns
   type.summary =
       "UV atlas: conformal charts that follow the surface (or planar ones), one square texture";
   type.doc =

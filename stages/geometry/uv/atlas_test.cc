@@ -480,6 +480,43 @@ TEST(UvConformalTest, LscmUnrollsACylinderWithoutStretch) {
   EXPECT_LT(ChartStretchL2(piece, chart), 1.001);
 }
 
+// The smallest systems: one unknown vertex (a triangle: the ordering has
+// nothing to order) and two (a bent quad). LSCM keeps a triangle's shape,
+// pinned at its true side length, and both counter-clockwise.
+TEST(UvConformalTest, LscmFlattensATriangleAndABentQuad) {
+  auto length = [](const double* p, uint32_t a, uint32_t b, int dims) {
+    double d2 = 0;
+    for (int k = 0; k < dims; ++k) {
+      const double d = p[dims * a + k] - p[dims * b + k];
+      d2 += d * d;
+    }
+    return std::sqrt(d2);
+  };
+  const std::vector<double> triangle = {0, 0, 0, 2, 0, 1, 0.5, 1.5, -0.5};
+  const std::vector<uint32_t> one = {0, 1, 2};
+  std::vector<double> uv;
+  ASSERT_TRUE(LscmFlatten(triangle, one, &uv));
+  for (auto [a, b] : {std::pair{0u, 1u}, {1u, 2u}, {2u, 0u}}) {
+    EXPECT_NEAR(length(uv.data(), a, b, 2), length(triangle.data(), a, b, 3), 1e-9);
+  }
+  auto ccw = [&](uint32_t a, uint32_t b, uint32_t c) {
+    return (uv[2 * b] - uv[2 * a]) * (uv[2 * c + 1] - uv[2 * a + 1]) -
+               (uv[2 * c] - uv[2 * a]) * (uv[2 * b + 1] - uv[2 * a + 1]) >
+           0;
+  };
+  EXPECT_TRUE(ccw(0, 1, 2));
+  // A unit square folded 60 degrees along its diagonal 0-2.
+  const double h = 0.5 * std::sqrt(3.0);
+  const std::vector<double> quad = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0.25, 0.75, h * std::sqrt(0.5)};
+  const std::vector<uint32_t> two = {0, 1, 2, 0, 2, 3};
+  ASSERT_TRUE(LscmFlatten(quad, two, &uv));
+  EXPECT_TRUE(ccw(0, 1, 2));
+  EXPECT_TRUE(ccw(0, 2, 3));
+  for (auto [a, b] : {std::pair{0u, 1u}, {1u, 2u}, {0u, 2u}, {2u, 3u}, {3u, 0u}}) {
+    EXPECT_NEAR(length(uv.data(), a, b, 2), length(quad.data(), a, b, 3), 1e-6);
+  }
+}
+
 TEST(UvConformalTest, BumpySphereMeetsTheAtlasTargets) {
   const Mesh sphere = MakeBumpySphere(1.0, 4, 0.08);  // 5,120 faces
   UnwrapOptions options;

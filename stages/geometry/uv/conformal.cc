@@ -6,9 +6,49 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <vector>
 
 namespace pb {
 namespace {
+
+// Approximate minimum degree ordering of the LSCM normal matrix computed on
+// its vertex graph: the two unknowns (u, v) of a vertex have the same
+// rows, so the matrix is the vertex pattern with every entry a 2x2 block.
+// Ordering the vertices and keeping each vertex's u and v together costs
+// a quarter of ordering the unknowns (Eigen's AMDOrdering), for the same
+// kind of fill.
+struct VertexAmdOrdering {
+  using PermutationType = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
+  // `full`: both triangles, as SimplicialLDLT passes it.
+  template <typename MatrixType>
+  void operator()(const MatrixType& full, PermutationType& perm) {
+    const int cols = int(full.cols()), vertices = cols / 2;
+    perm.resize(cols);
+    if (vertices < 2) {  // nothing to order
+      perm.setIdentity();
+      return;
+    }
+    Eigen::SparseMatrix<double, Eigen::ColMajor, int> graph(vertices, vertices);
+    std::vector<int> outer(vertices + 1, 0), inner;
+    inner.reserve(full.nonZeros() / 4 + vertices);
+    for (int u = 0; u < vertices; ++u) {
+      for (typename MatrixType::InnerIterator it(full, 2 * u); it; ++it) {
+        if (it.row() % 2 == 0) inner.push_back(int(it.row()) / 2);
+      }
+      outer[u + 1] = int(inner.size());
+    }
+    graph.resizeNonZeros(int(inner.size()));
+    std::copy(outer.begin(), outer.end(), graph.outerIndexPtr());
+    std::copy(inner.begin(), inner.end(), graph.innerIndexPtr());
+    std::fill(graph.valuePtr(), graph.valuePtr() + inner.size(), 1.0);
+    PermutationType vertex_perm;
+    Eigen::internal::minimum_degree_ordering(graph, vertex_perm);
+    for (int i = 0; i < vertices; ++i) {
+      perm.indices()[2 * i] = 2 * vertex_perm.indices()[i];
+      perm.indices()[2 * i + 1] = 2 * vertex_perm.indices()[i] + 1;
+    }
+  }
+};
 
 double Distance2(std::span<const double> p, uint32_t a, uint32_t b) {
   double d2 = 0;
@@ -182,7 +222,8 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
     for (int k = 0; k < cols; ++k) trace += normal.coeff(k, k);
     const double ridge = 1e-12 * (trace > 0 ? trace / cols : 1.0);
     for (int k = 0; k < cols; ++k) normal.coeffRef(k, k) += ridge;
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> solver(normal);
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, VertexAmdOrdering> solver(
+        normal);
     if (solver.info() != Eigen::Success) return false;
     const Eigen::VectorXd solution = solver.solve(rhs);
     if (solver.info() != Eigen::Success) return false;

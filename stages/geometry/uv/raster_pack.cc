@@ -564,7 +564,9 @@ class Atlas {
     }
     lowest_window_.assign(size_ + 1, 0);
     // Every window starts free but for the bits beyond `size`.
-    level_bits_.assign(kTallLevels + 1, {});
+    // resize, not assign: the levels keep their memory too (assign made
+    // fresh vectors, allocated and faulted in again at every packing).
+    level_bits_.resize(kTallLevels + 1);
     for (int l = 0; l <= kTallLevels; ++l) {
       level_bits_[l].assign(size_t(words_) * size_t(height_), 0);
       std::copy(bits_.begin(), bits_.end(), level_bits_[l].begin());
