@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "stages/geometry/core/vec3.h"
 #include "stages/geometry/mesh/distance.h"
 #include "stages/geometry/mesh/trim.h"  // MeanEdgeLength
 #include "stages/geometry/points/knn.h"
@@ -26,14 +27,11 @@
 namespace pb {
 namespace {
 
-using V3 = std::array<double, 3>;
-
-V3 Sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 Cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double Norm(const V3& a) { return std::sqrt(Dot(a, a)); }
+using vec3::V3;
+using vec3::Sub;
+using vec3::Dot;
+using vec3::Cross;
+using vec3::Norm;
 
 template <typename Body>
 void ParallelRanges(size_t n, const Body& body) {

@@ -19,18 +19,18 @@
 #include <optional>
 #include <utility>
 
+#include "stages/geometry/core/vec3.h"
+
 namespace pb {
 namespace {
 
-using V3 = std::array<double, 3>;
+using vec3::V3;
+using vec3::Sub;
+using vec3::Add;
+using vec3::Scale;
+using vec3::Dot;
+using vec3::Cross;
 
-V3 Sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-V3 Add(const V3& a, const V3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-V3 Scale(const V3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 Cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 // Zero stays zero.
 V3 Normalize(const V3& a) {
   const double length = std::sqrt(Dot(a, a));

@@ -21,16 +21,16 @@
 #include <string>
 #include <vector>
 
+#include "stages/geometry/core/vec3.h"
+
 namespace pb {
 namespace {
 
-using V3 = std::array<double, 3>;
+using vec3::V3;
+using vec3::Sub;
+using vec3::Dot;
+using vec3::Cross;
 
-V3 Sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V3 Cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 V3 Normalize(const V3& a) {
   const double length = std::sqrt(Dot(a, a));
   return length > 0 ? V3{a[0] / length, a[1] / length, a[2] / length} : a;

@@ -20,17 +20,16 @@
 #include <deque>
 #include <limits>
 
+#include "stages/geometry/core/vec3.h"
+
 namespace pb {
 namespace {
 
-using V3 = std::array<double, 3>;
-
-V3 Sub(const V3& a, const V3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-V3 Cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double Norm(const V3& a) { return std::sqrt(Dot(a, a)); }
+using vec3::V3;
+using vec3::Sub;
+using vec3::Dot;
+using vec3::Cross;
+using vec3::Norm;
 
 V3 Position(const Mesh& mesh, uint32_t v) {
   return {mesh.positions[3 * size_t(v)], mesh.positions[3 * size_t(v) + 1],

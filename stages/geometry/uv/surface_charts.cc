@@ -16,12 +16,18 @@
 #include <thread>
 #include <utility>
 
+#include "stages/geometry/core/vec3.h"
 #include "stages/geometry/uv/conformal.h"
 
 namespace pb {
 namespace {
 
-using V3 = std::array<double, 3>;
+using vec3::V3;
+using vec3::Add;
+using vec3::Dot;
+using vec3::Cross;
+using vec3::Norm;
+
 using Tri2 = std::array<double, 6>;
 
 constexpr uint32_t kNone = kNoFace;
@@ -40,12 +46,6 @@ constexpr double kMergeCreaseDeg = 75;
 // docs/uv.md have no curved chart that large and do not change).
 constexpr size_t kMaxSolveVertices = 10000;
 
-double Dot(const V3& a, const V3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-double Norm(const V3& a) { return std::sqrt(Dot(a, a)); }
-V3 Add(const V3& a, const V3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-V3 Cross(const V3& a, const V3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 V3 Normalized(const V3& v) {
   const double n = Norm(v);
   return n > 0 ? V3{v[0] / n, v[1] / n, v[2] / n} : V3{0, 0, 0};
