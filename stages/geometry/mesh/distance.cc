@@ -203,36 +203,7 @@ void TriangleBvh::Build() {
 }
 
 double TriangleBvh::Distance(const Vec3& point) const {
-  if (triangles_.empty()) return std::numeric_limits<double>::infinity();
-  const Vec3 p = Sub(point, origin_);
-  double best2 = std::numeric_limits<double>::infinity();
-  uint32_t stack[64];
-  int top = 0;
-  stack[top++] = 0;
-  while (top > 0) {
-    const Node& node = nodes_[stack[--top]];
-    if (BoxDistance2(p, node.min, node.max) >= best2) continue;
-    if (node.count > 0) {
-      for (uint32_t t = node.first; t < node.first + node.count; ++t) {
-        const auto& tri = triangles_[t];
-        best2 = std::min(best2, Norm2(Sub(p, ClosestPointOnTriangle(p, tri[0], tri[1], tri[2]))));
-      }
-      continue;
-    }
-    const Node& left = nodes_[node.first];
-    const Node& right = nodes_[node.first + 1];
-    const double dl = BoxDistance2(p, left.min, left.max);
-    const double dr = BoxDistance2(p, right.min, right.max);
-    // Visit the nearer child first: push it last.
-    if (dl < dr) {
-      if (dr < best2) stack[top++] = node.first + 1;
-      if (dl < best2) stack[top++] = node.first;
-    } else {
-      if (dl < best2) stack[top++] = node.first;
-      if (dr < best2) stack[top++] = node.first + 1;
-    }
-  }
-  return std::sqrt(best2);
+  return std::sqrt(Nearest(point).squared_distance_m2);
 }
 
 TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point) const {

@@ -16,6 +16,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <limits>
 #include <vector>
 
 #include "base/status.h"
@@ -42,11 +43,12 @@ class TriangleBvh {
   // The nearest triangle to `point` (absolute coordinates): its face index in
   // the mesh given to the constructor, the closest point on it (absolute) and
   // the squared distance. Ties go to the lowest face index, so the answer
-  // does not depend on the tree's layout. face = UINT32_MAX for an empty mesh.
+  // does not depend on the tree's layout. face = UINT32_MAX and an infinite
+  // distance for an empty mesh.
   struct Hit {
     uint32_t face = UINT32_MAX;
     Vec3 closest{};
-    double squared_distance_m2 = 0;
+    double squared_distance_m2 = std::numeric_limits<double>::infinity();
   };
   Hit Nearest(const Vec3& point) const;
 
