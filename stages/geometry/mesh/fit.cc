@@ -96,21 +96,27 @@ struct Assignment {
 };
 
 // Assigns every point (mesh frame, `local`) to its nearest face of the mesh
-// with `positions`; unsupported points get face UINT32_MAX.
+// with `positions` (whose face cross products are `crosses`); unsupported
+// points get face UINT32_MAX. With `nearest_signed_m`, also every point's
+// signed distance along the nearest face's normal, supported or not.
 std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& positions,
-                               const std::vector<V3>& local, const std::vector<float>& spacing,
-                               const PointCloud& points, const FitOptions& options,
-                               double edge_floor_m) {
+                               const std::vector<V3>& crosses, const std::vector<V3>& local,
+                               const std::vector<float>& spacing, const PointCloud& points,
+                               const FitOptions& options, double edge_floor_m,
+                               std::vector<double>* nearest_signed_m = nullptr) {
   Mesh work;
   work.positions = positions;
   work.indices = mesh.indices;
   const TriangleBvh bvh(work);
-  const std::vector<V3> crosses = FaceCrosses(mesh, positions);
   std::vector<Assignment> out(local.size());
+  if (nearest_signed_m) nearest_signed_m->assign(local.size(), 0.0);
   ParallelRanges(local.size(), [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       const TriangleBvh::Hit hit = bvh.Nearest(local[i]);
       if (hit.face == UINT32_MAX) continue;
+      if (nearest_signed_m) {
+        (*nearest_signed_m)[i] = Dot(Sub(local[i], hit.closest), Unit(crosses[hit.face]));
+      }
       const double support =
           std::max(options.support_spacings * spacing[i], edge_floor_m);
       if (hit.squared_distance_m2 > support * support) continue;
@@ -240,7 +246,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
     const std::vector<V3> crosses = FaceCrosses(mesh, positions);
     const std::vector<V3> vnormals = VertexNormals(mesh, crosses);
     const std::vector<Assignment> assigned =
-        Assign(mesh, positions, local, spacing, points, options, edge_floor);
+        Assign(mesh, positions, crosses, local, spacing, points, options, edge_floor);
     if (round == 0) {
       double sum_abs = 0, sum = 0;
       for (size_t i = 0; i < assigned.size(); ++i) {
@@ -375,23 +381,11 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
 
   // The figures after, on the points supported before.
   {
-    const std::vector<Assignment> assigned =
-        Assign(mesh, positions, local, spacing, points, options, edge_floor);
+    std::vector<double> d;
+    const std::vector<Assignment> assigned = Assign(mesh, positions, FaceCrosses(mesh, positions), local,
+                                                    spacing, points, options, edge_floor, &d);
     double sum_abs = 0, sum = 0;
     size_t count = 0;
-    Mesh work;
-    work.positions = positions;
-    work.indices = mesh.indices;
-    const TriangleBvh bvh(work);
-    const std::vector<V3> crosses = FaceCrosses(mesh, positions);
-    std::vector<double> d(points.size(), 0);
-    ParallelRanges(points.size(), [&](size_t begin, size_t end) {
-      for (size_t i = begin; i < end; ++i) {
-        if (!supported_before[i]) continue;
-        const TriangleBvh::Hit hit = bvh.Nearest(local[i]);
-        d[i] = Dot(Sub(local[i], hit.closest), Unit(crosses[hit.face]));
-      }
-    });
     for (size_t i = 0; i < points.size(); ++i) {
       if (assigned[i].face != UINT32_MAX) ++report.supported_after;
       if (!supported_before[i]) continue;
