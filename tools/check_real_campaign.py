@@ -9,16 +9,16 @@ Reads report/results.json and, for every scene (or those named), checks:
     hole pixels < --max-holes of the scan's sample footprint (metrics.image
     v4 hole_fraction: pixels a visible scan point projects into where the
     model shows background; default 0.002, issue 15's goal, met on the pump
-    by every workflow since mesh.fit moves the low meshes onto the scan:
-    0.13 % HPM, 0.19 % LPM and point transfer, 0.18 % Remeshing (0.34 and
-    0.49 % before, their outline a pixel inside the outermost samples of
+    by every workflow since mesh.fit moves the final meshes onto the scan:
+    0.05 % HPM, 0.14 % LPM and point transfer, 0.16 % Remeshing (0.13, 0.34
+    and 0.49 % before, their outline a pixel inside the outermost samples of
     curved pipes); ctest guards it with --max-holes 0.002,
     docs/real-scans.md). The line also gives the part
     enclosed by the model (background seen through it: missing faces), the
     part at its silhouette, and the count on the splats' disks (the old
     definition, splat_hole_fraction);
   - the final low meshes' boundary edges per 1000 faces within 1.5x LPM's
-    (met on the three real scenes: 1.08x, 1.12x, 1.44x);
+    (met on the three real scenes: 1.08x, 1.15x, 0.98x);
   - point transfer beats LPM on covered-pixel SSIM and FLIP against the scan,
     and its FLIP is at most Remeshing's;
   - with --background R,G,B (the runs' render.frames drawn on that color,
