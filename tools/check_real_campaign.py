@@ -20,7 +20,9 @@ Reads report/results.json and, for every scene (or those named), checks:
   - the final low meshes' boundary edges per 1000 faces within 1.5x LPM's
     (met on the three real scenes: 1.08x, 1.15x, 0.98x);
   - point transfer beats LPM on covered-pixel SSIM and FLIP against the scan,
-    and its FLIP is at most Remeshing's;
+    and its FLIP is at most Remeshing's (skipped, and said so, for a scan
+    without colors or intensities: io.read_points paints it one grey, so
+    every workflow's texture is that grey);
   - with --background R,G,B (the runs' render.frames drawn on that color,
     e.g. `set: { render.background: [255, 0, 255] }` in the campaign): the
     frames show that color on at most --max-background of the scan's sample
@@ -144,6 +146,23 @@ def hole_kinds(run_dir):
         return None
 
 
+def uniform_grey_scan(run_dir):
+    """True if the run's io.read_points painted the scan one grey (no colors,
+    no intensities in the file): its counter `uniform_grey`."""
+    try:
+        with open(os.path.join(run_dir, "run.json")) as f:
+            stages = json.load(f)["stages"]
+    except (OSError, ValueError, KeyError):
+        return False
+    for stage in stages:
+        if stage.get("type") != "io.read_points":
+            continue
+        counters = stage.get("counters") or (stage.get("cached_run") or {}).get("counters") or {}
+        if counters.get("uniform_grey"):
+            return True
+    return False
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out_dir")
@@ -212,6 +231,10 @@ def main():
         for w in ("remeshing", "point_transfer"):
             b = runs[w]["scan_geometry"]["boundary_edges_per_1000_faces"]
             check(b <= 1.5 * lpm_b, f"{scene}/{w}: boundary edges {b:.0f} per 1000 faces <= 1.5 x LPM's {lpm_b:.0f}")
+        if uniform_grey_scan(os.path.join(args.out_dir, "runs", scene, "point_transfer")):
+            print(f"skip  {scene}: the scan has no colors nor intensities (painted one grey): "
+                  "no texture ranking")
+            continue
         pt, lpm, rem = (runs[w]["vs_scan"] for w in ("point_transfer", "lpm", "remeshing"))
         check(pt["covered_ssim_luma"] > lpm["covered_ssim_luma"],
               f"{scene}: point transfer SSIM {pt['covered_ssim_luma']:.3f} > LPM {lpm['covered_ssim_luma']:.3f}")

@@ -82,7 +82,9 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.05));
   PB_ASSIGN_OR_RETURN(InputPoints points, ReadInputPoints(ctx, kId, 0.25));
   if (!points.cloud.has_colors()) {
-    return Status::Invalid(points.path + ": " + kId + " needs a colored point cloud");
+    return Status::Invalid(points.path + ": " + kId +
+                           " needs a colored point cloud (io.read_points paints an uncolored "
+                           "scan grey unless `uncolored: none`)");
   }
   double spacing_m = InputPointsSpacing(ctx);
   std::string spacing_source = "meta";

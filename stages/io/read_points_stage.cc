@@ -1,6 +1,9 @@
 // io.read_points: reads a scan file into the `points` artifact.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <string>
+#include <vector>
 
 #include "stages/geometry/io/scan_read.h"
 #include "stages/builtin.h"
@@ -11,6 +14,36 @@ namespace pb {
 namespace {
 
 constexpr const char* kId = "io.read_points";
+
+// The sRGB grey of a scan that has neither colors nor intensities: light
+// stone, so that the normal maps' shading shows on the renders.
+constexpr uint8_t kUniformGrey = 180;
+
+// Paints an uncolored cloud grey (`uncolored`): by its intensities,
+// stretched linearly between their 1st and 99th percentiles (scanners'
+// intensities crowd a narrow band, like CloudCompare's default scale), or
+// uniformly. Returns what the colors came from, for the meta.
+std::string PaintUncolored(const std::string& mode, PointCloud* points) {
+  if (points->has_colors()) return "file";
+  if (mode == "none" || points->empty()) return "none";
+  points->colors.assign(3 * points->size(), kUniformGrey);
+  if (mode != "intensity" || !points->has_intensities()) return "uniform grey";
+  std::vector<float> sorted = points->intensities;
+  const size_t n = sorted.size();
+  auto quantile = [&](double q) {
+    const size_t k = std::min(n - 1, size_t(q * double(n - 1)));
+    std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
+    return double(sorted[k]);
+  };
+  const double lo = quantile(0.01), hi = quantile(0.99);
+  if (!(hi > lo)) return "uniform grey";  // all intensities (nearly) equal
+  for (size_t i = 0; i < n; ++i) {
+    const double t = std::clamp((double(points->intensities[i]) - lo) / (hi - lo), 0.0, 1.0);
+    const auto grey = uint8_t(std::lround(255.0 * t));
+    for (int c = 0; c < 3; ++c) points->colors[3 * i + c] = grey;
+  }
+  return "intensity";
+}
 
 std::string ParamsSchema() {
   nlohmann::json formats = nlohmann::json::array({"auto"});
@@ -47,6 +80,16 @@ std::string ParamsSchema() {
               "XYZ/TXT/PTS only: column names in order, e.g. \"x y z r g b\" or "
               "\"x y z i r g b nx ny nz\"; \"_\" skips a column. Empty: the format's default "
               "(PTS: x y z i r g b) or detected from the first data line."}}},
+           {"uncolored",
+            {{"type", "string"},
+             {"enum", {"intensity", "grey", "none"}},
+             {"default", "intensity"},
+             {"description",
+              "What a scan without colors gets (a file with colors keeps them): 'intensity' "
+              "paints each point grey by its intensity, stretched between the 1st and 99th "
+              "percentiles, or a uniform light grey (sRGB 180) when the file has no "
+              "intensities either; 'grey' always the uniform grey; 'none' leaves the points "
+              "uncolored (the bake stages then refuse them: they need colors)."}}},
        }},
   };
   return schema.dump();
@@ -61,6 +104,7 @@ Status Run(StageContext& ctx) {
   const ScanFormat* format = *found;
 
   PB_ASSIGN_OR_RETURN(const std::string columns, StringParam(ctx, kId, "columns"));
+  PB_ASSIGN_OR_RETURN(const std::string uncolored, StringParam(ctx, kId, "uncolored"));
 
   ScanReadOptions options;
   options.drop_invalid_points = drop_invalid;
@@ -70,13 +114,20 @@ Status Run(StageContext& ctx) {
   Expected<ScanReadResult> read = format->read(path, options);
   ctx.end_phase("read");
   if (!read.ok()) return read.status();
-  const ScanReadResult& outcome = *read;
+  ScanReadResult& outcome = *read;
+  const std::string colors_from = PaintUncolored(uncolored, &outcome.points);
   const PointCloud& points = outcome.points;
   // The readers' warnings name the file (some readers put it first already).
   for (const std::string& warning : outcome.warnings)
     ctx.warning(warning.rfind(path, 0) == 0 ? warning : path + ": " + warning);
   if (outcome.dropped_points > 0)
     ctx.warning(path + ": dropped " + std::to_string(outcome.dropped_points) + " invalid points");
+  if (colors_from == "intensity" || colors_from == "uniform grey") {
+    ctx.warning(path + ": the scan has no colors: its points are painted " +
+                (colors_from == "intensity" ? std::string("grey by their intensities")
+                                            : std::string("a uniform grey (no intensities)")) +
+                " (io.read_points `uncolored`)");
+  }
 
   PB_RETURN_IF_ERROR(WriteOutputPoints(
       ctx, points,
@@ -85,12 +136,16 @@ Status Run(StageContext& ctx) {
        {"has_normals", points.has_normals()},
        {"has_colors", points.has_colors()},
        {"has_intensities", points.has_intensities()},
+       {"colors_from", colors_from},
        {"stations", points.stations.size()},
        {"source_format", outcome.format.empty() ? std::string(format->name) : outcome.format}},
       "write"));
   ctx.counter("points", static_cast<double>(points.size()));
   ctx.counter("dropped_points", static_cast<double>(outcome.dropped_points));
   ctx.counter("warnings", static_cast<double>(outcome.warnings.size()));
+  const bool painted = colors_from == "intensity" || colors_from == "uniform grey";
+  ctx.counter("painted_points", painted ? static_cast<double>(points.size()) : 0.0);
+  ctx.counter("uniform_grey", colors_from == "uniform grey" ? 1.0 : 0.0);
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -100,7 +155,7 @@ Status Run(StageContext& ctx) {
 StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;
+  type.version = 3;
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters, and normals "
@@ -118,8 +173,12 @@ StageType ReadPointsStage() {
       "origin at the scan's bounding-box center rounded to 1 m, which keeps float32 precision "
       "(about 1e-7 of the scan's extent) for any location on Earth; the "
       "origin travels in the artifact.\n\n"
+      "A scan without colors is painted grey (`uncolored`: by intensity, else uniformly) so "
+      "that every workflow runs on it, with a warning; the meta's `colors_from` says `file`, "
+      "`intensity`, `uniform grey` or `none`.\n\n"
       "Counters: `points` (points kept), `dropped_points` (non-finite coordinates, with "
-      "drop_invalid).";
+      "drop_invalid), `painted_points` (points painted grey by `uncolored`), `uniform_grey` "
+      "(1 when they all got the same grey: the scan's texture comparisons then say nothing).";
   type.params_schema = ParamsSchema();
   type.outputs = {{"points", "points", "The scan's points (binary PLY with origin).", false}};
   type.run = &Run;

@@ -160,7 +160,8 @@ TEST_F(PointsStagesTest, ReadPointsDropsInvalid) {
   const Status failed = Run("io.read_points", strict);
   EXPECT_THAT(failed.message(), HasSubstr("scan.PLY:9: vertex 1 has a non-finite coordinate"));
 
-  FakeContext lenient(dir_ / "b", {{"path", path}, {"drop_invalid", true}});
+  // (uncolored: none, or the grey paint's warning would join the list.)
+  FakeContext lenient(dir_ / "b", {{"path", path}, {"drop_invalid", true}, {"uncolored", "none"}});
   ASSERT_TRUE(Run("io.read_points", lenient).ok());
   EXPECT_EQ(lenient.counters_["points"], 2);
   EXPECT_EQ(lenient.counters_["dropped_points"], 1);
@@ -169,13 +170,66 @@ TEST_F(PointsStagesTest, ReadPointsDropsInvalid) {
   EXPECT_TRUE(strict.warnings_.empty());
 }
 
+// A scan without colors is painted grey so that the bakes can run: by its
+// intensities, stretched between their 1st and 99th percentiles, else
+// uniformly; `uncolored: none` keeps today's uncolored points.
+TEST_F(PointsStagesTest, ReadPointsPaintsUncoloredScansGrey) {
+  const std::string path = (dir_ / "grey.ply").string();
+  std::ofstream(path) << "ply\nformat ascii 1.0\nelement vertex 5\nproperty float x\n"
+                         "property float y\nproperty float z\nproperty float intensity\n"
+                         "end_header\n0 0 0 0\n1 0 0 250\n2 0 0 500\n3 0 0 750\n4 0 0 1000\n";
+  FakeContext by_intensity(dir_ / "a", {{"path", path}});
+  ASSERT_TRUE(Run("io.read_points", by_intensity).ok());
+  auto read = ReadPlyPoints(by_intensity.outputs_["points"]);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  // 1st percentile 0, 99th 750 (of five values): 0, 1/3, 2/3, 1, clamped 1.
+  EXPECT_EQ(read->points.colors, (std::vector<uint8_t>{0, 0, 0, 85, 85, 85, 170, 170, 170, 255,
+                                                       255, 255, 255, 255, 255}));
+  EXPECT_EQ(by_intensity.meta_["points"]["colors_from"], "intensity");
+  EXPECT_EQ(by_intensity.meta_["points"]["has_colors"], true);
+  EXPECT_EQ(by_intensity.counters_["painted_points"], 5);
+  EXPECT_EQ(by_intensity.counters_["uniform_grey"], 0);
+  ASSERT_EQ(by_intensity.warnings_.size(), 1u);
+  EXPECT_THAT(by_intensity.warnings_[0], HasSubstr("grey.ply: the scan has no colors"));
+
+  FakeContext grey(dir_ / "b", {{"path", path}, {"uncolored", "grey"}});
+  ASSERT_TRUE(Run("io.read_points", grey).ok());
+  read = ReadPlyPoints(grey.outputs_["points"]);
+  ASSERT_TRUE(read.ok());
+  EXPECT_EQ(read->points.colors, std::vector<uint8_t>(15, 180));
+  EXPECT_EQ(grey.meta_["points"]["colors_from"], "uniform grey");
+  EXPECT_EQ(grey.counters_["uniform_grey"], 1);
+
+  FakeContext none(dir_ / "c", {{"path", path}, {"uncolored", "none"}});
+  ASSERT_TRUE(Run("io.read_points", none).ok());
+  read = ReadPlyPoints(none.outputs_["points"]);
+  ASSERT_TRUE(read.ok());
+  EXPECT_FALSE(read->points.has_colors());
+  EXPECT_EQ(none.meta_["points"]["colors_from"], "none");
+  EXPECT_TRUE(none.warnings_.empty());
+
+  // A colored file keeps its colors, without a warning.
+  const std::string colored = (dir_ / "colored.ply").string();
+  std::ofstream(colored) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                            "property float y\nproperty float z\nproperty uchar red\n"
+                            "property uchar green\nproperty uchar blue\nend_header\n0 0 0 1 2 3\n";
+  FakeContext keep(dir_ / "d", {{"path", colored}});
+  ASSERT_TRUE(Run("io.read_points", keep).ok());
+  read = ReadPlyPoints(keep.outputs_["points"]);
+  ASSERT_TRUE(read.ok());
+  EXPECT_EQ(read->points.colors, (std::vector<uint8_t>{1, 2, 3}));
+  EXPECT_EQ(keep.meta_["points"]["colors_from"], "file");
+  EXPECT_EQ(keep.counters_["painted_points"], 0);
+  EXPECT_TRUE(keep.warnings_.empty());
+}
+
 // A reader's warnings reach the warning channel, each naming the file once.
 TEST_F(PointsStagesTest, ReadPointsPassesReaderWarningsOn) {
   const std::string data = SharedData();
   if (data.empty()) GTEST_SKIP() << "shared data not found";
   const std::string path = data + "/ptx/multiple-and-transform.ptx";
   if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
-  FakeContext ctx(dir_, {{"path", path}});
+  FakeContext ctx(dir_, {{"path", path}, {"uncolored", "none"}});
   const Status status = Run("io.read_points", ctx);
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(ctx.warnings_, std::vector<std::string>{path + ": 2 scans merged"});

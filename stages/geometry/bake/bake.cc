@@ -6,7 +6,9 @@ namespace pb {
 
 Expected<BakeResult> BakeVertexColors(Mesh mesh, const BakeOptions& options) {
   if (!mesh.has_colors()) {
-    return Status::Invalid("bake.vertex_colors: the mesh has no vertex colors");
+    return Status::Invalid(
+        "bake.vertex_colors: the mesh has no vertex colors (its scan had none: io.read_points "
+        "paints such scans grey unless `uncolored: none`)");
   }
   BakeResult result;
   PB_ASSIGN_OR_RETURN(result.mesh, PrepareBakeMesh(std::move(mesh)));
