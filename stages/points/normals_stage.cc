@@ -24,9 +24,9 @@ constexpr const char* kSchema = R"({
     },
     "orientation": {
       "type": "string",
-      "enum": ["auto", "stations", "propagate", "none"],
+      "enum": ["auto", "stations", "input", "propagate", "none"],
       "default": "auto",
-      "description": "How each normal's sign is chosen: 'stations' faces the scanner that saw the point; 'propagate' spreads a consistent sign over the neighbour graph (Hoppe 1992) from the point farthest from the centroid, facing outward; 'auto' uses stations when the cloud has them, else propagate; 'none' keeps the solver's arbitrary sign."
+      "description": "How each normal's sign is chosen: 'stations' faces the scanner that saw the point; 'input' takes the side of the normal the point came with (a file's own normals, e.g. a scanner's or a fusion's software's); 'propagate' spreads a consistent sign over the neighbour graph (Hoppe 1992) from the point farthest from the centroid, facing outward; 'auto' uses stations when the cloud has them, else the input normals when every point has a usable one, else propagate; 'none' keeps the solver's arbitrary sign."
     },
     "implementation": {
       "type": "string",
@@ -40,16 +40,18 @@ constexpr const char* kSchema = R"({
 Expected<NormalOrientation> ParseOrientation(const std::string& name) {
   if (name == "auto") return NormalOrientation::kAuto;
   if (name == "stations") return NormalOrientation::kStations;
+  if (name == "input") return NormalOrientation::kInput;
   if (name == "propagate") return NormalOrientation::kPropagate;
   if (name == "none") return NormalOrientation::kNone;
   return Status::Invalid(std::string(kId) + ": parameter 'orientation' must be one of auto, stations, "
-                         "propagate, none; got '" + name + "'");
+                         "input, propagate, none; got '" + name + "'");
 }
 
 const char* OrientationName(NormalOrientation orientation) {
   switch (orientation) {
     case NormalOrientation::kAuto: return "auto";
     case NormalOrientation::kStations: return "stations";
+    case NormalOrientation::kInput: return "input";
     case NormalOrientation::kPropagate: return "propagate";
     case NormalOrientation::kNone: return "none";
   }
@@ -101,16 +103,19 @@ Status Run(StageContext& ctx) {
 StageType NormalsStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
-  type.summary = "k-NN PCA normals, oriented toward the scanner or by propagation";
+  type.version = 2;
+  type.summary = "k-NN PCA normals, oriented toward the scanner, like the file's own, or by propagation";
   type.doc =
       "Estimates a unit normal per point: the eigenvector of the smallest eigenvalue of the "
       "covariance of the point's `k` nearest points (itself included), found with an exact "
       "kd-tree search. `orientation` then picks each sign: toward the point's scanner station "
       "(`stations`, needs per-point station ids), by minimum-spanning-tree propagation over the "
       "neighbour graph seeded outward from the point farthest from the centroid (`propagate`, "
-      "Hoppe et al. 1992; right for closed objects), `auto` (stations if present, else "
-      "propagate) or `none`. Existing normals are replaced; other attributes pass through. The "
+      "Hoppe et al. 1992; right for closed objects), like the normals the points came with "
+      "(`input`: a file's own normals, whose software knew the sensor; propagation can flip "
+      "whole thin parts), `auto` (stations if present, else the input normals if every point "
+      "has a usable one, else propagate; version 2, which added `input`) or `none`. Existing "
+      "normals are replaced (only their sides are used); other attributes pass through. The "
       "result does not depend on the thread count. `implementation` swaps the plane fit for "
       "PCL's NormalEstimationOMP or Open3D's EstimateNormals (modules loaded on first use), "
       "for campaigns that compare implementations.\n\n"

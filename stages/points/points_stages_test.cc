@@ -77,7 +77,7 @@ TEST_F(PointsStagesTest, RegistersWellFormedTypes) {
   EXPECT_EQ(normals_schema["properties"]["k"]["minimum"], 3);
   EXPECT_EQ(normals_schema["properties"]["k"]["maximum"], 100);
   EXPECT_EQ(normals_schema["properties"]["orientation"]["enum"],
-            nlohmann::json({"auto", "stations", "propagate", "none"}));
+            nlohmann::json({"auto", "stations", "input", "propagate", "none"}));
   const nlohmann::json outliers_schema = nlohmann::json::parse(registry_.Find("points.outliers")->params_schema);
   EXPECT_EQ(outliers_schema["properties"]["std_ratio"]["default"], 2.0);
   const nlohmann::json spacing_schema = nlohmann::json::parse(registry_.Find("points.spacing")->params_schema);

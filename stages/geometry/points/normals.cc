@@ -126,6 +126,33 @@ size_t OrientTowardStations(PointCloud& cloud) {
   return flipped;
 }
 
+// Index of the first point whose normal is not finite or (nearly) zero, or
+// n when every normal can give a side.
+size_t FirstUnusableNormal(const std::vector<float>& normals) {
+  const size_t n = normals.size() / 3;
+  for (size_t i = 0; i < n; ++i) {
+    const float* v = &normals[3 * i];
+    const double length2 = double(v[0]) * v[0] + double(v[1]) * v[1] + double(v[2]) * v[2];
+    if (!std::isfinite(length2) || !(length2 > 1e-12)) return i;
+  }
+  return n;
+}
+
+size_t OrientLikeInput(PointCloud& cloud, const std::vector<float>& input) {
+  const size_t n = cloud.size();
+  size_t flipped = 0;
+  for (size_t i = 0; i < n; ++i) {
+    float* normal = &cloud.normals[3 * i];
+    double dot = 0;
+    for (int a = 0; a < 3; ++a) dot += double(input[3 * i + a]) * normal[a];
+    if (dot < 0) {
+      for (int a = 0; a < 3; ++a) normal[a] = -normal[a];
+      ++flipped;
+    }
+  }
+  return flipped;
+}
+
 struct Edge {
   uint32_t target;
   uint32_t parent;
@@ -287,9 +314,26 @@ Status EstimateWithModule(PointCloud& cloud, const NormalOptions& options) {
 Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalReport& report) {
   const size_t n = cloud.size();
   NormalOrientation orientation = options.orientation;
+  // The cloud's own normals, kept for their sides before they are replaced.
+  std::vector<float> input;
+  const size_t unusable = cloud.has_normals() ? FirstUnusableNormal(cloud.normals) : 0;
   if (orientation == NormalOrientation::kAuto) {
     orientation = cloud.has_stations() && !cloud.stations.empty() ? NormalOrientation::kStations
-                                                                  : NormalOrientation::kPropagate;
+                  : cloud.has_normals() && unusable == n     ? NormalOrientation::kInput
+                                                             : NormalOrientation::kPropagate;
+  }
+  if (orientation == NormalOrientation::kInput) {
+    if (!cloud.has_normals()) {
+      return Status::Invalid(
+          "normal estimation: orientation 'input' needs the cloud's own normals, and this cloud "
+          "has none; use orientation 'auto', 'stations' or 'propagate'");
+    }
+    if (unusable < n) {
+      return Status::Invalid("normal estimation: orientation 'input': point " +
+                             std::to_string(unusable) +
+                             " has a zero or non-finite normal; use orientation 'propagate'");
+    }
+    input = cloud.normals;
   }
   if (orientation == NormalOrientation::kStations) {
     if (!cloud.has_stations() || cloud.stations.empty()) {
@@ -314,6 +358,7 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
   report.points = n;
   report.orientation_used = orientation;
   if (orientation == NormalOrientation::kStations) report.flipped = OrientTowardStations(cloud);
+  if (orientation == NormalOrientation::kInput) report.flipped = OrientLikeInput(cloud, input);
   if (orientation == NormalOrientation::kPropagate) report.flipped = OrientByPropagation(cloud, graph);
   if (options.progress) options.progress(1.0);
   return Status::Ok();

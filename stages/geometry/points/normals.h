@@ -19,7 +19,12 @@
 //               seeded the same way. Right for closed objects (a sphere gets
 //               outward normals); for interiors scanned from inside, use
 //               stations.
-//   kAuto:      kStations when the cloud has stations, else kPropagate.
+//   kInput:     the side of the normal the cloud came with (a file's own
+//               normals: a scanner's or a fusion's software knew the sensor;
+//               PCL and Open3D write oriented ones), dot(n_in, n) >= 0. Needs
+//               every point to have a finite, non-zero input normal.
+//   kAuto:      kStations when the cloud has stations, else kInput when every
+//               point has a usable input normal, else kPropagate.
 //   kNone:      the sign the eigen solver happens to produce.
 //
 // Output is identical whatever the thread count. Cost: one kNN query per
@@ -35,7 +40,7 @@
 
 namespace pb {
 
-enum class NormalOrientation { kAuto, kStations, kPropagate, kNone };
+enum class NormalOrientation { kAuto, kStations, kInput, kPropagate, kNone };
 
 // Whose code finds the unoriented normals (the orientation step is always
 // ours, so the three differ only in the PCA): ours (above), PCL 1.13's

@@ -164,6 +164,52 @@ TEST(NormalsTest, StationOrientationFacesTheScanner) {
   EXPECT_EQ(report.flipped, wrong);
 }
 
+// A thin sheet (an ear, a drapery fold) sampled on both faces, 5 mm apart,
+// with the normals the file came with: rough (each tilted up to 40 degrees)
+// but on the right side. `auto` takes their sides: every PCA normal faces
+// the way its input one did, top face up and bottom face down.
+TEST(NormalsTest, InputNormalsGiveTheSides) {
+  PointCloud cloud;
+  for (int face = 0; face < 2; ++face) {
+    for (int i = 0; i < 60; ++i) {
+      for (int j = 0; j < 60; ++j) {
+        cloud.positions.insert(cloud.positions.end(),
+                               {0.002f * i, 0.002f * j, face == 0 ? 0.0f : -0.005f});
+        const float tilt = 0.8f * std::sin(0.7f * float(i * 60 + j));  // up to ~40 degrees
+        const float up = face == 0 ? 1.0f : -1.0f;
+        cloud.normals.insert(cloud.normals.end(), {tilt, 0.0f, up});
+      }
+    }
+  }
+  PointCloud unoriented = cloud;
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(cloud, {.k = 8}, &report).ok());
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kInput);
+  ASSERT_TRUE(EstimateNormals(unoriented, {.k = 8, .orientation = NormalOrientation::kNone}).ok());
+  size_t flipped = 0;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const float expected = i < 3600 ? 1.0f : -1.0f;
+    ASSERT_GT(cloud.normals[3 * i + 2] * expected, 0.99f) << "point " << i;
+    // The PCA normal itself, only its sign chosen.
+    ASSERT_EQ(std::fabs(cloud.normals[3 * i + 2]), std::fabs(unoriented.normals[3 * i + 2]));
+    flipped += cloud.normals[3 * i + 2] != unoriented.normals[3 * i + 2];
+  }
+  EXPECT_EQ(report.flipped, flipped);
+
+  // One unusable input normal: `auto` propagates instead; `input` says which.
+  PointCloud zero = cloud;
+  zero.normals[3 * 17 + 0] = zero.normals[3 * 17 + 1] = zero.normals[3 * 17 + 2] = 0.0f;
+  PointCloud zero_auto = zero;
+  ASSERT_TRUE(EstimateNormals(zero_auto, {.k = 8}, &report).ok());
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kPropagate);
+  EXPECT_THAT(EstimateNormals(zero, {.k = 8, .orientation = NormalOrientation::kInput}).message(),
+              HasSubstr("orientation 'input': point 17 has a zero or non-finite normal"));
+  PointCloud none;
+  none.positions = cloud.positions;
+  EXPECT_THAT(EstimateNormals(none, {.orientation = NormalOrientation::kInput}).message(),
+              HasSubstr("orientation 'input' needs the cloud's own normals"));
+}
+
 TEST(NormalsTest, Errors) {
   PointCloud cloud;
   cloud.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
