@@ -131,6 +131,8 @@ TriangleBvh::TriangleBvh(const Mesh& mesh) : origin_(mesh.origin) {
   if (triangles_.empty()) return;
   nodes_.reserve(2 * triangles_.size() / 4 + 2);
   Build();
+  slots_.resize(faces_.size());
+  for (size_t t = 0; t < faces_.size(); ++t) slots_[faces_[t]] = static_cast<uint32_t>(t);
 }
 
 // Top-down median split on the longest axis of the centroid bounds; the two
@@ -207,11 +209,24 @@ double TriangleBvh::Distance(const Vec3& point) const {
 }
 
 TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point) const {
+  return Nearest(point, UINT32_MAX);
+}
+
+TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point, uint32_t hint_face) const {
   Hit hit;
   if (triangles_.empty()) return hit;
   const Vec3 p = Sub(point, origin_);
   double best2 = std::numeric_limits<double>::infinity();
   Vec3 best_q{};
+  // The hint's distance prunes from the start. The answer cannot change: a
+  // nearer face, or an equally near one of lower index, lies in a node at
+  // most that far, which is never pruned (the test is "farther than").
+  if (hint_face < slots_.size()) {
+    const auto& tri = triangles_[slots_[hint_face]];
+    best_q = ClosestPointOnTriangle(p, tri[0], tri[1], tri[2]);
+    best2 = Norm2(Sub(p, best_q));
+    hit.face = hint_face;
+  }
   uint32_t stack[64];
   int top = 0;
   stack[top++] = 0;

@@ -51,6 +51,11 @@ class TriangleBvh {
     double squared_distance_m2 = std::numeric_limits<double>::infinity();
   };
   Hit Nearest(const Vec3& point) const;
+  // The same answer, found faster when `hint_face` is near (e.g. the point's
+  // nearest face before the mesh moved a little): its distance bounds the
+  // search from the start. Any hint, or UINT32_MAX for none, gives the same
+  // hit as Nearest(point).
+  Hit Nearest(const Vec3& point, uint32_t hint_face) const;
 
  private:
   struct Node {
@@ -63,6 +68,7 @@ class TriangleBvh {
   std::array<double, 3> origin_{};
   std::vector<std::array<Vec3, 3>> triangles_;  // corners relative to origin_
   std::vector<uint32_t> faces_;                  // mesh face of each of triangles_
+  std::vector<uint32_t> slots_;                  // index in triangles_ of each mesh face
   std::vector<Node> nodes_;
 };
 

@@ -107,8 +107,18 @@ TEST(MeshDistanceTest, BvhMatchesBruteForceOverAllTriangles) {
     EXPECT_NEAR(BruteForceDistance(local, corner[0], corner[1], corner[2]), best, 1e-9);
     EXPECT_NEAR(std::sqrt(hit.squared_distance_m2), best, 1e-9);
     EXPECT_NEAR(Dist(hit.closest, absolute), best, 1e-9);
+    // Any hint (the answer, a random face, none) gives the same hit, bit for bit.
+    for (const uint32_t hint : {hit.face, static_cast<uint32_t>(rng() % soup.face_count()),
+                                static_cast<uint32_t>(soup.face_count() - 1 - hit.face),
+                                UINT32_MAX}) {
+      const TriangleBvh::Hit hinted = bvh.Nearest(absolute, hint);
+      ASSERT_EQ(hinted.face, hit.face) << "query " << i << ", hint " << hint;
+      ASSERT_EQ(hinted.squared_distance_m2, hit.squared_distance_m2);
+      ASSERT_EQ(hinted.closest, hit.closest);
+    }
   }
   EXPECT_EQ(TriangleBvh(Mesh{}).Nearest({0, 0, 0}).face, UINT32_MAX);
+  EXPECT_EQ(TriangleBvh(Mesh{}).Nearest({0, 0, 0}, 0).face, UINT32_MAX);
 }
 
 // Ties go to the lowest face index: two copies of one triangle.
@@ -121,6 +131,9 @@ TEST(MeshDistanceTest, NearestBreaksTiesByFaceIndex) {
   const TriangleBvh bvh(mesh);
   EXPECT_EQ(bvh.Nearest({0.2, 0.2, 1}).face, 0u);
   EXPECT_EQ(bvh.Nearest({-3, 5, -1}).face, 0u);
+  // A hint at an equally near copy still gives the lowest.
+  EXPECT_EQ(bvh.Nearest({0.2, 0.2, 1}, 5).face, 0u);
+  EXPECT_EQ(bvh.Nearest({-3, 5, -1}, 3).face, 0u);
 }
 
 TEST(MeshDistanceTest, SamplingIsDeterministicAndOnTheSurface) {

@@ -103,6 +103,7 @@ std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& posit
                                const std::vector<V3>& crosses, const std::vector<V3>& local,
                                const std::vector<float>& spacing, const PointCloud& points,
                                const FitOptions& options, double edge_floor_m,
+                               std::vector<uint32_t>& nearest_face,
                                std::vector<double>* nearest_signed_m = nullptr) {
   Mesh work;
   work.positions = positions;
@@ -112,8 +113,12 @@ std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& posit
   if (nearest_signed_m) nearest_signed_m->assign(local.size(), 0.0);
   ParallelRanges(local.size(), [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
-      const TriangleBvh::Hit hit = bvh.Nearest(local[i]);
+      // Last round's nearest face as the hint: the mesh moved by a fraction
+      // of an edge, so it is at or next to this round's (same answer, a
+      // third of the search).
+      const TriangleBvh::Hit hit = bvh.Nearest(local[i], nearest_face[i]);
       if (hit.face == UINT32_MAX) continue;
+      nearest_face[i] = hit.face;
       if (nearest_signed_m) {
         (*nearest_signed_m)[i] = Dot(Sub(local[i], hit.closest), Unit(crosses[hit.face]));
       }
@@ -241,12 +246,13 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
   const std::vector<V3> input_crosses = FaceCrosses(mesh, mesh.positions);
   std::vector<float> positions = mesh.positions;
   std::vector<uint8_t> supported_before(points.size(), 0);
+  std::vector<uint32_t> nearest_face(points.size(), UINT32_MAX);  // hints for the next round
 
   for (int round = 0; round < options.iterations; ++round) {
     const std::vector<V3> crosses = FaceCrosses(mesh, positions);
     const std::vector<V3> vnormals = VertexNormals(mesh, crosses);
     const std::vector<Assignment> assigned =
-        Assign(mesh, positions, crosses, local, spacing, points, options, edge_floor);
+        Assign(mesh, positions, crosses, local, spacing, points, options, edge_floor, nearest_face);
     if (round == 0) {
       double sum_abs = 0, sum = 0;
       for (size_t i = 0; i < assigned.size(); ++i) {
@@ -383,7 +389,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
   {
     std::vector<double> d;
     const std::vector<Assignment> assigned = Assign(mesh, positions, FaceCrosses(mesh, positions), local,
-                                                    spacing, points, options, edge_floor, &d);
+                                                    spacing, points, options, edge_floor, nearest_face, &d);
     double sum_abs = 0, sum = 0;
     size_t count = 0;
     for (size_t i = 0; i < points.size(); ++i) {
