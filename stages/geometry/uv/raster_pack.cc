@@ -587,10 +587,14 @@ class Atlas {
     words_ = (size + 63) / 64 + 1;
     window_ = window;
     bits_.assign(size_t(words_) * size_t(height_), 0);
+    // Bits at and beyond `size` are taken, so free runs end at the edge:
+    // words size / 64 on, the same in every row.
+    const int first_pad = size_ >> 6;
+    const uint64_t partial = ~uint64_t(0) << (size_ & 63);  // of word first_pad
     for (int y = 0; y < height_; ++y) {
       uint64_t* row = Row(y);
-      // Bits at and beyond `size` are taken, so free runs end at the edge.
-      for (int x = size_; x < words_ * 64; ++x) row[x >> 6] |= uint64_t(1) << (x & 63);
+      row[first_pad] |= partial;
+      for (int w = first_pad + 1; w < words_; ++w) row[w] = ~uint64_t(0);
     }
     max_free_.assign(height_, size_);
     lowest_row_.assign(size_ + 1, 0);
@@ -607,8 +611,7 @@ class Atlas {
     // fresh vectors, allocated and faulted in again at every packing).
     level_bits_.resize(kTallLevels + 1);
     for (int l = 0; l <= kTallLevels; ++l) {
-      level_bits_[l].assign(size_t(words_) * size_t(height_), 0);
-      std::copy(bits_.begin(), bits_.end(), level_bits_[l].begin());
+      level_bits_[l].assign(bits_.begin(), bits_.end());  // one pass, not zeros then a copy
     }
     for (int l = 0; l < kTallLevels; ++l) {
       const int rows = window_ * kTallLevel[l];
