@@ -152,7 +152,8 @@ Status Run(StageContext& ctx) {
 StageType UnwrapStage() {
   StageType type;
   type.id = kId;
-  type.version = 7;  // 7: the scale search's second pair aimed lower when the first
+  type.version = 8;  // 8: LSCM solved in complex form (same charts, UVs within rounding);
+                     // 7: the scale search's second pair aimed lower when the first
                      // pair's fitting trial is nearly full (bunny 10^5: 4 trials, not 6);
                      // 6: LSCM ordered by vertices (same charts and packing, UVs within
                      // a float ulp); 5: few irregular charts also try 30/15-degree turns

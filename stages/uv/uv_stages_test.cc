@@ -63,7 +63,7 @@ class UvStagesTest : public StageTest {
 TEST_F(UvStagesTest, UnwrapIsWellFormed) {
   const StageType* type = registry_.Find("uv.unwrap");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 7);
+  EXPECT_EQ(type->version, 8);
   const nlohmann::json schema = CheckedSchema(*type, /*defaults=*/true);
   EXPECT_EQ(schema["properties"]["method"]["default"], "conformal");
   EXPECT_EQ(schema["properties"]["method"]["enum"],

@@ -534,67 +534,6 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
   return charts;
 }
 
-void ForEachIntersectingBoxPair(const std::vector<Box2>& boxes,
-                                const std::function<bool(uint32_t, uint32_t)>& visit) {
-  const size_t n = boxes.size();
-  if (n < 2) return;
-  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300}, mean_size = 0;
-  for (const Box2& b : boxes) {
-    lo[0] = std::min(lo[0], b[0]);
-    lo[1] = std::min(lo[1], b[1]);
-    hi[0] = std::max(hi[0], b[2]);
-    hi[1] = std::max(hi[1], b[3]);
-    mean_size += std::max(b[2] - b[0], b[3] - b[1]);
-  }
-  mean_size /= double(n);
-  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], 1e-300});
-  // Cells about the mean box size, at most ~4 n of them.
-  double cell = std::max(mean_size, extent / std::sqrt(4.0 * double(n)));
-  cell = std::max(cell, extent / 4096.0);
-  const int64_t nx = std::max<int64_t>(1, int64_t((hi[0] - lo[0]) / cell) + 1);
-  const int64_t ny = std::max<int64_t>(1, int64_t((hi[1] - lo[1]) / cell) + 1);
-  auto cell_x = [&](double x) {
-    return std::clamp<int64_t>(int64_t((x - lo[0]) / cell), 0, nx - 1);
-  };
-  auto cell_y = [&](double y) {
-    return std::clamp<int64_t>(int64_t((y - lo[1]) / cell), 0, ny - 1);
-  };
-  std::vector<uint32_t> offsets(size_t(nx * ny) + 1, 0);
-  for (const Box2& b : boxes) {
-    for (int64_t y = cell_y(b[1]); y <= cell_y(b[3]); ++y) {
-      for (int64_t x = cell_x(b[0]); x <= cell_x(b[2]); ++x) ++offsets[size_t(y * nx + x) + 1];
-    }
-  }
-  for (size_t i = 0; i + 1 < offsets.size(); ++i) offsets[i + 1] += offsets[i];
-  std::vector<uint32_t> members(offsets.back());
-  {
-    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
-    for (uint32_t i = 0; i < n; ++i) {
-      const Box2& b = boxes[i];
-      for (int64_t y = cell_y(b[1]); y <= cell_y(b[3]); ++y) {
-        for (int64_t x = cell_x(b[0]); x <= cell_x(b[2]); ++x)
-          members[fill[size_t(y * nx + x)]++] = i;
-      }
-    }
-  }
-  for (int64_t cy = 0; cy < ny; ++cy) {
-    for (int64_t cx = 0; cx < nx; ++cx) {
-      const size_t c = size_t(cy * nx + cx);
-      for (uint32_t p = offsets[c]; p < offsets[c + 1]; ++p) {
-        for (uint32_t q = p + 1; q < offsets[c + 1]; ++q) {
-          uint32_t i = members[p], j = members[q];
-          const Box2 &a = boxes[i], &b = boxes[j];
-          if (a[0] > b[2] || b[0] > a[2] || a[1] > b[3] || b[1] > a[3]) continue;
-          // Visit each pair once: in the cell of its intersection's min corner.
-          if (cell_x(std::max(a[0], b[0])) != cx || cell_y(std::max(a[1], b[1])) != cy) continue;
-          if (i > j) std::swap(i, j);
-          if (!visit(i, j)) return;
-        }
-      }
-    }
-  }
-}
-
 bool TrianglesOverlap(const Tri2& a, const Tri2& b, double tolerance) {
   for (const Tri2* t : {&a, &b}) {
     for (int k = 0; k < 3; ++k) {
@@ -617,6 +556,61 @@ bool TrianglesOverlap(const Tri2& a, const Tri2& b, double tolerance) {
     }
   }
   return true;
+}
+
+bool ChartFacesOverlap(const FlatChart& chart, const std::vector<Box2>& boxes, double tolerance) {
+  const size_t faces = chart.faces.size();
+  std::vector<char> ccw(faces);
+  for (size_t i = 0; i < faces; ++i) ccw[i] = SignedArea(ChartTriangle(chart, i)) > 0;
+  auto point = [&](uint32_t v) {
+    return std::array<double, 2>{chart.uv_m[2 * size_t(v)], chart.uv_m[2 * size_t(v) + 1]};
+  };
+  auto cross = [](const std::array<double, 2>& o, const std::array<double, 2>& a,
+                  const std::array<double, 2>& b) {
+    return (a[0] - o[0]) * (b[1] - o[1]) - (a[1] - o[1]) * (b[0] - o[0]);
+  };
+  bool overlap = false;
+  ForEachIntersectingBoxPair(boxes, [&](uint32_t i, uint32_t j) {
+    const uint32_t* a = &chart.corners[3 * size_t(i)];
+    const uint32_t* b = &chart.corners[3 * size_t(j)];
+    if (ccw[i] && ccw[j]) {
+      // Shared corners: a[ka] == b[kb].
+      int shared = 0, ka = 0, kb = 0;
+      for (int x = 0; x < 3; ++x) {
+        for (int y = 0; y < 3; ++y) {
+          if (a[x] == b[y]) {
+            ++shared;
+            ka = x;
+            kb = y;
+          }
+        }
+      }
+      if (shared == 2) {
+        // The shared edge a[ka] -> a[ka + 1] in a is b[kb] <- b[kb - 1] in
+        // b (or the other way around when the last match is the edge's
+        // end): opposite directions put the third corners on either side
+        // of it.
+        if (a[(ka + 1) % 3] == b[(kb + 2) % 3] || a[(ka + 2) % 3] == b[(kb + 1) % 3]) return true;
+      } else if (shared == 1) {
+        // Both angles at the shared corner o are under a half turn (the
+        // faces are counter-clockwise), a's from side d1 to d2 and b's from
+        // e1 to e2: they are disjoint iff a line through o along one of
+        // the four sides has them on either side.
+        const auto o = point(a[ka]);
+        const auto a1 = point(a[(ka + 1) % 3]), a2 = point(a[(ka + 2) % 3]);
+        const auto b1 = point(b[(kb + 1) % 3]), b2 = point(b[(kb + 2) % 3]);
+        const double c11 = cross(o, a1, b1), c12 = cross(o, a1, b2);
+        const double c21 = cross(o, a2, b1), c22 = cross(o, a2, b2);
+        if ((c11 <= 0 && c12 <= 0) || (c21 >= 0 && c22 >= 0) || (c11 >= 0 && c21 >= 0) ||
+            (c12 <= 0 && c22 <= 0)) {
+          return true;
+        }
+      }
+    }
+    overlap = TrianglesOverlap(ChartTriangle(chart, i), ChartTriangle(chart, j), tolerance);
+    return !overlap;
+  });
+  return overlap;
 }
 
 namespace {

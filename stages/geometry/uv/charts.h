@@ -2,7 +2,9 @@
 // the public API is uv_atlas.h). Algorithm and references there.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <functional>
 #include <vector>
@@ -78,10 +80,11 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
 // Axis-aligned boxes {min_x, min_y, max_x, max_y}; calls visit(i, j), i < j,
 // once for every pair whose boxes intersect (closed). A uniform grid sized to
 // the boxes keeps the work near-linear for boxes of similar size. visit
-// returns false to stop early.
+// returns false to stop early. (A template: the visit is inlined, and it
+// runs once per pair, a million times on a 10^5-face chart.)
 using Box2 = std::array<double, 4>;
-void ForEachIntersectingBoxPair(const std::vector<Box2>& boxes,
-                                const std::function<bool(uint32_t, uint32_t)>& visit);
+template <typename Visit>
+void ForEachIntersectingBoxPair(const std::vector<Box2>& boxes, Visit&& visit);
 
 // Whether the interiors of triangles a and b (3 points each, x y) overlap by
 // more than `tolerance` along every separating axis (SAT): triangles that
@@ -90,5 +93,90 @@ bool TrianglesOverlap(const std::array<double, 6>& a, const std::array<double, 6
                       double tolerance);
 // Euclidean distance between two triangles (0 if they intersect).
 double TriangleDistance(const std::array<double, 6>& a, const std::array<double, 6>& b);
+
+// Whether two faces of a flattened chart overlap: TrianglesOverlap with
+// `tolerance` on every pair of faces whose `boxes` (one per face, as
+// ForEachIntersectingBoxPair takes them) intersect. Pairs of faces with
+// positive signed area that share an edge in opposite directions, or share
+// one corner and have disjoint angles there, are disjoint without the test
+// (they lie on either side of a line through the shared corners); they are
+// most pairs on a mesh.
+bool ChartFacesOverlap(const FlatChart& chart, const std::vector<Box2>& boxes, double tolerance);
+
+// Template definition.
+template <typename Visit>
+void ForEachIntersectingBoxPair(const std::vector<Box2>& boxes, Visit&& visit) {
+  const size_t n = boxes.size();
+  if (n < 2) return;
+  double lo[2] = {1e300, 1e300}, hi[2] = {-1e300, -1e300}, mean_size = 0;
+  for (const Box2& b : boxes) {
+    lo[0] = std::min(lo[0], b[0]);
+    lo[1] = std::min(lo[1], b[1]);
+    hi[0] = std::max(hi[0], b[2]);
+    hi[1] = std::max(hi[1], b[3]);
+    mean_size += std::max(b[2] - b[0], b[3] - b[1]);
+  }
+  mean_size /= double(n);
+  const double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], 1e-300});
+  // Cells about the mean box size, at most ~4 n of them.
+  double cell = std::max(mean_size, extent / std::sqrt(4.0 * double(n)));
+  cell = std::max(cell, extent / 4096.0);
+  const int64_t nx = std::max<int64_t>(1, int64_t((hi[0] - lo[0]) / cell) + 1);
+  const int64_t ny = std::max<int64_t>(1, int64_t((hi[1] - lo[1]) / cell) + 1);
+  auto cell_x = [&](double x) {
+    return int32_t(std::clamp<int64_t>(int64_t((x - lo[0]) / cell), 0, nx - 1));
+  };
+  auto cell_y = [&](double y) {
+    return int32_t(std::clamp<int64_t>(int64_t((y - lo[1]) / cell), 0, ny - 1));
+  };
+  // Each box's cell range, computed once.
+  std::vector<std::array<int32_t, 4>> range(n);
+  std::vector<uint32_t> offsets(size_t(nx * ny) + 1, 0);
+  for (size_t i = 0; i < n; ++i) {
+    const Box2& b = boxes[i];
+    range[i] = {cell_x(b[0]), cell_y(b[1]), cell_x(b[2]), cell_y(b[3])};
+    for (int64_t y = range[i][1]; y <= range[i][3]; ++y) {
+      for (int64_t x = range[i][0]; x <= range[i][2]; ++x) ++offsets[size_t(y * nx + x) + 1];
+    }
+  }
+  for (size_t i = 0; i + 1 < offsets.size(); ++i) offsets[i + 1] += offsets[i];
+  // The cells' members with their boxes and min cells, in cell order (read
+  // in sequence, not through the box index).
+  struct Member {
+    Box2 box;
+    uint32_t id;
+    int32_t cx, cy;
+  };
+  std::vector<Member> members(offsets.back());
+  {
+    std::vector<uint32_t> fill(offsets.begin(), offsets.end() - 1);
+    for (uint32_t i = 0; i < n; ++i) {
+      const auto& r = range[i];
+      for (int64_t y = r[1]; y <= r[3]; ++y) {
+        for (int64_t x = r[0]; x <= r[2]; ++x) {
+          members[fill[size_t(y * nx + x)]++] = {boxes[i], i, r[0], r[1]};
+        }
+      }
+    }
+  }
+  for (int32_t cy = 0; cy < ny; ++cy) {
+    for (int32_t cx = 0; cx < nx; ++cx) {
+      const size_t c = size_t(cy * nx + cx);
+      for (uint32_t p = offsets[c]; p < offsets[c + 1]; ++p) {
+        const Member& mp = members[p];
+        for (uint32_t q = p + 1; q < offsets[c + 1]; ++q) {
+          const Member& mq = members[q];
+          const Box2 &a = mp.box, &b = mq.box;
+          if (a[0] > b[2] || b[0] > a[2] || a[1] > b[3] || b[1] > a[3]) continue;
+          // Visit each pair once: in the cell of its intersection's min
+          // corner (the cell of the larger min, the cells being monotone).
+          if (std::max(mp.cx, mq.cx) != cx || std::max(mp.cy, mq.cy) != cy) continue;
+          const uint32_t i = std::min(mp.id, mq.id), j = std::max(mp.id, mq.id);
+          if (!visit(i, j)) return;
+        }
+      }
+    }
+  }
+}
 
 }  // namespace pb

@@ -5,48 +5,36 @@
 #include <Eigen/SparseCholesky>
 #include <algorithm>
 #include <cmath>
+#include <complex>
 #include <limits>
 #include <vector>
 
 namespace pb {
 namespace {
 
-// Approximate minimum degree ordering of the LSCM normal matrix computed on
-// its vertex graph: the two unknowns (u, v) of a vertex have the same
-// rows, so the matrix is the vertex pattern with every entry a 2x2 block.
-// Ordering the vertices and keeping each vertex's u and v together costs
-// a quarter of ordering the unknowns (Eigen's AMDOrdering), for the same
-// kind of fill.
+using Complex = std::complex<double>;
+
+// Approximate minimum degree ordering of the LSCM matrix on its vertex
+// graph: the pattern of the full (both triangles) matrix SimplicialLDLT
+// passes, diagonal included, as a pattern-only copy (the ordering works in
+// place on it).
 struct VertexAmdOrdering {
   using PermutationType = Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int>;
-  // `full`: both triangles, as SimplicialLDLT passes it.
   template <typename MatrixType>
   void operator()(const MatrixType& full, PermutationType& perm) {
-    const int cols = int(full.cols()), vertices = cols / 2;
-    perm.resize(cols);
+    const int vertices = int(full.cols());
     if (vertices < 2) {  // nothing to order
+      perm.resize(vertices);
       perm.setIdentity();
       return;
     }
     Eigen::SparseMatrix<double, Eigen::ColMajor, int> graph(vertices, vertices);
-    std::vector<int> outer(vertices + 1, 0), inner;
-    inner.reserve(full.nonZeros() / 4 + vertices);
-    for (int u = 0; u < vertices; ++u) {
-      for (typename MatrixType::InnerIterator it(full, 2 * u); it; ++it) {
-        if (it.row() % 2 == 0) inner.push_back(int(it.row()) / 2);
-      }
-      outer[u + 1] = int(inner.size());
-    }
-    graph.resizeNonZeros(int(inner.size()));
-    std::copy(outer.begin(), outer.end(), graph.outerIndexPtr());
-    std::copy(inner.begin(), inner.end(), graph.innerIndexPtr());
-    std::fill(graph.valuePtr(), graph.valuePtr() + inner.size(), 1.0);
-    PermutationType vertex_perm;
-    Eigen::internal::minimum_degree_ordering(graph, vertex_perm);
-    for (int i = 0; i < vertices; ++i) {
-      perm.indices()[2 * i] = 2 * vertex_perm.indices()[i];
-      perm.indices()[2 * i + 1] = 2 * vertex_perm.indices()[i] + 1;
-    }
+    const int entries = int(full.nonZeros());
+    graph.resizeNonZeros(entries);
+    std::copy(full.outerIndexPtr(), full.outerIndexPtr() + vertices + 1, graph.outerIndexPtr());
+    std::copy(full.innerIndexPtr(), full.innerIndexPtr() + entries, graph.innerIndexPtr());
+    std::fill(graph.valuePtr(), graph.valuePtr() + entries, 1.0);
+    Eigen::internal::minimum_degree_ordering(graph, perm);
   }
 };
 
@@ -94,29 +82,29 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
   const double pin_distance = std::sqrt(Distance2(positions, pin_a, pin_b));
   if (!(pin_distance > 0)) return false;
 
-  // Unknowns: u, v of every used vertex but the pins.
+  // Unknowns: U = u + i v of every used vertex but the pins.
   constexpr int kPinned = -1;
   std::vector<int> column(n, kPinned);
   int unknowns = 0;
   for (uint32_t v : used) {
-    if (v != pin_a && v != pin_b) column[v] = 2 * unknowns++;
+    if (v != pin_a && v != pin_b) column[v] = unknowns++;
   }
-  const int cols = 2 * unknowns;
-  double pinned_uv[2][2] = {{0, 0}, {pin_distance, 0}};
+  const Complex pinned_uv[2] = {Complex(0, 0), Complex(pin_distance, 0)};
   auto pin_index = [&](uint32_t v) { return v == pin_a ? 0 : 1; };
 
-  // The normal equations AᵀA x = Aᵀb, assembled directly in compressed
-  // columns (lower triangle, all SimplicialLDLT reads): each face gives two
-  // rows of A; every entry of AᵀA and Aᵀb sums its rows' products in
-  // increasing row order, as Eigen's sparse product AᵀA of the row matrix
-  // did (same bits), without building A, its transpose and the product.
-  struct FaceRows {
+  // Each face gives one complex row of A (its dU/dz-bar); the normal
+  // equations A^H A U = A^H b are assembled directly in compressed columns
+  // (lower triangle, all SimplicialLDLT reads). Complex, they have one
+  // unknown per vertex: the real (u, v) form is the same system with every
+  // entry a 2x2 block [re -im; im re], and factorizing it cost twice the
+  // flops and four times the index work.
+  struct FaceRow {
     int entries = 0;
-    int column[6];
-    double value[2][6];
-    double b[2] = {0, 0};
+    int column[3];
+    Complex value[3];
+    Complex b = 0;
   };
-  std::vector<FaceRows> rows;
+  std::vector<FaceRow> rows;
   rows.reserve(faces);
   for (size_t f = 0; f < faces; ++f) {
     const uint32_t v[3] = {corners[3 * f], corners[3 * f + 1], corners[3 * f + 2]};
@@ -139,106 +127,94 @@ bool LscmFlatten(std::span<const double> positions, std::span<const uint32_t> co
     // dU/dz-bar = sum_j W_j U_j / (4 A) with W_j = (y_{j+1} - y_{j+2}) + i (x_{j+2} - x_{j+1});
     // the row is scaled by 1/sqrt(A) so that each face weighs by its area.
     const double scale = 1.0 / std::sqrt(0.5 * twice_area);
-    FaceRows& face = rows.emplace_back();
+    FaceRow& face = rows.emplace_back();
     for (int j = 0; j < 3; ++j) {
       const int j1 = (j + 1) % 3, j2 = (j + 2) % 3;
-      const double a = (y[j1] - y[j2]) * scale, b = (x[j2] - x[j1]) * scale;
-      // Re(W U) = a u - b v, Im(W U) = b u + a v.
+      const Complex w((y[j1] - y[j2]) * scale, (x[j2] - x[j1]) * scale);
       if (column[v[j]] == kPinned) {
-        const double* p = pinned_uv[pin_index(v[j])];
-        face.b[0] -= a * p[0] - b * p[1];
-        face.b[1] -= b * p[0] + a * p[1];
+        face.b -= w * pinned_uv[pin_index(v[j])];
       } else {
-        const int c = column[v[j]], e = face.entries;
-        face.column[e] = c;
-        face.column[e + 1] = c + 1;
-        face.value[0][e] = a;
-        face.value[0][e + 1] = -b;
-        face.value[1][e] = b;
-        face.value[1][e + 1] = a;
-        face.entries += 2;
+        face.column[face.entries] = column[v[j]];
+        face.value[face.entries++] = w;
       }
     }
   }
-  if (cols > 0) {
+  if (unknowns > 0) {
     // Pattern: column q holds the rows p >= q of the unknowns that share a
-    // face with it (each unknown vertex's two columns have the same rows).
-    const int vertices = cols / 2;
-    std::vector<std::vector<int>> near(vertices);
-    for (int u = 0; u < vertices; ++u) near[u].push_back(u);  // the diagonal, always
-    for (const FaceRows& face : rows) {
-      for (int p = 0; p < face.entries; p += 2) {
-        for (int q = 0; q < face.entries; q += 2) {
-          if (face.column[p] >= face.column[q]) near[face.column[q] / 2].push_back(face.column[p] / 2);
+    // face with it, the diagonal first: per column, the candidates (with
+    // repeats) by counting, then each column sorted and deduplicated.
+    std::vector<int> start(unknowns + 1, 0);
+    for (const FaceRow& face : rows) {
+      for (int p = 0; p < face.entries; ++p) {
+        for (int q = 0; q < face.entries; ++q) {
+          if (face.column[p] > face.column[q]) ++start[face.column[q] + 1];
         }
       }
     }
-    std::vector<int> outer(cols + 1, 0);
-    for (int u = 0; u < vertices; ++u) {
-      std::vector<int>& list = near[u];
-      std::sort(list.begin(), list.end());
-      list.erase(std::unique(list.begin(), list.end()), list.end());
-      // Column 2u: rows 2w, 2w+1 for every w; column 2u+1: the same but 2u.
-      outer[2 * u + 1] = outer[2 * u] + 2 * int(list.size());
-      outer[2 * u + 2] = outer[2 * u + 1] + 2 * int(list.size()) - 1;
+    for (int u = 0; u < unknowns; ++u) start[u + 1] += start[u] + 1;  // + the diagonal
+    std::vector<int> candidates(start[unknowns]);
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int u = 0; u < unknowns; ++u) candidates[fill[u]++] = u;
+    for (const FaceRow& face : rows) {
+      for (int p = 0; p < face.entries; ++p) {
+        for (int q = 0; q < face.entries; ++q) {
+          if (face.column[p] > face.column[q]) candidates[fill[face.column[q]]++] = face.column[p];
+        }
+      }
     }
-    Eigen::SparseMatrix<double> normal(cols, cols);
-    normal.resizeNonZeros(outer[cols]);
-    std::copy(outer.begin(), outer.end(), normal.outerIndexPtr());
+    Eigen::SparseMatrix<Complex> normal(unknowns, unknowns);
+    normal.resizeNonZeros(int(candidates.size()));
+    int* outer = normal.outerIndexPtr();
     int* inner = normal.innerIndexPtr();
-    double* values = normal.valuePtr();
-    std::fill(values, values + outer[cols], 0.0);
-    for (int u = 0; u < vertices; ++u) {
-      int k = outer[2 * u];
-      for (int w : near[u]) {
-        inner[k++] = 2 * w;
-        inner[k++] = 2 * w + 1;
-      }
-      for (int w : near[u]) {
-        if (w != u) inner[k++] = 2 * w;
-        inner[k++] = 2 * w + 1;
-      }
+    outer[0] = 0;
+    for (int u = 0; u < unknowns; ++u) {
+      int* first = candidates.data() + start[u];
+      int* last = candidates.data() + start[u + 1];
+      std::sort(first + 1, last);  // the diagonal stays first
+      last = std::unique(first, last);
+      outer[u + 1] = int(std::copy(first, last, inner + outer[u]) - inner);
     }
-    Eigen::VectorXd rhs = Eigen::VectorXd::Zero(cols);
-    for (const FaceRows& face : rows) {
-      for (int r = 0; r < 2; ++r) {
-        for (int p = 0; p < face.entries; ++p) {
-          const int row = face.column[p];
-          for (int q = 0; q < face.entries; ++q) {
-            const int col = face.column[q];
-            if (row < col) continue;
-            int k = outer[col];
-            while (inner[k] != row) ++k;
-            values[k] += face.value[r][p] * face.value[r][q];
-          }
-          rhs[row] += face.value[r][p] * face.b[r];
+    normal.resizeNonZeros(outer[unknowns]);
+    Complex* values = normal.valuePtr();
+    std::fill(values, values + outer[unknowns], Complex(0));
+    Eigen::VectorXcd rhs = Eigen::VectorXcd::Zero(unknowns);
+    for (const FaceRow& face : rows) {
+      for (int p = 0; p < face.entries; ++p) {
+        const int row = face.column[p];
+        const Complex conj_p = std::conj(face.value[p]);
+        for (int q = 0; q < face.entries; ++q) {
+          const int col = face.column[q];
+          if (row < col) continue;
+          int k = outer[col];
+          while (inner[k] != row) ++k;
+          values[k] += conj_p * face.value[q];
         }
+        rhs[row] += conj_p * face.b;
       }
     }
     // A whisper of regularization keeps vertices that only degenerate faces
     // reach from making the system singular (they land near the origin and
     // the chart's overlap check splits them off).
     double trace = 0;
-    for (int k = 0; k < cols; ++k) trace += normal.coeff(k, k);
-    const double ridge = 1e-12 * (trace > 0 ? trace / cols : 1.0);
-    for (int k = 0; k < cols; ++k) normal.coeffRef(k, k) += ridge;
-    Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>, Eigen::Lower, VertexAmdOrdering> solver(
+    for (int u = 0; u < unknowns; ++u) trace += values[outer[u]].real();
+    const double ridge = 1e-12 * (trace > 0 ? trace / unknowns : 1.0);
+    for (int u = 0; u < unknowns; ++u) values[outer[u]] += ridge;
+    Eigen::SimplicialLDLT<Eigen::SparseMatrix<Complex>, Eigen::Lower, VertexAmdOrdering> solver(
         normal);
     if (solver.info() != Eigen::Success) return false;
-    const Eigen::VectorXd solution = solver.solve(rhs);
+    const Eigen::VectorXcd solution = solver.solve(rhs);
     if (solver.info() != Eigen::Success) return false;
     for (uint32_t vtx : used) {
       if (column[vtx] == kPinned) continue;
-      (*uv)[2 * size_t(vtx)] = solution[column[vtx]];
-      (*uv)[2 * size_t(vtx) + 1] = solution[column[vtx] + 1];
-      if (!std::isfinite((*uv)[2 * size_t(vtx)]) || !std::isfinite((*uv)[2 * size_t(vtx) + 1])) {
-        return false;
-      }
+      const Complex z = solution[column[vtx]];
+      (*uv)[2 * size_t(vtx)] = z.real();
+      (*uv)[2 * size_t(vtx) + 1] = z.imag();
+      if (!std::isfinite(z.real()) || !std::isfinite(z.imag())) return false;
     }
   }
   for (uint32_t p : {pin_a, pin_b}) {
-    (*uv)[2 * size_t(p)] = pinned_uv[pin_index(p)][0];
-    (*uv)[2 * size_t(p) + 1] = pinned_uv[pin_index(p)][1];
+    (*uv)[2 * size_t(p)] = pinned_uv[pin_index(p)].real();
+    (*uv)[2 * size_t(p) + 1] = pinned_uv[pin_index(p)].imag();
   }
   return true;
 }

@@ -6,7 +6,8 @@
 // orthonormal 2-D frame, the map's d/dz-bar (the non-holomorphic part) is
 // zero for a similarity; the sum over triangles of area x |dU/dz-bar|^2 is
 // minimized with two vertices pinned (the pair found by two farthest-point
-// sweeps), by the normal equations and a sparse Cholesky factorization
+// sweeps), by the normal equations in complex form (U = u + i v: one
+// unknown per vertex, a Hermitian matrix) and a sparse LDLᴴ factorization
 // (Eigen's SimplicialLDLT). Departure: the paper's free boundary is kept but
 // no global (multi-chart) solve is done: each chart is solved alone, so the
 // atlas is a set of independent problems (parallel, deterministic).

@@ -57,6 +57,45 @@ int NextBit(const uint64_t* row, int words, int limit, int from, bool set) {
   return std::min(limit, w * 64 + __builtin_ctzll(m));
 }
 
+// The longest run of clear bits of a row of `words` words (the first of
+// the longest): its start and length. Word by word: a clear word extends
+// the current run, a set one ends it, and only the others are walked run
+// by run (an atlas row is mostly whole words of either).
+std::pair<int, int> LongestClearRun(const uint64_t* row, int words) {
+  int best_lo = 0, best = 0, start = 0, length = 0;  // the current run
+  for (int w = 0; w < words; ++w) {
+    const uint64_t x = row[w];
+    if (x == 0) {
+      length += 64;
+      continue;
+    }
+    int bit = 0;
+    while (bit < 64) {
+      const uint64_t clear_from_bit = x >> bit;
+      if (clear_from_bit == 0) {  // clear to the word's end: the run goes on
+        length += 64 - bit;
+        break;
+      }
+      const int clear = __builtin_ctzll(clear_from_bit);
+      length += clear;
+      if (length > best) {
+        best = length;
+        best_lo = start;
+      }
+      bit += clear;
+      const uint64_t set_from_bit = ~x >> bit;
+      bit += set_from_bit == 0 ? 64 - bit : __builtin_ctzll(set_from_bit);
+      start = w * 64 + bit;
+      length = 0;
+    }
+  }
+  if (length > best) {
+    best = length;
+    best_lo = start;
+  }
+  return {best_lo, best};
+}
+
 void ComputeRuns(Mask* mask) {
   mask->run_lo.assign(mask->h, 0);
   mask->run_len.assign(mask->h, 0);
@@ -548,10 +587,14 @@ class Atlas {
     words_ = (size + 63) / 64 + 1;
     window_ = window;
     bits_.assign(size_t(words_) * size_t(height_), 0);
+    // Bits at and beyond `size` are taken, so free runs end at the edge:
+    // words size / 64 on, the same in every row.
+    const int first_pad = size_ >> 6;
+    const uint64_t partial = ~uint64_t(0) << (size_ & 63);  // of word first_pad
     for (int y = 0; y < height_; ++y) {
       uint64_t* row = Row(y);
-      // Bits at and beyond `size` are taken, so free runs end at the edge.
-      for (int x = size_; x < words_ * 64; ++x) row[x >> 6] |= uint64_t(1) << (x & 63);
+      row[first_pad] |= partial;
+      for (int w = first_pad + 1; w < words_; ++w) row[w] = ~uint64_t(0);
     }
     max_free_.assign(height_, size_);
     lowest_row_.assign(size_ + 1, 0);
@@ -568,8 +611,7 @@ class Atlas {
     // fresh vectors, allocated and faulted in again at every packing).
     level_bits_.resize(kTallLevels + 1);
     for (int l = 0; l <= kTallLevels; ++l) {
-      level_bits_[l].assign(size_t(words_) * size_t(height_), 0);
-      std::copy(bits_.begin(), bits_.end(), level_bits_[l].begin());
+      level_bits_[l].assign(bits_.begin(), bits_.end());  // one pass, not zeros then a copy
     }
     for (int l = 0; l < kTallLevels; ++l) {
       const int rows = window_ * kTallLevel[l];
@@ -774,17 +816,7 @@ class Atlas {
         for (int i = wa; i <= wb; ++i) dst[i] = lower[i] | upper[i];
         const int lo = tall_max_lo_[l][y];
         if (lo + tall_max_free_[l][y] <= a || lo >= b) continue;  // the longest is elsewhere
-        int best = 0, best_lo = 0;
-        for (int x = 0; x < size_;) {
-          const int s = NextBit(dst, words_, size_, x, false);
-          if (s >= size_) break;
-          const int e = NextBit(dst, words_, size_, s, true);
-          if (e - s > best) {
-            best = e - s;
-            best_lo = s;
-          }
-          x = e;
-        }
+        const auto [best_lo, best] = LongestClearRun(dst, words_);
         tall_max_free_[l][y] = best;
         tall_max_lo_[l][y] = best_lo;
       }

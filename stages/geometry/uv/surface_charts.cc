@@ -344,16 +344,11 @@ bool ScaleAndCheck(const Mesh& mesh, const FaceData& data, double max_stretch, F
   for (double& x : chart->uv_m) x *= scale;
   if (faces == 1) return true;
   if (ChartStretchL2(mesh, *chart) > max_stretch) return false;
-  bool overlap = false;
   const double tolerance = 1e-9 * extent * scale;
   for (Box2& b : boxes) {
     for (double& x : b) x *= scale;
   }
-  ForEachIntersectingBoxPair(boxes, [&](uint32_t i, uint32_t j) {
-    overlap = TrianglesOverlap(ChartTriangle(*chart, i), ChartTriangle(*chart, j), tolerance);
-    return !overlap;
-  });
-  return !overlap;
+  return !ChartFacesOverlap(*chart, boxes, tolerance);
 }
 
 // Flattens (step 3) and validates (step 4); false if the chart must split.
