@@ -28,17 +28,25 @@ std::string PaintUncolored(const std::string& mode, PointCloud* points) {
   if (mode == "none" || points->empty()) return "none";
   points->colors.assign(3 * points->size(), kUniformGrey);
   if (mode != "intensity" || !points->has_intensities()) return "uniform grey";
-  std::vector<float> sorted = points->intensities;
-  const size_t n = sorted.size();
+  // Finite intensities only (a NaN would break the ordering); a point
+  // without one gets the middle grey.
+  std::vector<float> sorted;
+  sorted.reserve(points->intensities.size());
+  for (float v : points->intensities) {
+    if (std::isfinite(v)) sorted.push_back(v);
+  }
+  if (sorted.empty()) return "uniform grey";
+  const size_t n = points->intensities.size(), m = sorted.size();
   auto quantile = [&](double q) {
-    const size_t k = std::min(n - 1, size_t(q * double(n - 1)));
+    const size_t k = std::min(m - 1, size_t(q * double(m - 1)));
     std::nth_element(sorted.begin(), sorted.begin() + k, sorted.end());
     return double(sorted[k]);
   };
   const double lo = quantile(0.01), hi = quantile(0.99);
   if (!(hi > lo)) return "uniform grey";  // all intensities (nearly) equal
   for (size_t i = 0; i < n; ++i) {
-    const double t = std::clamp((double(points->intensities[i]) - lo) / (hi - lo), 0.0, 1.0);
+    const double v = points->intensities[i];
+    const double t = std::isfinite(v) ? std::clamp((v - lo) / (hi - lo), 0.0, 1.0) : 0.5;
     const auto grey = uint8_t(std::lround(255.0 * t));
     for (int c = 0; c < 3; ++c) points->colors[3 * i + c] = grey;
   }

@@ -208,6 +208,20 @@ TEST_F(PointsStagesTest, ReadPointsPaintsUncoloredScansGrey) {
   EXPECT_EQ(none.meta_["points"]["colors_from"], "none");
   EXPECT_TRUE(none.warnings_.empty());
 
+  // A non-finite intensity neither joins the percentiles nor breaks them:
+  // its point gets the middle grey.
+  const std::string with_nan = (dir_ / "nan.ply").string();
+  std::ofstream(with_nan) << "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\n"
+                             "property float y\nproperty float z\nproperty float intensity\n"
+                             "end_header\n0 0 0 0\n1 0 0 nan\n2 0 0 0.5\n3 0 0 1\n";
+  FakeContext nan_ctx(dir_ / "e", {{"path", with_nan}});
+  ASSERT_TRUE(Run("io.read_points", nan_ctx).ok());
+  read = ReadPlyPoints(nan_ctx.outputs_["points"]);
+  ASSERT_TRUE(read.ok());
+  // 1st percentile 0, 99th 0.5 (of the three finite values).
+  EXPECT_EQ(read->points.colors,
+            (std::vector<uint8_t>{0, 0, 0, 128, 128, 128, 255, 255, 255, 255, 255, 255}));
+
   // A colored file keeps its colors, without a warning.
   const std::string colored = (dir_ / "colored.ply").string();
   std::ofstream(colored) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"

@@ -114,8 +114,8 @@ std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& posit
   ParallelRanges(local.size(), [&](size_t begin, size_t end) {
     for (size_t i = begin; i < end; ++i) {
       // Last round's nearest face as the hint: the mesh moved by a fraction
-      // of an edge, so it is at or next to this round's (same answer, a
-      // third of the search).
+      // of an edge, so it is at or next to this round's (same answer, found
+      // with less search: TriangleBvh::Nearest).
       const TriangleBvh::Hit hit = bvh.Nearest(local[i], nearest_face[i]);
       if (hit.face == UINT32_MAX) continue;
       nearest_face[i] = hit.face;
