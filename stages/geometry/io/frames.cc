@@ -47,30 +47,27 @@ Status Validate(const FramesIndex& index) {
     const std::string where = "frames[" + std::to_string(i) + "]";
     if (f.name.empty()) return Status::Invalid(where + ": empty name");
     if (!names.insert(f.name).second) return Status::Invalid(where + ": duplicate name '" + f.name + "'");
-    if (f.file.empty() || f.file.find('/') != std::string::npos ||
-        f.file.find('\\') != std::string::npos || f.file == "." || f.file == ".." ||
-        f.file == kFramesIndexFile || !EndsWithPng(f.file))
-      return Status::Invalid(where + " '" + f.name + "': file '" + f.file +
-                             "' must be a plain file name ending in .png");
-    if (!files.insert(f.file).second)
-      return Status::Invalid(where + " '" + f.name + "': file '" + f.file + "' used twice");
-    if (!f.depth_file.empty()) {
-      const std::string& d = f.depth_file;
-      if (d.find('/') != std::string::npos || d.find('\\') != std::string::npos || d.size() <= 4 ||
-          d.compare(d.size() - 4, 4, ".exr") != 0)
-        return Status::Invalid(where + " '" + f.name + "': depth file '" + d +
-                               "' must be a plain file name ending in .exr");
-      if (!files.insert(d).second)
-        return Status::Invalid(where + " '" + f.name + "': file '" + d + "' used twice");
+    // The frame's image and its optional depth and samples files: plain
+    // file names with their extension, each used once in the set.
+    auto check_file = [&](const std::string& file, const std::string& kind, const char* extension,
+                          bool extension_ok) -> Status {
+      if (file.find('/') != std::string::npos || file.find('\\') != std::string::npos ||
+          file == "." || file == ".." || file == kFramesIndexFile || !extension_ok)
+        return Status::Invalid(where + " '" + f.name + "': " + kind + "file '" + file +
+                               "' must be a plain file name ending in " + extension);
+      if (!files.insert(file).second)
+        return Status::Invalid(where + " '" + f.name + "': file '" + file + "' used twice");
+      return Status::Ok();
+    };
+    PB_RETURN_IF_ERROR(check_file(f.file, "", ".png", !f.file.empty() && EndsWithPng(f.file)));
+    const std::string& d = f.depth_file;
+    if (!d.empty()) {
+      PB_RETURN_IF_ERROR(check_file(
+          d, "depth ", ".exr", d.size() > 4 && d.compare(d.size() - 4, 4, ".exr") == 0));
     }
     if (!f.samples_file.empty()) {
-      const std::string& m = f.samples_file;
-      if (m.find('/') != std::string::npos || m.find('\\') != std::string::npos || m == kFramesIndexFile ||
-          !EndsWithPng(m))
-        return Status::Invalid(where + " '" + f.name + "': samples file '" + m +
-                               "' must be a plain file name ending in .png");
-      if (!files.insert(m).second)
-        return Status::Invalid(where + " '" + f.name + "': file '" + m + "' used twice");
+      PB_RETURN_IF_ERROR(
+          check_file(f.samples_file, "samples ", ".png", EndsWithPng(f.samples_file)));
     }
   }
   return Status::Ok();
@@ -177,31 +174,28 @@ Expected<FrameSet> ReadFrames(const std::string& index_path, const FramesFilePat
       return Status::Invalid(what + ": " + entry.file + " is " + std::to_string(image->width) + "x" +
                              std::to_string(image->height) + ", the set is " +
                              std::to_string(index.width) + "x" + std::to_string(index.height));
-    Image depth;
+    // A depth (one-channel float EXR) or samples (8-bit gray PNG) image of
+    // the frame's size.
+    auto read_side = [&](const std::string& file, const char* kind, bool exr) -> Expected<Image> {
+      const std::string side_path = path_of ? path_of(file) : JoinPath(dir, file);
+      if (side_path.empty() || !Env::Default()->Exists(side_path))
+        return Status::NotFound(what + ": missing " + kind + " file '" + file + "'");
+      Expected<Image> read = exr ? ReadExr(side_path) : ReadPng(side_path);
+      if (!read.ok()) return read.status().WithContext(what);
+      if (read->type != (exr ? Image::PixelType::kF32 : Image::PixelType::kU8) ||
+          read->channels != 1 || read->width != index.width || read->height != index.height)
+        return Status::Invalid(what + ": " + file + " must be " +
+                               (exr ? "a one-channel float " : "an 8-bit gray ") +
+                               std::to_string(index.width) + "x" + std::to_string(index.height) +
+                               (exr ? " EXR" : " PNG"));
+      return read;
+    };
+    Image depth, samples;
     if (!entry.depth_file.empty()) {
-      const std::string depth_path = path_of ? path_of(entry.depth_file) : JoinPath(dir, entry.depth_file);
-      if (depth_path.empty() || !Env::Default()->Exists(depth_path))
-        return Status::NotFound(what + ": missing depth file '" + entry.depth_file + "'");
-      Expected<Image> read = ReadExr(depth_path);
-      if (!read.ok()) return read.status().WithContext(what);
-      if (read->type != Image::PixelType::kF32 || read->channels != 1 || read->width != index.width ||
-          read->height != index.height)
-        return Status::Invalid(what + ": " + entry.depth_file + " must be a one-channel float " +
-                               std::to_string(index.width) + "x" + std::to_string(index.height) + " EXR");
-      depth = std::move(*read);
+      PB_ASSIGN_OR_RETURN(depth, read_side(entry.depth_file, "depth", true));
     }
-    Image samples;
     if (!entry.samples_file.empty()) {
-      const std::string samples_path = path_of ? path_of(entry.samples_file) : JoinPath(dir, entry.samples_file);
-      if (samples_path.empty() || !Env::Default()->Exists(samples_path))
-        return Status::NotFound(what + ": missing samples file '" + entry.samples_file + "'");
-      Expected<Image> read = ReadPng(samples_path);
-      if (!read.ok()) return read.status().WithContext(what);
-      if (read->type != Image::PixelType::kU8 || read->channels != 1 || read->width != index.width ||
-          read->height != index.height)
-        return Status::Invalid(what + ": " + entry.samples_file + " must be an 8-bit gray " +
-                               std::to_string(index.width) + "x" + std::to_string(index.height) + " PNG");
-      samples = std::move(*read);
+      PB_ASSIGN_OR_RETURN(samples, read_side(entry.samples_file, "samples", false));
     }
     set.frames.push_back(
         Frame{std::move(entry), std::move(image).value(), std::move(depth), std::move(samples)});
