@@ -184,11 +184,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
   }
   PB_ASSIGN_OR_RETURN(KnnIndex index, KnnIndex::Build(points.positions));
   PB_ASSIGN_OR_RETURN(std::vector<float> spacing, LocalSpacing(index, options.spacing_neighbors));
-  {
-    std::vector<float> sorted = spacing;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    report.median_spacing_m = sorted[sorted.size() / 2];
-  }
+  report.median_spacing_m = MedianLocalSpacing(spacing);
   report.points = points.size();
   report.mean_edge_m = MeanEdgeLength(mesh);
   const double edge_floor = options.support_edges * report.mean_edge_m;

@@ -14,6 +14,7 @@
 
 #include "stages/geometry/mesh/distance.h"
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/spacing.h"
 
 namespace pb {
 namespace {
@@ -68,9 +69,7 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
   result.boundary_edges = CountBoundaryEdges(mesh);
   result.boundary_edges_per_1000_faces =
       mesh.face_count() ? 1000.0 * double(result.boundary_edges) / double(mesh.face_count()) : 0;
-  std::vector<float> sorted(local_spacing_m.begin(), local_spacing_m.end());
-  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-  result.median_spacing_m = sorted[sorted.size() / 2];
+  result.median_spacing_m = MedianLocalSpacing(local_spacing_m);
 
   // Invented area: mesh samples against their nearest scan points.
   const std::vector<Vec3> samples = SampleMeshSurface(mesh, options.samples, options.seed);

@@ -192,11 +192,7 @@ Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,
   r.faces_in = mesh.face_count();
   PB_ASSIGN_OR_RETURN(const SupportField field,
                       BuildField(mesh, points, options.spacing_neighbors, options.threads));
-  {
-    std::vector<float> sorted = field.spacing;
-    std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
-    r.median_spacing_m = sorted[sorted.size() / 2];
-  }
+  r.median_spacing_m = MedianLocalSpacing(field.spacing);
   r.mean_edge_m = MeanEdgeLength(mesh);
   const double edge_term = options.max_distance_edges * r.mean_edge_m;
   // Distance of a mesh position as a fraction of its core threshold.

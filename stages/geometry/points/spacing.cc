@@ -84,4 +84,11 @@ Expected<std::vector<float>> LocalSpacing(const KnnIndex& index, int k) {
   return spacing;
 }
 
+double MedianLocalSpacing(std::span<const float> spacing) {
+  if (spacing.empty()) return 0;
+  std::vector<float> sorted(spacing.begin(), spacing.end());
+  std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
+  return sorted[sorted.size() / 2];
+}
+
 }  // namespace pb

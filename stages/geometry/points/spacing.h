@@ -10,6 +10,7 @@
 #pragma once
 
 #include <cstddef>
+#include <span>
 #include <vector>
 
 #include "base/status.h"
@@ -44,5 +45,9 @@ Expected<std::vector<float>> LocalSpacing(const PointCloud& cloud, int k);
 // The same for the points of `index` (KnnIndex::Build over the cloud's
 // positions), for a caller that keeps the index for its own queries.
 Expected<std::vector<float>> LocalSpacing(const KnnIndex& index, int k);
+
+// The median of local spacings (the upper middle value of an even count; 0
+// for none): the one figure the stages that count in local spacings report.
+double MedianLocalSpacing(std::span<const float> spacing);
 
 }  // namespace pb

@@ -49,5 +49,11 @@ TEST(LocalSpacingTest, DuplicatesCountAndBadInputIsNamed) {
   EXPECT_NE(too_few.status().message().find("k = 2"), std::string::npos) << too_few.status().message();
 }
 
+TEST(SpacingTest, MedianLocalSpacingIsTheUpperMiddleValue) {
+  EXPECT_EQ(MedianLocalSpacing(std::vector<float>{}), 0.0);
+  EXPECT_EQ(MedianLocalSpacing(std::vector<float>{3.0f, 1.0f, 2.0f}), 2.0);
+  EXPECT_EQ(MedianLocalSpacing(std::vector<float>{4.0f, 1.0f, 3.0f, 2.0f}), 3.0);
+}
+
 }  // namespace
 }  // namespace pb
