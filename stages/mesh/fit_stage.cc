@@ -49,6 +49,13 @@ constexpr const char* kSchema = R"({
       "default": 0.25,
       "description": "Weight of the smoothness of the displacement (membrane energy, relative to a vertex's mean data weight): noise averages over neighbours; 0 fits the points alone."
     },
+    "outside_weight": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "exclusiveMaximum": 1,
+      "default": 0.75,
+      "description": "Weight of a scan point outside the surface against one inside (w and 1 - w): 0.5 is plain least squares, whose surface runs through the middle of the points and leaves the outer half of the samples along every silhouette outside the model's outline; 0.75 (a point outside weighs three inside) moves the surface towards the outer side of the points' spread, by a fraction of its width. Larger covers more of the scan's outline and moves the surface farther out."
+    },
     "sweeps": {
       "type": "integer",
       "minimum": 1,
@@ -107,6 +114,7 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.support_edges, NumberParam(ctx, kId, "support_edges"));
   PB_ASSIGN_OR_RETURN(options.min_normal_cosine, NumberParam(ctx, kId, "min_normal_cosine"));
   PB_ASSIGN_OR_RETURN(options.smoothness, NumberParam(ctx, kId, "smoothness"));
+  PB_ASSIGN_OR_RETURN(options.outside_weight, NumberParam(ctx, kId, "outside_weight"));
   PB_ASSIGN_OR_RETURN(const int64_t sweeps, IntegerParam(ctx, kId, "sweeps", {1, 1000}));
   options.sweeps = static_cast<int>(sweeps);
   PB_ASSIGN_OR_RETURN(options.damping, NumberParam(ctx, kId, "damping"));
@@ -135,6 +143,8 @@ Status Run(StageContext& ctx) {
   ctx.counter("mean_abs_distance_after_m", report.mean_abs_distance_after_m);
   ctx.counter("mean_signed_distance_before_m", report.mean_signed_distance_before_m);
   ctx.counter("mean_signed_distance_after_m", report.mean_signed_distance_after_m);
+  ctx.counter("outside_fraction_before", report.outside_fraction_before);
+  ctx.counter("outside_fraction_after", report.outside_fraction_after);
   ctx.counter("vertices_moved", static_cast<double>(report.vertices_moved));
   ctx.counter("max_move_m", report.max_move_m);
   ctx.counter("mean_move_m", report.mean_move_m);
@@ -146,6 +156,8 @@ Status Run(StageContext& ctx) {
                               {"mean_abs_distance_after_m", report.mean_abs_distance_after_m},
                               {"mean_signed_distance_before_m", report.mean_signed_distance_before_m},
                               {"mean_signed_distance_after_m", report.mean_signed_distance_after_m},
+                              {"outside_fraction_before", report.outside_fraction_before},
+                              {"outside_fraction_after", report.outside_fraction_after},
                               {"vertices_moved", report.vertices_moved},
                               {"max_move_m", report.max_move_m},
                               {"mean_move_m", report.mean_move_m},
@@ -162,7 +174,7 @@ Status Run(StageContext& ctx) {
 StageType FitStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;  // 2: outside_weight (0.75; version 1 was 0.5)
   type.summary = "Moves a mesh's vertices along their normals so the surface fits the scan's points";
   type.doc =
       "A decimated mesh's vertices lie on the surface it was decimated from, so its chords cut "
@@ -173,7 +185,10 @@ StageType FitStage() {
       "to its nearest face (exact point-triangle distance; with point normals, only a face "
       "facing the same side, `min_normal_cosine`) with its signed distance along the face "
       "normal, and the vertices' displacements along their normals solve the least-squares "
-      "problem of those distances (the face moving by the barycentric blend of its corners) "
+      "problem of those distances (the face moving by the barycentric blend of its corners; a "
+      "point outside the surface weighs `outside_weight`, one inside 1 - `outside_weight`, so "
+      "the surface settles towards the outer side of the points and its outline covers the "
+      "scan's) "
       "plus `smoothness` times the membrane energy of the displacement (`sweeps` Gauss-Seidel "
       "sweeps; the displacement is smoothed, not the positions, so the mesh does not "
       "shrink), and each vertex moves along its normal by `damping` of it, at most "
@@ -188,7 +203,9 @@ StageType FitStage() {
       "Counters: `supported_points`, `mean_abs_distance_before_m`, `mean_abs_distance_after_m` "
       "(mean |signed distance| of the supported points to the input and to the output), "
       "`mean_signed_distance_before_m`, `mean_signed_distance_after_m` (positive: points "
-      "outside), `vertices_moved`, `max_move_m`, `mean_move_m`. Phases: `io`, `compute`.";
+      "outside), `outside_fraction_before`, `outside_fraction_after` (share of those points "
+      "outside the surface), `vertices_moved`, `max_move_m`, `mean_move_m`. Phases: `io`, "
+      "`compute`.";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to fit (mesh.ply), e.g. the decimated low mesh.", false},
                  {"points", "points", "The scan (points.ply; normals used when present).", false}};

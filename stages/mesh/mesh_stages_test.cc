@@ -355,9 +355,10 @@ TEST_F(MeshStagesTest, TrimRemovesUnsupportedFacesAndCleanFillsPinHoles) {
 TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
   const StageType* type = registry_.Find("mesh.fit");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 1);
+  EXPECT_EQ(type->version, 2);
   const nlohmann::json schema = CheckedSchema(*type, true);
   EXPECT_EQ(schema["properties"]["iterations"]["default"], 12);
+  EXPECT_EQ(schema["properties"]["outside_weight"]["default"], 0.75);
   ASSERT_EQ(type->inputs.size(), 2u);
   EXPECT_EQ(type->inputs[1].name, "points");
 
@@ -391,6 +392,8 @@ TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
   EXPECT_LT(fit.counters_["mean_abs_distance_after_m"], 2e-4);
   EXPECT_EQ(fit.counters_["vertices_moved"], (n + 1) * (n + 1));
   EXPECT_NEAR(fit.counters_["max_move_m"], 0.004, 5e-4);
+  EXPECT_EQ(fit.counters_["outside_fraction_before"], 1.0);  // every point above the grid
+  EXPECT_LE(fit.counters_["outside_fraction_after"], 1.0);
   EXPECT_EQ(fit.phases_, (std::set<std::string>{"io", "compute"}));
   EXPECT_EQ(fit.meta_["mesh"]["source"], "test");
   auto fitted = ReadPlyMesh(fit.outputs_["mesh"]);

@@ -157,6 +157,7 @@ Status CheckOptions(const FitOptions& o) {
     return bad("min_normal_cosine must be in [-1, 1]");
   }
   if (!(o.smoothness >= 0)) return bad("smoothness must be >= 0");
+  if (!(o.outside_weight > 0 && o.outside_weight < 1)) return bad("outside_weight must be in (0, 1)");
   if (o.sweeps < 1) return bad("sweeps must be >= 1");
   if (!(o.damping > 0 && o.damping <= 1)) return bad("damping must be in (0, 1]");
   if (!(o.max_step_edges > 0)) return bad("max_step_edges must be > 0");
@@ -251,37 +252,43 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
         Assign(mesh, positions, crosses, local, spacing, points, options, edge_floor, nearest_face);
     if (round == 0) {
       double sum_abs = 0, sum = 0;
+      size_t outside = 0;
       for (size_t i = 0; i < assigned.size(); ++i) {
         if (assigned[i].face == UINT32_MAX) continue;
         supported_before[i] = 1;
         ++report.supported_before;
         sum_abs += std::abs(assigned[i].d);
         sum += assigned[i].d;
+        if (assigned[i].d > 0) ++outside;
       }
       if (report.supported_before > 0) {
         report.mean_abs_distance_before_m = sum_abs / report.supported_before;
         report.mean_signed_distance_before_m = sum / report.supported_before;
+        report.outside_fraction_before = static_cast<double>(outside) / report.supported_before;
       }
     }
     // The least-squares problem of the round, in the displacements u along
-    // the vertex normals: sum over points of (sum_k b_k u_k - d)^2, gathered
-    // per face as the 3 x 3 matrix sum b b^T and the vector sum b d (in point
-    // order), plus lambda W sum over edges of (u_i - u_j)^2.
+    // the vertex normals: sum over points of w (sum_k b_k u_k - d)^2 (w by
+    // the side of the point, outside_weight), gathered per face as the 3 x 3
+    // matrix sum w b b^T and the vector sum w b d (in point order), plus
+    // lambda W sum over edges of (u_i - u_j)^2.
     std::vector<std::array<double, 6>> face_m(nf, std::array<double, 6>{});  // 00 11 22 01 02 12
     std::vector<std::array<double, 3>> face_r(nf, std::array<double, 3>{});
+    const double w_out = 2 * options.outside_weight, w_in = 2 * (1 - options.outside_weight);
     for (const Assignment& a : assigned) {
       if (a.face == UINT32_MAX) continue;
       auto& m = face_m[a.face];
+      const double w = a.d > 0 ? w_out : w_in;
       const double b0 = a.b[0], b1 = a.b[1], b2 = a.b[2];
-      m[0] += b0 * b0;
-      m[1] += b1 * b1;
-      m[2] += b2 * b2;
-      m[3] += b0 * b1;
-      m[4] += b0 * b2;
-      m[5] += b1 * b2;
-      face_r[a.face][0] += b0 * a.d;
-      face_r[a.face][1] += b1 * a.d;
-      face_r[a.face][2] += b2 * a.d;
+      m[0] += w * b0 * b0;
+      m[1] += w * b1 * b1;
+      m[2] += w * b2 * b2;
+      m[3] += w * b0 * b1;
+      m[4] += w * b0 * b2;
+      m[5] += w * b1 * b2;
+      face_r[a.face][0] += w * b0 * a.d;
+      face_r[a.face][1] += w * b1 * a.d;
+      face_r[a.face][2] += w * b2 * a.d;
     }
     std::vector<double> diagonal(nv, 0);
     for (size_t f = 0; f < nf; ++f) {
@@ -387,17 +394,19 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
     const std::vector<Assignment> assigned = Assign(mesh, positions, FaceCrosses(mesh, positions), local,
                                                     spacing, points, options, edge_floor, nearest_face, &d);
     double sum_abs = 0, sum = 0;
-    size_t count = 0;
+    size_t count = 0, outside = 0;
     for (size_t i = 0; i < points.size(); ++i) {
       if (assigned[i].face != UINT32_MAX) ++report.supported_after;
       if (!supported_before[i]) continue;
       sum_abs += std::abs(d[i]);
       sum += d[i];
+      if (d[i] > 0) ++outside;
       ++count;
     }
     if (count > 0) {
       report.mean_abs_distance_after_m = sum_abs / count;
       report.mean_signed_distance_after_m = sum / count;
+      report.outside_fraction_after = static_cast<double>(outside) / count;
     }
   }
 

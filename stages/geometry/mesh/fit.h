@@ -20,13 +20,22 @@
 //  * The point's signed distance d = (p - q) . n_f, n_f the face's unit
 //    normal (positive: the point lies outside the surface).
 //  * Per round, the displacements u along the vertex normals solve the
-//    least-squares problem
-//      sum over points of (b0 u_0 + b1 u_1 + b2 u_2 - d)^2
+//    weighted least-squares problem
+//      sum over points of w_p (b0 u_0 + b1 u_1 + b2 u_2 - d)^2
 //        + lambda W sum over edges (u_i - u_j)^2
 //    (the face moves by the barycentric blend of its corners' moves; W the
 //    mean diagonal data weight of the vertices with points, lambda =
 //    `smoothness`) by `sweeps` Gauss-Seidel sweeps in vertex order from
-//    u = 0. The smoothness term acts on the displacement, not on the
+//    u = 0. w_p = 2 `outside_weight` for a point outside the surface of
+//    the round (d > 0), 2 (1 - `outside_weight`) inside: rounds of this
+//    reweighting converge to the asymmetric least-squares (expectile) fit.
+//    0.5 is plain least squares, whose surface runs through the middle of
+//    the points, so the outer half of the samples along a silhouette lies
+//    outside the model's outline (hole pixels, a pixel wide); the default
+//    0.75 (a point outside weighs 3 inside ones) puts the surface towards
+//    the outer side of the points' spread, a fraction of its width
+//    (docs/mesh-real-scans.md: hole pixels on the samples of curved
+//    objects 2-3x fewer, texture comparisons within 0.001). The smoothness term acts on the displacement, not on the
 //    positions (a Laplacian on positions would shrink the mesh, which is the
 //    very error being corrected); vertices without points follow their
 //    neighbours. (The coupled problem rather than each vertex's own
@@ -68,6 +77,7 @@ struct FitOptions {
   double support_edges = 0.5;       // ... floored by this many mean edge lengths, >= 0
   double min_normal_cosine = 0.0;   // point normal vs face normal (cloud with normals), [-1, 1]
   double smoothness = 0.25;         // lambda of the displacement smoothing, >= 0
+  double outside_weight = 0.75;     // weight of a point outside vs inside: w, 1 - w; (0, 1), 0.5 least squares
   int sweeps = 20;                  // Gauss-Seidel sweeps of the solve per round, >= 1
   double damping = 0.8;             // fraction of the solved step taken, (0, 1]
   double max_step_edges = 0.25;     // step clamp per round, in mean incident edge lengths, > 0
@@ -85,6 +95,8 @@ struct FitReport {
   double mean_abs_distance_after_m = 0;   // the same points, against the output
   double mean_signed_distance_before_m = 0;
   double mean_signed_distance_after_m = 0;
+  double outside_fraction_before = 0;  // of the points supported before, the share with d > 0
+  double outside_fraction_after = 0;   // the same points, against the output
   uint64_t vertices_moved = 0;      // vertices whose position changed
   double max_move_m = 0;            // largest displacement of a vertex, input to output
   double mean_move_m = 0;           // over all vertices

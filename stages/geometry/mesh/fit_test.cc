@@ -68,8 +68,10 @@ TEST(FitTest, MovesAnInscribedCylinderOntoItsPoints) {
   const double r = 0.1;
   const Mesh mesh = InscribedCylinder(r, 0.3, 12, 7);  // chords 5.2 cm, sagitta 3.4 mm
   const PointCloud points = CylinderPoints(r, 0.3, 0.004);
+  FitOptions options;
+  options.outside_weight = 0.5;  // plain least squares: the mesh straddles the points
   FitReport report;
-  Expected<Mesh> fitted = FitMeshToPoints(mesh, points, FitOptions{}, &report);
+  Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
   ASSERT_TRUE(fitted.ok()) << fitted.status().message();
   // Faces, order and vertex count kept.
   EXPECT_EQ(fitted->indices, mesh.indices);
@@ -87,6 +89,20 @@ TEST(FitTest, MovesAnInscribedCylinderOntoItsPoints) {
   EXPECT_LT(MeanRadiusOfFaces(mesh), r - 0.002);
   EXPECT_GT(MeanRadiusOfFaces(*fitted), r - 0.001);
   EXPECT_LT(MeanRadiusOfFaces(*fitted), r + 0.002);
+  EXPECT_GT(report.outside_fraction_before, 0.95);  // the chords lie inside
+  EXPECT_GT(report.outside_fraction_after, 0.3);
+  EXPECT_LT(report.outside_fraction_after, 0.7);
+
+  // The default weighs a point outside three times one inside: the chords
+  // move farther out, and fewer points are left outside the mesh (the ones a
+  // silhouette would miss).
+  FitReport weighted;
+  Expected<Mesh> covering = FitMeshToPoints(mesh, points, FitOptions{}, &weighted);
+  ASSERT_TRUE(covering.ok()) << covering.status().message();
+  EXPECT_LT(weighted.mean_signed_distance_after_m, -0.0003);
+  EXPECT_LT(weighted.outside_fraction_after, report.outside_fraction_after - 0.1);
+  EXPECT_GT(MeanRadiusOfFaces(*covering), MeanRadiusOfFaces(*fitted));
+  EXPECT_LT(MeanRadiusOfFaces(*covering), r + 0.003);
 }
 
 TEST(FitTest, SameBytesForAnyThreadCount) {
@@ -137,6 +153,7 @@ TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
   }
   FitOptions options;
   options.iterations = 6;
+  options.outside_weight = 0.5;
   FitReport report;
   Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
   ASSERT_TRUE(fitted.ok()) << fitted.status().message();
@@ -152,6 +169,59 @@ TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
   EXPECT_LT(hi, 0.0015);
   EXPECT_LT(hi - lo, 0.0015);  // noise amplitude 4 mm
   EXPECT_LT(report.mean_abs_distance_after_m, report.mean_abs_distance_before_m);
+}
+
+// A flat grid under points spread uniformly over z in [-a, a] (a = 2 mm):
+// the weighted least-squares fit settles at the points' expectile of level w,
+// e = a (sqrt(w) - sqrt(1 - w)) / (sqrt(w) + sqrt(1 - w)), with (a - e) / 2a
+// of them above it: z = 0 and half for w = 0.5, 0.536 mm and 36.6 % for
+// 0.75, 1 mm and 25 % for 0.9.
+TEST(FitTest, OutsideWeightSettlesTheSurfaceAtThePointsExpectile) {
+  Mesh mesh;
+  const int n = 8;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      mesh.positions.insert(mesh.positions.end(),
+                            {static_cast<float>(0.1 * i), static_cast<float>(0.1 * j), -0.003f});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  const double half_spread = 0.002;
+  PointCloud points;
+  uint64_t state = 777;
+  for (int j = 0; j <= 160; ++j) {
+    for (int i = 0; i <= 160; ++i) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      const double z = (static_cast<double>(state >> 11) * 0x1.0p-53 * 2 - 1) * half_spread;
+      points.positions.insert(points.positions.end(),
+                              {static_cast<float>(0.005 * i), static_cast<float>(0.005 * j),
+                               static_cast<float>(z)});
+    }
+  }
+  for (const double w : {0.5, 0.75, 0.9}) {
+    FitOptions options;
+    options.outside_weight = w;
+    options.support_spacings = 10;  // the whole spread supports the grid from 3 mm under it
+    FitReport report;
+    Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
+    ASSERT_TRUE(fitted.ok()) << fitted.status().message();
+    const double e = half_spread * (std::sqrt(w) - std::sqrt(1 - w)) / (std::sqrt(w) + std::sqrt(1 - w));
+    double mean_z = 0;
+    for (size_t v = 0; v < fitted->vertex_count(); ++v) mean_z += fitted->positions[3 * v + 2];
+    mean_z /= static_cast<double>(fitted->vertex_count());
+    EXPECT_NEAR(mean_z, e, 0.00015) << "outside_weight " << w;
+    EXPECT_NEAR(report.outside_fraction_after, (half_spread - e) / (2 * half_spread), 0.04)
+        << "outside_weight " << w;
+    EXPECT_EQ(report.supported_after, points.size()) << "outside_weight " << w;
+  }
+  FitOptions bad;
+  bad.outside_weight = 1;
+  EXPECT_FALSE(FitMeshToPoints(mesh, points, bad, nullptr).ok());
 }
 
 // Unit normals of every face.
