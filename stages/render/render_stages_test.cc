@@ -475,5 +475,65 @@ TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
   EXPECT_EQ(open[2], exact[2] + 36);
 }
 
+TEST_F(RenderStagesTest, RangeNoiseIsNotCountedAsHolesOfTheTrueSurface) {
+  // The quad scanned with range noise: a 2.5 cm grid over it (its outermost
+  // points half a step in from the edges, as a scan samples a surface), every point
+  // moved up to 4 cm across the plane, seen obliquely from above, so the
+  // noise scatters the points along its outline past it. Against the quad
+  // itself (the true surface), the measured positions put sample pixels
+  // outside the outline, "holes" no surface would fill (23); the points
+  // moved onto their local surface (samples_on_surface, the default) leave
+  // a few (7: the fit keeps about sqrt(6 / 17) of the noise, and an edge
+  // point is only half a step inside the outline).
+  PointCloud cloud;
+  cloud.origin = {300000.0, 5000000.0, 100.0};
+  uint64_t state = 4242;
+  for (int j = 0; j < 80; ++j)
+    for (int i = 0; i < 80; ++i) {
+      state = state * 6364136223846793005ull + 1442695040888963407ull;
+      const double noise = (double(state >> 11) * 0x1.0p-53 * 2 - 1) * 0.04;
+      cloud.positions.insert(cloud.positions.end(),
+                             {-0.9875f + 0.025f * i, float(5.0 + noise), -0.9875f + 0.025f * j});
+      cloud.colors.insert(cloud.colors.end(), {uint8_t(i * 3), 90, uint8_t(j * 3)});
+    }
+  const nlohmann::json above = nlohmann::json::array(
+      {{{"name", "above"}, {"eye", {300000.0, 5000003.0, 102.0}}, {"target", {300000.0, 5000005.0, 100.0}}}});
+  auto hole_px = [&](bool on_surface, const std::string& out) {
+    std::filesystem::create_directories(dir_ / ("scan_" + out));
+    FakeContext scan(dir_ / ("scan_" + out),
+                     {{"viewpoints", above}, {"size", 128}, {"samples_on_surface", on_surface}});
+    scan.AddInput("points", "points", WriteInputPoints("noisy_" + out, cloud));
+    EXPECT_TRUE(Run("render.splats", scan).ok());
+    EXPECT_EQ(scan.meta_["frames"]["render"]["samples_on_surface"], on_surface);
+    if (on_surface) {
+      EXPECT_EQ(scan.counters_.at("projected_points"), 80 * 80);
+      EXPECT_GT(scan.counters_.at("mean_projection_m"), 0.008);  // the noise's mean |.| is 1.5 cm
+    }
+    std::filesystem::create_directories(dir_ / ("quad_" + out));
+    FakeContext render(dir_ / ("quad_" + out), {{"viewpoints", above}, {"size", 128}, {"lighting", "unlit"}});
+    render.AddInput("mesh", "mesh", WriteInputMesh("quad_" + out, Quad()));
+    EXPECT_TRUE(Run("render.frames", render).ok());
+    auto artifact = [](const FakeContext& ctx) {
+      std::map<std::string, std::string> files;
+      for (const auto& [key, path] : ctx.files_)
+        if (key.rfind("frames/", 0) == 0) files[key.substr(7)] = path;
+      return files;
+    };
+    std::filesystem::create_directories(dir_ / ("metrics_" + out));
+    FakeContext metrics(dir_ / ("metrics_" + out), nlohmann::json::object());
+    metrics.AddInput("frames", "frames", artifact(render));
+    metrics.AddInput("reference", "frames", artifact(scan));
+    EXPECT_TRUE(Run("metrics.image", metrics).ok());
+    const nlohmann::json table = nlohmann::json::parse(std::ifstream(metrics.outputs_.at("table")));
+    for (size_t c = 0; c < table["columns"].size(); ++c)
+      if (table["columns"][c] == "hole_px") return table["rows"][0][c].get<double>();
+    ADD_FAILURE() << "no hole_px column";
+    return -1.0;
+  };
+  const double measured = hole_px(false, "measured"), projected = hole_px(true, "projected");
+  EXPECT_GT(measured, 15);
+  EXPECT_LT(projected, measured / 3);
+}
+
 }  // namespace
 }  // namespace pb

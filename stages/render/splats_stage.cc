@@ -40,6 +40,11 @@ constexpr const char* kSchema = R"({
       "default": true,
       "description": "Also write each frame's sample mask (<frame>.samples.png, 8-bit gray: 255 in the pixels into which the center of a scan point projects that no nearer splat hides, by the same depth tolerance as the blending, counted with supersample >= 2 only inside the hull of the pixel's sample centers, so that a frame whose surface reaches the point covers a sample of that pixel; 0 elsewhere): the pixels the scan has evidence of, on which metrics.image counts hole pixels, as against the pixels the disks interpolate (a disk reaches a local spacing around its point, more at a sparse border or corner)."
     },
+    "samples_on_surface": {
+      "type": "boolean",
+      "default": true,
+      "description": "With `samples`: a point enters the sample mask where it lies once moved onto its local surface, the quadric fitted to it and its `surfel_k` neighbours (one moving-least-squares projection, points/surfels.h), rather than where it was measured. Range noise scatters the measured points across the surface, so along every silhouette about half of them stand outside the surface's outline, each a pixel of 'evidence' no surface, the true one included, covers; the projection leaves about sqrt(6 / (surfel_k + 1)) of that noise and moves a noise-free point by third-order terms only. A point whose neighbourhood is no plane (surface variation above `max_surface_variation`: a corner, a thin part) keeps its measured position. false: the measured positions (version 3's mask)."
+    },
     "size": {
       "type": "integer",
       "minimum": 16,
@@ -129,6 +134,7 @@ struct Options {
   SplatOptions splat;
   bool depth = false;
   bool samples = true;
+  bool samples_on_surface = true;
   bool orient = true;
   bool clip_border = true;
   int surfel_k = 16;
@@ -147,6 +153,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 64}));
   PB_ASSIGN_OR_RETURN(options.depth, BoolParam(ctx, kId, "depth"));
   PB_ASSIGN_OR_RETURN(options.samples, BoolParam(ctx, kId, "samples"));
+  PB_ASSIGN_OR_RETURN(options.samples_on_surface, BoolParam(ctx, kId, "samples_on_surface"));
   PB_ASSIGN_OR_RETURN(options.orient, BoolParam(ctx, kId, "orient"));
   PB_ASSIGN_OR_RETURN(options.clip_border, BoolParam(ctx, kId, "clip_border"));
   PB_ASSIGN_OR_RETURN(const int64_t surfel_k, IntegerParam(ctx, kId, "surfel_k", {3, 64}));
@@ -203,14 +210,30 @@ Status Run(StageContext& ctx) {
   }
   Surfels surfels;
   std::vector<float> clip;
-  size_t oriented_points = 0;
-  if (options.orient) {
+  size_t oriented_points = 0, projected_points = 0;
+  double mean_projection_m = 0;
+  const bool project = options.samples && options.samples_on_surface;
+  if (options.orient || project) {
     PB_PHASE(ctx, "surfels");
     Expected<Surfels> estimated = Status::Internal("not run");
-    arena.execute([&] { estimated = EstimateSurfels(cloud, {.k = options.surfel_k}); });
+    arena.execute([&] { estimated = EstimateSurfels(cloud, {.k = options.surfel_k, .project = project}); });
     if (!estimated.ok())
       return estimated.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
     surfels = std::move(*estimated);
+  }
+  if (project) {
+    double total = 0;
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      const float* q = &surfels.on_surface[i * 3];
+      const float* p = &cloud.positions[i * 3];
+      const double d[3] = {double(q[0]) - p[0], double(q[1]) - p[1], double(q[2]) - p[2]};
+      const double moved = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+      if (moved > 0) ++projected_points;
+      total += moved;
+    }
+    mean_projection_m = cloud.size() > 0 ? total / double(cloud.size()) : 0;
+  }
+  if (options.orient) {
     for (size_t i = 0; i < cloud.size(); ++i) {
       if (surfels.variation[i] <= options.max_surface_variation) {
         ++oriented_points;
@@ -228,7 +251,8 @@ Status Run(StageContext& ctx) {
       }
     }
   }
-  const SplatShapes shapes{radius, surfels.normal, clip};
+  const SplatShapes shapes{radius, options.orient ? std::span<const float>(surfels.normal) : std::span<const float>(),
+                           clip, project ? std::span<const float>(surfels.on_surface) : std::span<const float>()};
   ctx.progress(0.35);
 
   FrameSet frames;
@@ -272,20 +296,27 @@ Status Run(StageContext& ctx) {
                     {"k", options.k},
                     {"radius_scale", options.radius_scale},
                     {"orient", options.orient},
-                    {"border_points", surfels.border_points},
+                    {"border_points", options.orient ? surfels.border_points : size_t{0}},
                     {"median_radius_m", median_radius_m},
                     {"coverage", covered_samples / (pixels * ss * ss)}};
-  if (options.samples) meta["render"]["sample_coverage"] = double(sample_pixels) / pixels;
+  if (options.samples) {
+    meta["render"]["sample_coverage"] = double(sample_pixels) / pixels;
+    meta["render"]["samples_on_surface"] = project;
+  }
   ctx.set_output_meta("frames", std::move(meta));
   ctx.counter("frames", double(views.size()));
   ctx.counter("points", double(cloud.size()));
   ctx.counter("splats_drawn", double(drawn));
   ctx.counter("radii_capped", double(capped));
-  ctx.counter("border_points", double(surfels.border_points));
+  ctx.counter("border_points", options.orient ? double(surfels.border_points) : 0.0);
   ctx.counter("oriented_points", double(oriented_points));
   ctx.counter("median_radius_m", median_radius_m);
   ctx.counter("pixels", pixels);
   if (options.samples) ctx.counter("sample_pixels", double(sample_pixels));
+  if (project) {
+    ctx.counter("projected_points", double(projected_points));
+    ctx.counter("mean_projection_m", mean_projection_m);
+  }
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -296,8 +327,10 @@ StageType SplatsStage() {
   StageType type;
   type.id = kId;
   // 2: tangent disks, clip lines at the border, spacing r_k sqrt(pi / k);
-  // 3: the sample masks (`samples`), frames' PNGs unchanged.
-  type.version = 3;
+  // 3: the sample masks (`samples`), frames' PNGs unchanged;
+  // 4: the sample masks of the points moved onto their local surface
+  // (`samples_on_surface`), frames' PNGs unchanged.
+  type.version = 4;
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
       "Draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
@@ -317,9 +350,12 @@ StageType SplatsStage() {
       "`depth`, also <name>.depth.exr (the front splats' view depth in meters, 0 on background); with "
       "`samples` (default), also <name>.samples.png (8-bit gray, 255 where the center of a point no "
       "nearer splat hides projects into the pixel, inside the hull of the pixel's sample centers: the "
-      "pixels the scan has evidence of; metrics.image counts hole pixels on them).\n\n"
+      "pixels the scan has evidence of; metrics.image counts hole pixels on them), each point taken "
+      "where it lies once moved onto the quadric fitted to its neighbourhood (`samples_on_surface`), "
+      "so that range noise scattering points past a silhouette does not count as evidence.\n\n"
       "Counters: `frames`, `points`, `splats_drawn` (over all frames), `radii_capped`, `border_points`, "
-      "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`). "
+      "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`), `projected_points`, "
+      "`mean_projection_m` (with `samples_on_surface`: points moved, mean distance over all points). "
       "Phases: `io`, `spacing`, `surfels`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);
   type.inputs = {{"points", "points", "The colored scan (points.ply).", false}};

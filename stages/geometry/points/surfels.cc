@@ -14,6 +14,37 @@
 #include "stages/geometry/points/normals.h"
 
 namespace pb {
+namespace {
+
+// Solves the 6 x 6 symmetric positive definite system m x = r in place
+// (Cholesky); false if a pivot is not positive (singular: points on a line).
+bool SolveSymmetric6(double m[36], double r[6]) {
+  for (int j = 0; j < 6; ++j) {
+    double d = m[j * 6 + j];
+    for (int k = 0; k < j; ++k) d -= m[j * 6 + k] * m[j * 6 + k];
+    if (!(d > 1e-12)) return false;
+    d = std::sqrt(d);
+    m[j * 6 + j] = d;
+    for (int i = j + 1; i < 6; ++i) {
+      double v = m[i * 6 + j];
+      for (int k = 0; k < j; ++k) v -= m[i * 6 + k] * m[j * 6 + k];
+      m[i * 6 + j] = v / d;
+    }
+  }
+  for (int i = 0; i < 6; ++i) {
+    double v = r[i];
+    for (int k = 0; k < i; ++k) v -= m[i * 6 + k] * r[k];
+    r[i] = v / m[i * 6 + i];
+  }
+  for (int i = 5; i >= 0; --i) {
+    double v = r[i];
+    for (int k = i + 1; k < 6; ++k) v -= m[k * 6 + i] * r[k];
+    r[i] = v / m[i * 6 + i];
+  }
+  return true;
+}
+
+}  // namespace
 
 Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& options) {
   PB_RETURN_IF_ERROR(Validate(cloud));
@@ -30,6 +61,7 @@ Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& 
   surfels.normal.assign(n * 3, 0.0f);
   surfels.outward.assign(n * 3, 0.0f);
   surfels.variation.assign(n, 0.0f);
+  if (options.project) surfels.on_surface = cloud.positions;
   std::atomic<size_t> border{0};
   const int k = options.k;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
@@ -79,6 +111,54 @@ Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& 
       if (r_k > 0 && length > options.border_shift * r_k) {
         for (int c = 0; c < 3; ++c) surfels.outward[size_t(i) * 3 + c] = float(-shift[c] / length);
         ++border_here;
+      }
+      if (options.project && r_k > 0) {
+        // The quadric over the plane (origin: the centroid; unit r_k).
+        const int axis = std::abs(normal[0]) < std::abs(normal[1])
+                             ? (std::abs(normal[0]) < std::abs(normal[2]) ? 0 : 2)
+                             : (std::abs(normal[1]) < std::abs(normal[2]) ? 1 : 2);
+        double t1[3] = {0, 0, 0};
+        t1[axis] = 1;
+        const double dot = normal[axis];
+        for (int c = 0; c < 3; ++c) t1[c] -= dot * normal[c];
+        const double t1_length = std::sqrt(t1[0] * t1[0] + t1[1] * t1[1] + t1[2] * t1[2]);
+        for (int c = 0; c < 3; ++c) t1[c] /= t1_length;
+        const double t2[3] = {normal[1] * t1[2] - normal[2] * t1[1], normal[2] * t1[0] - normal[0] * t1[2],
+                              normal[0] * t1[1] - normal[1] * t1[0]};
+        double m[36] = {}, r[6] = {};
+        const auto local = [&](const double d[3], double& x, double& y, double& z) {
+          const double e[3] = {(d[0] - centroid[0]) / r_k, (d[1] - centroid[1]) / r_k, (d[2] - centroid[2]) / r_k};
+          x = e[0] * t1[0] + e[1] * t1[1] + e[2] * t1[2];
+          y = e[0] * t2[0] + e[1] * t2[1] + e[2] * t2[2];
+          z = e[0] * normal[0] + e[1] * normal[1] + e[2] * normal[2];
+        };
+        const auto add = [&](const double d[3]) {
+          double x, y, z;
+          local(d, x, y, z);
+          const double row[6] = {x * x, x * y, y * y, x, y, 1};
+          for (int a = 0; a < 6; ++a) {
+            r[a] += row[a] * z;
+            for (int b = 0; b <= a; ++b) m[a * 6 + b] += row[a] * row[b];
+          }
+        };
+        add(self);
+        for (int j = 0; j < found; ++j) {
+          const float* q = &cloud.positions[size_t(neighbors[size_t(j)].index) * 3];
+          const double d[3] = {double(q[0]) - p[0], double(q[1]) - p[1], double(q[2]) - p[2]};
+          add(d);
+        }
+        for (int a = 0; a < 6; ++a)
+          for (int b = a + 1; b < 6; ++b) m[a * 6 + b] = m[b * 6 + a];
+        double x, y, z;
+        local(self, x, y, z);
+        double height = 0;  // the plane, when the quadric is undetermined
+        if (SolveSymmetric6(m, r)) height = r[0] * x * x + r[1] * x * y + r[2] * y * y + r[3] * x + r[4] * y + r[5];
+        if (!std::isfinite(height)) height = 0;
+        const double move = height - z;  // along the normal, in r_k
+        if (std::abs(move) <= 1.0) {
+          for (int c = 0; c < 3; ++c)
+            surfels.on_surface[size_t(i) * 3 + c] = float(double(p[c]) + move * r_k * normal[c]);
+        }
       }
     }
     border += border_here;

@@ -26,6 +26,19 @@
 // (standard deviation 0.125 r per axis for k = 16), and a laser scan's
 // near-regular grid scatters far less.
 //
+// On the surface (with `project`): the point moved onto the quadric height
+// field z = a x^2 + b xy + c y^2 + d x + e y + f fitted by least squares to
+// it and its k neighbours in the frame of their plane (origin at their
+// centroid, z along the normal, coordinates scaled by r_k), at its own
+// tangent coordinates: one step of the moving-least-squares projection
+// (Alexa et al. 2003, "Computing and rendering point set surfaces", with the
+// polynomial of Levin's MLS). It removes the range noise across the
+// surface, about sqrt(6 / (k + 1)) of it is left, and, the quadric holding
+// the curvature, moves a noise-free point by third-order terms only (a plane
+// would pull a point on a curved part inward by r_k^2 / 4R). Where the
+// normal equations are singular (points on a line) the point goes onto the
+// plane; where the quadric would move it more than r_k it stays.
+//
 // Deterministic for any thread count (run inside a tbb::task_arena to limit
 // threads).
 #pragma once
@@ -41,12 +54,14 @@ namespace pb {
 struct SurfelOptions {
   int k = 16;                 // neighbours of the plane fit and the border test, 3..64
   double border_shift = 0.25;  // in r_k, > 0
+  bool project = false;        // also compute `on_surface`
 };
 
 struct Surfels {
   std::vector<float> normal;   // 3 per point, unit, the cloud's frame
   std::vector<float> outward;  // 3 per point: unit, in the tangent plane, on the border; else 0
   std::vector<float> variation;  // 1 per point, surface variation in [0, 1/3]
+  std::vector<float> on_surface;  // with `project`: 3 per point, the cloud's frame; else empty
   size_t border_points = 0;
 };
 

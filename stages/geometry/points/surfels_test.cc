@@ -70,6 +70,61 @@ TEST(SurfelsTest, AThinPartIsNoPlane) {
   EXPECT_LT(surfels->variation[10 * 20 + 10], 1e-6f);
 }
 
+// A sphere of radius 0.1 m, 4000 points on a Fibonacci spiral (about 5.6 mm
+// apart), each moved `noise` times a pseudo-random number in [-1, 1]
+// radially (range noise).
+PointCloud Sphere(double noise) {
+  PointCloud cloud;
+  const int n = 4000;
+  uint64_t state = 99;
+  for (int i = 0; i < n; ++i) {
+    const double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z);
+    const double phi = i * M_PI * (3 - std::sqrt(5.0));
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    const double u = double(state >> 11) * 0x1.0p-53 * 2 - 1;
+    const double radius = 0.1 + noise * u;
+    cloud.positions.insert(cloud.positions.end(), {float(radius * r * std::cos(phi)),
+                                                   float(radius * r * std::sin(phi)), float(radius * z)});
+  }
+  return cloud;
+}
+
+double MeanRadialError(const std::vector<float>& xyz) {
+  double sum = 0;
+  for (size_t i = 0; i < xyz.size(); i += 3) sum += std::abs(std::hypot(xyz[i], xyz[i + 1], xyz[i + 2]) - 0.1);
+  return sum / double(xyz.size() / 3);
+}
+
+// The projection onto the local quadric: on an exact sphere it moves the
+// points by far less than a plane's r_k^2 / 4R (r_k about 12 mm for 16
+// neighbours: 0.36 mm), and on a noisy one it takes most of the noise out.
+TEST(SurfelsTest, ProjectionOntoTheLocalSurface) {
+  const PointCloud exact = Sphere(0);
+  Expected<Surfels> plain = EstimateSurfels(exact);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_TRUE(plain->on_surface.empty());  // not asked for
+  Expected<Surfels> on_exact = EstimateSurfels(exact, {.project = true});
+  ASSERT_TRUE(on_exact.ok());
+  ASSERT_EQ(on_exact->on_surface.size(), exact.positions.size());
+  EXPECT_LT(MeanRadialError(exact.positions), 1e-6);
+  EXPECT_LT(MeanRadialError(on_exact->on_surface), 2e-5);
+
+  const PointCloud noisy = Sphere(0.002);  // mean |error| 1 mm
+  Expected<Surfels> on_noisy = EstimateSurfels(noisy, {.project = true});
+  ASSERT_TRUE(on_noisy.ok());
+  const double before = MeanRadialError(noisy.positions), after = MeanRadialError(on_noisy->on_surface);
+  EXPECT_NEAR(before, 0.001, 1e-4);
+  EXPECT_LT(after, 0.6 * before);  // sqrt(6 / 17) = 0.59 of the noise is left at most
+  // Moved along the normal only: a point's direction from the center barely changes.
+  for (size_t i = 0; i < noisy.size(); i += 97) {
+    const float* p = &noisy.positions[i * 3];
+    const float* q = &on_noisy->on_surface[i * 3];
+    const double cosine = (double(p[0]) * q[0] + double(p[1]) * q[1] + double(p[2]) * q[2]) /
+                          (std::hypot(p[0], p[1], p[2]) * std::hypot(q[0], q[1], q[2]));
+    EXPECT_GT(cosine, 0.9999) << i;
+  }
+}
+
 TEST(SurfelsTest, RejectsBadInput) {
   const PointCloud cloud = TiltedGrid();
   EXPECT_FALSE(EstimateSurfels(cloud, {.k = 2}).ok());

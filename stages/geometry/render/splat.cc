@@ -112,6 +112,9 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
   if (!shapes.clip.empty() && (!oriented || shapes.clip.size() != cloud.size() * 4))
     return Status::Invalid("splats: clip lines need normals and 4 floats per point, got " +
                            std::to_string(shapes.clip.size()) + " for " + std::to_string(cloud.size()) + " points");
+  if (!shapes.sample_at.empty() && shapes.sample_at.size() != cloud.size() * 3)
+    return Status::Invalid("splats: " + std::to_string(shapes.sample_at.size()) + " sample position floats for " +
+                           std::to_string(cloud.size()) + " points (3 each)");
   if (cloud.size() >= size_t(kNone)) return Status::Invalid("splats: too many points");
   PB_ASSIGN_OR_RETURN(const SplatCamera cam, MakeCamera(camera, cloud.origin, options));
   const size_t n = cloud.size();
@@ -369,13 +372,21 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
     uint8_t* mask = samples->u8();
     const double lo = ss >= 2 ? 0.5 : 0.0, hi = ss >= 2 ? ss - 0.5 : double(ss);
     for (size_t i = 0; i < n; ++i) {
-      const ScreenSplat& s = splats[i];
-      if (!(s.depth > 0)) continue;  // behind the near plane, or no valid radius
-      if (!(s.x >= 0 && s.y >= 0 && s.x < cam.samples && s.y < cam.samples)) continue;
-      const double fx = s.x - std::floor(s.x / ss) * ss, fy = s.y - std::floor(s.y / ss) * ss;
+      if (!(splats[i].depth > 0)) continue;  // not drawn: behind the near plane, or no valid radius
+      double x = splats[i].x, y = splats[i].y, depth = splats[i].depth;
+      if (!shapes.sample_at.empty()) {
+        const float* p = &shapes.sample_at[i * 3];
+        const V3 rel = Sub({double(p[0]), double(p[1]), double(p[2])}, cam.eye);
+        depth = Dot(rel, cam.forward);
+        if (!(depth >= kNearPlaneM)) continue;
+        x = cam.half + cam.focal * Dot(rel, cam.right) / depth;
+        y = cam.half - cam.focal * Dot(rel, cam.up) / depth;
+      }
+      if (!(x >= 0 && y >= 0 && x < cam.samples && y < cam.samples)) continue;
+      const double fx = x - std::floor(x / ss) * ss, fy = y - std::floor(y / ss) * ss;
       if (!(fx >= lo && fx <= hi && fy >= lo && fy <= hi)) continue;
-      const int sx = int(s.x), sy = int(s.y);
-      if (!(double(s.depth) <= visible_limit[size_t(sy) * cam.samples + sx])) continue;
+      const int sx = int(x), sy = int(y);
+      if (!(depth <= visible_limit[size_t(sy) * cam.samples + sx])) continue;
       uint8_t& m = mask[size_t(sy / ss) * size + size_t(sx / ss)];
       sample_pixels += m == 0 ? 1 : 0;
       m = 255;

@@ -91,6 +91,11 @@ struct SplatShapes {
   // distance in meters (the clip line); direction 0: the whole disk. Needs
   // normals.
   std::span<const float> clip;
+  // 3 per point (the cloud's frame), or empty: where the sample mask takes
+  // each point to be (its depth and pixel), e.g. the point moved onto its
+  // local surface so that range noise does not count as evidence past the
+  // surface's outline; the splats are drawn where the points are.
+  std::span<const float> sample_at;
 };
 
 // An RGBA kU8 image of camera.size squared. Status::Invalid for a bad camera

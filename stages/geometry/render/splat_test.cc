@@ -314,6 +314,34 @@ TEST(SplatTest, SampleMaskHoldsTheVisiblePointsOnly) {
   EXPECT_GT(hidden, 10u);
 }
 
+TEST(SplatTest, SampleMaskTakesTheGivenSamplePositions) {
+  // The same plane with every sample position moved one output pixel to the
+  // right (5 m away): the mask moves with them, the splats' image does not.
+  const int size = 64;
+  PointCloud cloud;
+  AddPlane(cloud, 1.0, 0.1, 0.0f, {200, 0, 0});
+  const std::vector<float> radius(cloud.size(), 0.1f);
+  const double pixel_m = 5.0 / (size / 2.0 / std::tan(M_PI / 6));
+  std::vector<float> moved = cloud.positions;
+  for (size_t i = 0; i < cloud.size(); ++i) moved[i * 3] = float(moved[i * 3] + pixel_m);
+  Image raw_mask, moved_mask;
+  Expected<Image> raw = RenderSplats(cloud, {radius}, HeadOn(size), SplatOptions{}, nullptr, nullptr, &raw_mask);
+  SplatShapes shapes{radius};
+  shapes.sample_at = moved;
+  Expected<Image> shifted = RenderSplats(cloud, shapes, HeadOn(size), SplatOptions{}, nullptr, nullptr, &moved_mask);
+  ASSERT_TRUE(raw.ok() && shifted.ok());
+  EXPECT_EQ(raw->data, shifted->data);
+  size_t count = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x + 1 < size; ++x) {
+      EXPECT_EQ(moved_mask.at_u8(x + 1, y, 0), raw_mask.at_u8(x, y, 0)) << x << " " << y;
+      count += raw_mask.at_u8(x, y, 0) == 255;
+    }
+  EXPECT_GT(count, 40u);  // of 441 points, those in their pixel's middle half
+  shapes.sample_at = std::span<const float>(moved).first(6);
+  EXPECT_FALSE(RenderSplats(cloud, shapes, HeadOn(size), SplatOptions{}, nullptr, nullptr, &moved_mask).ok());
+}
+
 TEST(SplatTest, RejectsBadInput) {
   PointCloud cloud;
   AddPlane(cloud, 0.1, 0.05, 0.0f, {1, 2, 3});
