@@ -10,10 +10,12 @@ Reads report/results.json and, for every scene (or those named), checks:
     v4 hole_fraction: pixels a visible scan point projects into where the
     model shows background; default 0.002, issue 15's goal, met on the pump
     by every workflow since mesh.fit moves the final meshes onto the scan:
-    0.03 % HPM, 0.09 % LPM and point transfer, 0.10 % Remeshing with
-    mesh.fit version 2's outside_weight 0.75 (0.05 / 0.14 / 0.16 % with
-    version 1's least squares, 0.13 / 0.34 / 0.49 % before the fit, their
-    outline a pixel inside the outermost samples of curved pipes); ctest guards it with --max-holes 0.002,
+    0.02 % HPM, 0.05 % LPM and point transfer, 0.06 % Remeshing with
+    mesh.fit version 2's outside_weight 0.75 and render.splats version 4's
+    masks of the points moved onto their local surface (0.05 / 0.14 / 0.16 %
+    with version 1's least squares and version 3's masks, 0.13 / 0.34 /
+    0.49 % before the fit, their outline a pixel inside the outermost
+    samples of curved pipes); ctest guards it with --max-holes 0.002,
     docs/real-scans.md). The line also gives the part
     enclosed by the model (background seen through it: missing faces), the
     part at its silhouette, and the count on the splats' disks (the old
