@@ -117,15 +117,14 @@ TEST(FitTest, SameBytesForAnyThreadCount) {
   EXPECT_EQ(a->positions, b->positions);
 }
 
-// A flat grid 5 mm under noisy points on z = 0: the fit lifts it onto the
-// plane and the smoothing keeps it flat (the noise does not make it bumpy).
-TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
+// An n x n grid of 10 cm squares (two triangles each) in the plane z = `z`,
+// facing +z.
+Mesh FlatGrid(int n, float z) {
   Mesh mesh;
-  const int n = 10;
   for (int j = 0; j <= n; ++j) {
     for (int i = 0; i <= n; ++i) {
       mesh.positions.insert(mesh.positions.end(),
-                            {static_cast<float>(0.1 * i), static_cast<float>(0.1 * j), -0.005f});
+                            {static_cast<float>(0.1 * i), static_cast<float>(0.1 * j), z});
     }
   }
   for (int j = 0; j < n; ++j) {
@@ -134,6 +133,13 @@ TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
       mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
     }
   }
+  return mesh;
+}
+
+// A flat grid 5 mm under noisy points on z = 0: the fit lifts it onto the
+// plane and the smoothing keeps it flat (the noise does not make it bumpy).
+TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
+  Mesh mesh = FlatGrid(10, -0.005f);
   // Normals tilted 10 degrees from the faces' (a smoother surface's, as
   // Poisson's are for a decimated mesh): kept, since the faces do not turn.
   const float tilt = static_cast<float>(10 * std::numbers::pi / 180);
@@ -177,20 +183,7 @@ TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
 // of them above it: z = 0 and half for w = 0.5, 0.536 mm and 36.6 % for
 // 0.75, 1 mm and 25 % for 0.9.
 TEST(FitTest, OutsideWeightSettlesTheSurfaceAtThePointsExpectile) {
-  Mesh mesh;
-  const int n = 8;
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) {
-      mesh.positions.insert(mesh.positions.end(),
-                            {static_cast<float>(0.1 * i), static_cast<float>(0.1 * j), -0.003f});
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      mesh.indices.insert(mesh.indices.end(), {a, b, c, a, c, d});
-    }
-  }
+  const Mesh mesh = FlatGrid(8, -0.003f);
   const double half_spread = 0.002;
   PointCloud points;
   uint64_t state = 777;
