@@ -317,7 +317,8 @@ TEST_F(RenderStagesTest, SplatsOfIsolatedPointsStaySmall) {
   ctx.AddInput("points", "points", WriteInputPoints("stray", cloud));
   ASSERT_TRUE(Run("render.splats", ctx).ok());
   EXPECT_EQ(ctx.counters_["radii_capped"], 1);
-  const Image& front = Frames(ctx)->frames[0].image;
+  const FrameSet frames = Frames(ctx).value();
+  const Image& front = frames.frames[0].image;
   // The stray point projects to x = 32 + 1.5 / 4 * 55.4 = 52.8 px with a
   // radius of 0.21 / 4 * 55.4 = 2.9 px (uncapped: 10 px).
   int white = 0;
