@@ -57,6 +57,12 @@ constexpr const char* kSchema = R"({
       "maximum": 1,
       "default": 0.2,
       "description": "Reject a collapse that turns a face normal so that its cosine to the normal before (or in the input) drops below this; 0.2 allows about 78 degrees."
+    },
+    "fill_hole_output_edges": {
+      "type": "number",
+      "minimum": 0,
+      "default": 6,
+      "description": "First fill the holes (boundary loops) whose perimeter is at most this many output mean edge lengths, without new vertices (CGAL's hole triangulation, as mesh.clean): the output cannot draw such a hole round, and held by the border planes it would end as a hole of a few low-poly triangles that a coarser surface of the same budget (a low-depth Poisson mesh) closes. 6 edges is a circle of one output edge's radius. 0 fills nothing."
     }
   },
   "oneOf": [{"required": ["target_faces"]}, {"required": ["ratio"]}]
@@ -74,6 +80,8 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.boundary_tolerance, NumberParam(ctx, kId, "boundary_tolerance"));
   PB_ASSIGN_OR_RETURN(options.boundary_erosion, NumberParam(ctx, kId, "boundary_erosion"));
   PB_ASSIGN_OR_RETURN(options.min_normal_dot, NumberParam(ctx, kId, "min_normal_dot"));
+  PB_ASSIGN_OR_RETURN(options.fill_hole_output_edges,
+                      NumberParam(ctx, kId, "fill_hole_output_edges"));
   double ratio = 0;
   int64_t target = 0;
   if (has_ratio) {
@@ -108,6 +116,8 @@ Status Run(StageContext& ctx) {
   }
   ctx.counter("faces_in", static_cast<double>(report.faces_in));
   ctx.counter("faces_out", static_cast<double>(report.faces_out));
+  ctx.counter("holes_filled", static_cast<double>(report.holes_filled));
+  ctx.counter("hole_faces", static_cast<double>(report.hole_faces));
   PB_RETURN_IF_ERROR(WriteOutputMesh(
       ctx, output,
       InputMeshMetaWith(ctx, output,
@@ -116,7 +126,9 @@ Status Run(StageContext& ctx) {
                            {"collapses", report.collapses},
                            {"rejected_link", report.rejected_link},
                            {"rejected_flip", report.rejected_flip},
-                           {"rejected_degenerate", report.rejected_degenerate}}}})));
+                           {"rejected_degenerate", report.rejected_degenerate},
+                           {"holes_filled", report.holes_filled},
+                           {"hole_faces", report.hole_faces}}}})));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -126,7 +138,8 @@ Status Run(StageContext& ctx) {
 StageType DecimateStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it
+  type.version = 4;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it;
+                    // 4: fill_hole_output_edges
   type.summary = "Quadric edge-collapse decimation to a face budget, keeping the mesh manifold";
   type.doc =
       "Collapses edges in order of quadric error (Garland & Heckbert 1997) until the face count "

@@ -57,10 +57,11 @@ class MeshStagesTest : public StageTest {
 TEST_F(MeshStagesTest, DecimateIsWellFormed) {
   const StageType* type = registry_.Find("mesh.decimate");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 3);
+  EXPECT_EQ(type->version, 4);
   const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["type"], "object");
   EXPECT_EQ(schema["properties"]["target_faces"]["type"], "integer");
+  EXPECT_EQ(schema["properties"]["fill_hole_output_edges"]["default"], 6);
   EXPECT_EQ(schema["properties"]["boundary_weight"]["default"], 1000);
   EXPECT_EQ(schema["properties"]["boundary_tolerance"]["default"], 0.2);
   EXPECT_EQ(schema["properties"]["boundary_erosion"]["default"], 0.5);
@@ -82,6 +83,7 @@ TEST_F(MeshStagesTest, DecimateToTargetFaces) {
   EXPECT_EQ(ctx.counters_["faces_in"], 800);
   EXPECT_LE(ctx.counters_["faces_out"], 200);
   EXPECT_GE(ctx.counters_["faces_out"], 190);
+  EXPECT_EQ(ctx.counters_["holes_filled"], 0);  // the grid's border is no small hole
   EXPECT_EQ(ctx.phases_, (std::set<std::string>{"io", "compute"}));
   EXPECT_DOUBLE_EQ(ctx.last_progress_, 1.0);
   auto out = ReadPlyMesh(ctx.outputs_["mesh"]);

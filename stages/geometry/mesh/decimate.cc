@@ -19,6 +19,8 @@
 #include <utility>
 #include <vector>
 
+#include "stages/geometry/mesh/holes.h"
+
 namespace pb {
 namespace {
 
@@ -159,6 +161,34 @@ class Decimator {
     const uint32_t* t = &faces_[3 * f];
     return Cross(Sub(positions_[t[1]], positions_[t[0]]), Sub(positions_[t[2]], positions_[t[0]]));
   }
+  // The mean edge of `target_faces` equilateral triangles covering the
+  // area of faces_.
+  double OutputEdge() const {
+    double area = 0;
+    for (size_t f = 0; f < faces_.size() / 3; ++f) {
+      area += 0.5 * Norm(FaceCross(static_cast<uint32_t>(f)));
+    }
+    return std::sqrt(4 * area / (std::sqrt(3.0) * static_cast<double>(options_.target_faces)));
+  }
+  // fill_hole_output_edges: appends the small holes' patches to faces_
+  // (FillSmallHoles adds no vertex, so positions_ and the attributes stay).
+  Status FillHolesBelowOutput() {
+    if (!(options_.fill_hole_output_edges > 0) || options_.target_faces == 0 ||
+        options_.target_faces >= faces_.size() / 3) {
+      return Status::Ok();
+    }
+    Mesh shape;
+    shape.positions = mesh_.positions;
+    shape.indices = faces_;
+    HoleFillOptions fill;
+    fill.max_perimeter_m = options_.fill_hole_output_edges * OutputEdge();
+    HoleFillReport filled;
+    PB_RETURN_IF_ERROR(FillSmallHoles(shape, fill, &filled));
+    report_.holes_filled = filled.holes_filled;
+    report_.hole_faces = filled.faces_added;
+    faces_ = std::move(shape.indices);
+    return Status::Ok();
+  }
   void BuildAdjacency();
   void BuildQuadrics();
   // Alive faces around v (dropping dead ones from its list).
@@ -295,12 +325,7 @@ void Decimator::BuildQuadrics() {
   double tolerance = 0;
   if (options_.boundary_tolerance > 0 && options_.target_faces > 0 &&
       options_.target_faces < face_total) {
-    double area = 0;
-    for (size_t f = 0; f < face_total; ++f) area += 0.5 * Norm(FaceCross(static_cast<uint32_t>(f)));
-    // Mean edge of `target_faces` equilateral triangles covering the area.
-    const double output_edge =
-        std::sqrt(4 * area / (std::sqrt(3.0) * static_cast<double>(options_.target_faces)));
-    tolerance = options_.boundary_tolerance * output_edge;
+    tolerance = options_.boundary_tolerance * OutputEdge();
   }
   // chord[i]: the (start, end) vertices of the chord of border edge i; by
   // default the edge itself.
@@ -721,12 +746,11 @@ Mesh Decimator::Output() const {
 
 Expected<Mesh> Decimator::Run() {
   PB_RETURN_IF_ERROR(Validate(mesh_));
-  const size_t face_count = mesh_.face_count();
   const size_t n = mesh_.vertex_count();
-  report_.faces_in = face_count;
+  report_.faces_in = mesh_.face_count();
   report_.vertices_in = n;
   faces_ = mesh_.indices;
-  for (size_t f = 0; f < face_count; ++f) {
+  for (size_t f = 0; f < mesh_.face_count(); ++f) {
     const uint32_t* t = &faces_[3 * f];
     if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
       return Status::Invalid("mesh face " + std::to_string(f) + " repeats vertex " +
@@ -741,6 +765,8 @@ Expected<Mesh> Decimator::Run() {
       return Status::Invalid("mesh vertex " + std::to_string(v) + " has a non-finite coordinate");
     }
   }
+  PB_RETURN_IF_ERROR(FillHolesBelowOutput());
+  const size_t face_count = faces_.size() / 3;
   normals_ = mesh_.normals;
   uvs_ = mesh_.uvs;
   tangents_ = mesh_.tangents;
@@ -814,6 +840,10 @@ Expected<Mesh> DecimateMesh(const Mesh& mesh, const DecimateOptions& options,
   if (!(options.min_normal_dot >= -1 && options.min_normal_dot <= 1)) {
     return Status::Invalid("decimate: min_normal_dot must be in [-1, 1], got " +
                            std::to_string(options.min_normal_dot));
+  }
+  if (!(options.fill_hole_output_edges >= 0) || !std::isfinite(options.fill_hole_output_edges)) {
+    return Status::Invalid("decimate: fill_hole_output_edges must be finite and >= 0, got " +
+                           std::to_string(options.fill_hole_output_edges));
   }
   DecimateReport local;
   Decimator decimator(mesh, options, report ? report : &local);

@@ -88,6 +88,15 @@ struct DecimateOptions {
   // Reject a collapse that makes a face's unit normal have a dot product
   // below this with its normal before the collapse or in the input.
   double min_normal_dot = 0.2;
+  // Before collapsing, fill the holes (boundary loops) whose perimeter is
+  // at most this many output mean edge lengths (FillSmallHoles, holes.h; no
+  // new vertices). The output cannot draw such a hole round: held by the
+  // boundary planes it ends as a hole of a few low-poly triangles, which a
+  // coarser surface of the same budget (a low-depth Poisson mesh) would
+  // have closed. A loop of perimeter 2 pi times the output edge is a circle
+  // of that radius, so a patch of 6 edges reaches about one output edge
+  // from its rim. 0 fills nothing.
+  double fill_hole_output_edges = 0;
   // Called with the fraction of the work done, in [0,1], every few thousand
   // collapses.
   std::function<void(double fraction)> progress;
@@ -102,6 +111,8 @@ struct DecimateReport {
   uint64_t rejected_link = 0;        // link condition or non-manifold edge
   uint64_t rejected_flip = 0;        // a face normal would turn too far
   uint64_t rejected_degenerate = 0;  // a face would get (near) zero area
+  uint64_t holes_filled = 0;         // fill_hole_output_edges
+  uint64_t hole_faces = 0;           // faces the filled holes added
 };
 
 // Decimates `mesh` to about `options.target_faces` triangles. Status::Invalid

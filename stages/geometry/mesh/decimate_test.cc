@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include "stages/geometry/mesh/holes.h"
 #include "stages/geometry/synth/scene.h"
 #include "stages/geometry/testing/meshes.h"
 
@@ -366,6 +367,75 @@ TEST(MeshDecimate, Deterministic) {
   EXPECT_EQ(r1.rejected_link, r2.rejected_link);
 }
 
+// Grid(n) without the faces whose centroid lies within `radius` of one of
+// `centers`: round holes with staircase borders.
+Mesh GridWithHoles(int n, const std::vector<std::array<double, 3>>& holes) {
+  Mesh grid = Grid(n);
+  std::vector<uint32_t> kept;
+  for (size_t f = 0; f < grid.face_count(); ++f) {
+    double c[2] = {0, 0};
+    for (int k = 0; k < 3; ++k)
+      for (int d = 0; d < 2; ++d) c[d] += grid.positions[3 * grid.indices[3 * f + k] + d] / 3.0;
+    bool in_hole = false;
+    for (const auto& [x, y, radius] : holes)
+      in_hole |= (c[0] - x) * (c[0] - x) + (c[1] - y) * (c[1] - y) < radius * radius;
+    if (!in_hole) kept.insert(kept.end(), &grid.indices[3 * f], &grid.indices[3 * f] + 3);
+  }
+  grid.indices = kept;
+  DropUnreferencedVertices(grid);
+  return grid;
+}
+
+double Area(const Mesh& m) {
+  double area = 0;
+  for (size_t f = 0; f < m.face_count(); ++f) {
+    const float* p[3];
+    for (int k = 0; k < 3; ++k) p[k] = &m.positions[3 * m.indices[3 * f + k]];
+    area += 0.5 * std::abs((p[1][0] - p[0][0]) * (p[2][1] - p[0][1]) -
+                           (p[1][1] - p[0][1]) * (p[2][0] - p[0][0]));
+  }
+  return area;
+}
+
+TEST(MeshDecimate, HolesTheOutputCannotDrawAreFilledFirst) {
+  // 200 faces over about 0.92 m^2: output edge sqrt(4 * 0.92 / (sqrt(3) *
+  // 200)) = 0.103 m, so 6 edges are 0.62 m of perimeter. The hole of radius
+  // 0.05 (staircase perimeter under 8 r = 0.4) is below that; the one of
+  // radius 0.15 (perimeter over 2 pi r = 0.94) and the square's border are
+  // not.
+  const Mesh holed = GridWithHoles(60, {{0.3, 0.3, 0.05}, {0.65, 0.65, 0.15}});
+  const Topology in = Check(holed);
+  DecimateOptions options;
+  options.target_faces = 200;
+  DecimateReport kept_report, filled_report;
+  const auto kept = DecimateMesh(holed, options, &kept_report);
+  options.fill_hole_output_edges = 6;
+  const auto filled = DecimateMesh(holed, options, &filled_report);
+  ASSERT_TRUE(kept.ok() && filled.ok());
+  EXPECT_EQ(kept_report.holes_filled, 0u);
+  EXPECT_EQ(filled_report.holes_filled, 1u);
+  EXPECT_GT(filled_report.hole_faces, 0u);
+  EXPECT_EQ(filled_report.faces_in, holed.face_count());
+  EXPECT_LE(filled->face_count(), 200u);
+  EXPECT_EQ(BoundaryLoops(*kept).size(), 3u);    // the square, both holes
+  EXPECT_EQ(BoundaryLoops(*filled).size(), 2u);  // the square, the large hole
+  const Topology out = Check(*filled);
+  EXPECT_EQ(out.nonmanifold_edges, 0u);
+  EXPECT_EQ(out.nonmanifold_vertices, 0u);
+  EXPECT_LT(out.boundary_edges, Check(*kept).boundary_edges);
+  // The patch covers the small hole, about pi 0.05^2 = 0.008 m^2, and only it.
+  EXPECT_NEAR(Area(*filled) - Area(*kept), M_PI * 0.05 * 0.05, 0.004);
+  EXPECT_NEAR(Area(*filled), 1 - M_PI * 0.15 * 0.15, 0.02);
+  // Without decimation (a budget above the input) nothing is filled.
+  options.target_faces = holed.face_count();
+  DecimateReport copy_report;
+  const auto copy = DecimateMesh(holed, options, &copy_report);
+  ASSERT_TRUE(copy.ok());
+  EXPECT_EQ(copy_report.holes_filled, 0u);
+  EXPECT_EQ(copy->indices, holed.indices);
+  EXPECT_GT(in.boundary_edges, 0u);
+}
+
 TEST(MeshDecimate, TargetAboveInputCopiesMesh) {
   const Mesh grid = Grid(4);
   DecimateReport report;
@@ -400,6 +470,11 @@ TEST(MeshDecimate, RejectsBadInput) {
   EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
   options.boundary_tolerance = 0.2;
   options.boundary_erosion = 1.5;
+  EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
+  options.boundary_erosion = 0.5;
+  options.fill_hole_output_edges = -1;
+  EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
+  options.fill_hole_output_edges = NAN;
   EXPECT_EQ(DecimateMesh(Grid(1), options, nullptr).status().code(), Status::Code::kInvalid);
 }
 
