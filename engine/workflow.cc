@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "base/env.h"
+#include "base/units.h"
 #include "engine/schema.h"
 
 namespace pb {
@@ -295,7 +296,43 @@ Expected<nlohmann::json> LoadScene(const std::string& path) {
   }
   ReportSchemaErrors(doc, schema.Validate(doc.value), "", errors);
   if (!errors.empty()) return errors.ToStatus();
-  return ApplyDefaults(SceneSchemaJson(), doc.value);
+  json scene = ApplyDefaults(SceneSchemaJson(), doc.value);
+
+  // Units: the project computes in meters. An io.read_points source reads
+  // its file in the scene's units (its `with: units`, set here), and the
+  // viewpoints, written in the same units as the scan, are converted.
+  std::string unit = scene.value("units", "m");
+  const bool unit_given = doc.value.contains("units");
+  if (!unit_given && scene.contains("source") && scene["source"].contains("with") &&
+      scene["source"]["with"].is_object() && scene["source"]["with"].contains("units") &&
+      scene["source"]["with"]["units"].is_string() &&
+      MetersPerUnit(scene["source"]["with"]["units"].get<std::string>())) {
+    unit = scene["source"]["with"]["units"].get<std::string>();  // the source's, for the viewpoints
+    scene["units"] = unit;
+  }
+  const double meters = MetersPerUnit(unit).value_or(1.0);  // the schema checked the name
+  if (scene.contains("source") && scene["source"].value("uses", "") == "io.read_points") {
+    json& with = scene["source"]["with"];
+    if (!with.is_object()) with = json::object();
+    if (with.contains("units") && with["units"] != unit) {
+      errors.Add(doc.PositionOf("/source/with/units"),
+                 "the source reads its file in " + with["units"].dump() + " but the scene's units are \"" +
+                     unit + "\"; give the units once, as the scene's `units:`");
+    }
+    with["units"] = unit;
+  } else if (meters != 1.0 && scene.contains("source")) {
+    errors.Add(doc.PositionOf("/units"),
+               "units \"" + unit + "\": only an io.read_points source converts a scan file to meters; " +
+                   scene["source"].value("uses", "") + " makes its points in meters (say `units: m`)");
+  }
+  if (meters != 1.0 && scene.contains("viewpoints")) {
+    for (json& view : scene["viewpoints"])
+      for (const char* key : {"eye", "target"})
+        if (view.contains(key))
+          for (json& c : view[key]) c = c.get<double>() * meters;
+  }
+  if (!errors.empty()) return errors.ToStatus();
+  return scene;
 }
 
 Expected<Workflow> LoadWorkflow(const std::string& path, const LoadOptions& options,

@@ -75,7 +75,10 @@ std::string DidYouMean(const std::string& word, const std::vector<std::string>& 
 // characters a name may not hold replaced by '_' ("my flow.yaml" -> "my_flow").
 std::string DefaultWorkflowName(const std::string& path);
 
-// Validates a scene file on its own.
+// Validates a scene file on its own and applies its defaults and `units`
+// (base/units.h): a scene in other units than meters gets its viewpoints' eye
+// and target in meters, and an io.read_points source reads its file in those
+// units (its `with: units`, which the scene sets).
 Expected<nlohmann::json> LoadScene(const std::string& path);
 
 // The embedded schemas (schemas/*.json, compiled into the binary).

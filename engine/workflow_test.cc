@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "base/units.h"
 #include "engine/test_util.h"
 
 namespace pb {
@@ -182,6 +183,62 @@ outputs: { result: up.out, truth: both.out }
             std::string::npos) << missing.status().message();
   EXPECT_NE(missing.status().message().find("The scene says: Ask the archive for scan.txt."),
             std::string::npos) << missing.status().message();
+}
+
+TEST_F(WorkflowTest, SceneUnitsConvertTheViewpointsAndReachTheScanReader) {
+  // The schema's names are the table's (base/units.h).
+  std::vector<std::string> names;
+  for (const auto& [name, meters] : kLengthUnits) names.emplace_back(name);
+  EXPECT_EQ(SceneSchemaJson()["properties"]["units"]["enum"].get<std::vector<std::string>>(), names);
+
+  const std::string mm = dir_.Write("mm.yaml", R"(name: statue
+units: mm
+source: { uses: io.read_points, with: { path: statue.ply } }
+viewpoints:
+  - { name: front, eye: [1500, -250, 400], target: [0, 0, 900], up: [0, 0, 1], fov_deg: 40 }
+)");
+  auto scene = LoadScene(mm);
+  ASSERT_TRUE(scene.ok()) << scene.status().message();
+  EXPECT_EQ((*scene)["source"]["with"]["units"], "mm");
+  EXPECT_EQ((*scene)["viewpoints"][0]["eye"], nlohmann::json::parse("[1.5, -0.25, 0.4]"));
+  EXPECT_EQ((*scene)["viewpoints"][0]["target"], nlohmann::json::parse("[0.0, 0.0, 0.9]"));
+  EXPECT_EQ((*scene)["viewpoints"][0]["up"], nlohmann::json::parse("[0, 0, 1]"));  // a direction
+  EXPECT_EQ((*scene)["viewpoints"][0]["fov_deg"], 40);
+
+  // Meters (the default) leave the viewpoints and say so to the reader.
+  auto meters = LoadScene(dir_.Write("m.yaml", R"(name: pump
+source: { uses: io.read_points, with: { path: pump.e57 } }
+viewpoints: [{ eye: [1.5, -1, 0.5], target: [0, 0, 0] }]
+)"));
+  ASSERT_TRUE(meters.ok()) << meters.status().message();
+  EXPECT_EQ((*meters)["source"]["with"]["units"], "m");
+  EXPECT_EQ((*meters)["viewpoints"][0]["eye"], nlohmann::json::parse("[1.5, -1, 0.5]"));
+
+  // Units given only to the reader are the scene's: the viewpoints follow.
+  auto reader = LoadScene(dir_.Write("cm.yaml", R"(name: s
+source: { uses: io.read_points, with: { path: s.ply, units: cm } }
+viewpoints: [{ eye: [100, 0, 0], target: [0, 0, 0] }]
+)"));
+  ASSERT_TRUE(reader.ok()) << reader.status().message();
+  EXPECT_EQ((*reader)["units"], "cm");
+  EXPECT_EQ((*reader)["viewpoints"][0]["eye"], nlohmann::json::parse("[1.0, 0.0, 0.0]"));
+
+  // Two different units, or units a source cannot apply: errors at the place.
+  auto both = LoadScene(dir_.Write("both.yaml", R"(name: s
+units: mm
+source: { uses: io.read_points, with: { path: s.ply, units: cm } }
+)"));
+  ASSERT_FALSE(both.ok());
+  EXPECT_NE(both.status().message().find("both.yaml:3:"), std::string::npos) << both.status().message();
+  EXPECT_NE(both.status().message().find("reads its file in \"cm\" but the scene's units are \"mm\""),
+            std::string::npos) << both.status().message();
+  auto synthetic = LoadScene(dir_.Write("synth.yaml", "name: s\nunits: ft\nsource: { uses: synth.scan }\n"));
+  ASSERT_FALSE(synthetic.ok());
+  EXPECT_NE(synthetic.status().message().find("synth.yaml:2:"), std::string::npos)
+      << synthetic.status().message();
+  EXPECT_NE(synthetic.status().message().find("synth.scan makes its points in meters"), std::string::npos)
+      << synthetic.status().message();
+  EXPECT_FALSE(LoadScene(dir_.Write("bad.yaml", "name: s\nunits: yd\n")).ok());
 }
 
 TEST_F(WorkflowTest, WhenAndSceneNamedStagesReportBadValues) {

@@ -1,10 +1,13 @@
 // io.read_points: reads a scan file into the `points` artifact.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <vector>
 
+#include "base/units.h"
 #include "stages/geometry/io/scan_read.h"
 #include "stages/builtin.h"
 #include "stages/params.h"
@@ -53,9 +56,21 @@ std::string PaintUncolored(const std::string& mode, PointCloud* points) {
   return "intensity";
 }
 
+// `units`: the file's coordinates times `meters` (origin, offsets and
+// stations; normals are directions and stay).
+void ConvertToMeters(double meters, PointCloud* points) {
+  if (meters == 1.0) return;
+  for (double& c : points->origin) c *= meters;
+  for (float& c : points->positions) c = static_cast<float>(c * meters);
+  for (std::array<double, 3>& station : points->stations)
+    for (double& c : station) c *= meters;
+}
+
 std::string ParamsSchema() {
   nlohmann::json formats = nlohmann::json::array({"auto"});
   for (const ScanFormat& format : ScanFormats()) formats.push_back(std::string(format.name));
+  nlohmann::json units = nlohmann::json::array();
+  for (const auto& [name, meters] : kLengthUnits) units.push_back(std::string(name));
   const nlohmann::json schema = {
       {"type", "object"},
       {"additionalProperties", false},
@@ -66,8 +81,16 @@ std::string ParamsSchema() {
             {{"type", "string"},
              {"x-path", true},
              {"description",
-              "The scan file, relative to the file that names it. Coordinates in meters. "
-              "Keyed by content, so renaming or moving it keeps the cache."}}},
+              "The scan file, relative to the file that names it. Keyed by content, so "
+              "renaming or moving it keeps the cache."}}},
+           {"units",
+            {{"type", "string"},
+             {"enum", units},
+             {"default", "m"},
+             {"description",
+              "The length unit of the file's coordinates; the points are converted to meters, "
+              "in which the project computes and glTF is written. A scene's `units:` sets it "
+              "for its `source:` (docs/campaigns.md, Units)."}}},
            {"format",
             {{"type", "string"},
              {"enum", formats},
@@ -113,6 +136,9 @@ Status Run(StageContext& ctx) {
 
   PB_ASSIGN_OR_RETURN(const std::string columns, StringParam(ctx, kId, "columns"));
   PB_ASSIGN_OR_RETURN(const std::string uncolored, StringParam(ctx, kId, "uncolored"));
+  PB_ASSIGN_OR_RETURN(const std::string unit, StringParam(ctx, kId, "units"));
+  const std::optional<double> meters = MetersPerUnit(unit);
+  if (!meters) return Status::Invalid(std::string(kId) + ": unknown units '" + unit + "'");
 
   ScanReadOptions options;
   options.drop_invalid_points = drop_invalid;
@@ -123,6 +149,7 @@ Status Run(StageContext& ctx) {
   ctx.end_phase("read");
   if (!read.ok()) return read.status();
   ScanReadResult& outcome = *read;
+  ConvertToMeters(*meters, &outcome.points);
   const std::string colors_from = PaintUncolored(uncolored, &outcome.points);
   const PointCloud& points = outcome.points;
   // The readers' warnings name the file (some readers put it first already).
@@ -145,6 +172,7 @@ Status Run(StageContext& ctx) {
        {"has_colors", points.has_colors()},
        {"has_intensities", points.has_intensities()},
        {"colors_from", colors_from},
+       {"file_units", unit},
        {"stations", points.stations.size()},
        {"source_format", outcome.format.empty() ? std::string(format->name) : outcome.format}},
       "write"));
@@ -163,10 +191,11 @@ Status Run(StageContext& ctx) {
 StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;
+  type.version = 4;  // 4: units
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
-      "Reads a colored laser scan into the `points` artifact: positions in meters, and normals "
+      "Reads a colored laser scan into the `points` artifact: positions in meters (a file in "
+      "millimeters, centimeters, feet or inches says so with `units`), and normals "
       "and 8-bit sRGB colors, intensities and scanner stations when the file has them.\n\n"
       "Formats (chosen by extension, or `format:`): PLY (ascii, binary little and big endian; "
       "any scalar types; unknown elements and properties ignored); PCD v0.6/0.7 (ascii, binary, "

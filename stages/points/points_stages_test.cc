@@ -237,6 +237,49 @@ TEST_F(PointsStagesTest, ReadPointsPaintsUncoloredScansGrey) {
   EXPECT_TRUE(keep.warnings_.empty());
 }
 
+// `units`: a file in millimeters (or cm, ft, in) is converted to meters:
+// origin, offsets and stations; normals are directions and stay.
+TEST_F(PointsStagesTest, ReadPointsConvertsTheFilesUnitsToMeters) {
+  const std::string pcd = (dir_ / "mm.pcd").string();
+  std::ofstream(pcd) << "# .PCD v0.7\nVERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\n"
+                        "COUNT 1 1 1\nWIDTH 2\nHEIGHT 1\nVIEWPOINT 1000 2000 3000 1 0 0 0\n"
+                        "POINTS 2\nDATA ascii\n10 20 30\n-500 0 250\n";
+  const auto absolute = [](const PointCloud& points, size_t i, int c) {
+    return points.origin[c] + points.positions[3 * i + c];
+  };
+  for (const auto& [unit, meters] : std::vector<std::pair<std::string, double>>{
+           {"m", 1.0}, {"mm", 0.001}, {"ft", 0.3048}}) {
+    FakeContext ctx(dir_ / unit, {{"path", pcd}, {"units", unit}, {"uncolored", "none"}});
+    ASSERT_TRUE(Run("io.read_points", ctx).ok()) << unit;
+    auto read = ReadPlyPoints(ctx.outputs_["points"]);
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    const PointCloud& points = read->points;
+    const double want[2][3] = {{1010, 2020, 3030}, {500, 2000, 3250}};
+    for (size_t i = 0; i < 2; ++i)
+      for (int c = 0; c < 3; ++c)
+        EXPECT_NEAR(absolute(points, i, c), want[i][c] * meters, 1e-6 * meters * 3250) << unit;
+    ASSERT_EQ(points.stations.size(), 1u);
+    EXPECT_NEAR(points.stations[0][0], 1000 * meters, 1e-9);
+    EXPECT_NEAR(points.stations[0][2], 3000 * meters, 1e-9);
+    EXPECT_EQ(ctx.meta_["points"]["file_units"], unit);
+  }
+
+  const std::string ply = (dir_ / "normals.ply").string();
+  std::ofstream(ply) << "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\n"
+                        "property float y\nproperty float z\nproperty float nx\nproperty float ny\n"
+                        "property float nz\nend_header\n1000 0 -20 0 0.6 0.8\n";
+  FakeContext mm(dir_ / "n", {{"path", ply}, {"units", "mm"}, {"uncolored", "none"}});
+  ASSERT_TRUE(Run("io.read_points", mm).ok());
+  auto read = ReadPlyPoints(mm.outputs_["points"]);
+  ASSERT_TRUE(read.ok());
+  EXPECT_NEAR(absolute(read->points, 0, 0), 1.0, 1e-6);
+  EXPECT_NEAR(absolute(read->points, 0, 2), -0.02, 1e-6);
+  EXPECT_EQ(read->points.normals, (std::vector<float>{0, 0.6f, 0.8f}));
+
+  FakeContext bad(dir_ / "bad", {{"path", ply}, {"units", "yd"}});
+  EXPECT_EQ(Run("io.read_points", bad).code(), Status::Code::kInvalid);
+}
+
 // A reader's warnings reach the warning channel, each naming the file once.
 TEST_F(PointsStagesTest, ReadPointsPassesReaderWarningsOn) {
   const std::string data = SharedData();
