@@ -13,6 +13,7 @@
 #include "stages/geometry/mesh/scan_agreement.h"
 #include "stages/geometry/points/knn.h"
 #include "stages/geometry/points/spacing.h"
+#include "stages/geometry/points/strays.h"
 #include "stages/points_io.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/io/vtp.h"
@@ -41,6 +42,12 @@ constexpr const char* kSchema = R"({
       "maximum": 64,
       "default": 8,
       "description": "With `points`: a scan point's local spacing is r_k sqrt(pi / k), r_k the distance to its k-th nearest other point (points/spacing.h LocalSpacing; mesh.trim and render.splats use the same)."
+    },
+    "stray_cluster_points": {
+      "type": "integer",
+      "minimum": 0,
+      "default": 50,
+      "description": "With `points`: scan points in clusters of fewer samples are strays (points/strays.h, as render.splats leaves them out of the scan's frames: a return in the air, floating dust), which missing surface does not count. 0 counts every point."
     },
     "spacing_factor": {
       "type": "number",
@@ -133,6 +140,7 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t samples, IntegerParam(ctx, kId, "samples", {1}));
   PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", {0}));
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 64}));
+  PB_ASSIGN_OR_RETURN(const int64_t stray_cluster_points, IntegerParam(ctx, kId, "stray_cluster_points", {0}));
   PB_ASSIGN_OR_RETURN(const double spacing_factor, NumberParam(ctx, kId, "spacing_factor"));
   if (!(spacing_factor > 0)) return Status::Invalid(std::string(kId) + ": 'spacing_factor' must be > 0");
   const bool has_truth = ctx.has_input("truth"), has_points = ctx.has_input("points");
@@ -194,6 +202,7 @@ Status Run(StageContext& ctx) {
     PB_PHASE(ctx, "scan");
     Expected<ScanAgreement> agreement = Status::Internal("not run");
     Expected<VertexScanAgreement> at_vertices = Status::Internal("not run");
+    std::vector<uint8_t> strays;
     arena.execute([&] {
       // One index of the scan for the spacing and both measures.
       Expected<KnnIndex> index = KnnIndex::Build(scan->cloud.positions);
@@ -206,7 +215,15 @@ Status Run(StageContext& ctx) {
         agreement = spacing.status();
         return;
       }
+      Expected<std::vector<uint8_t>> stray =
+          StrayPoints(*index, *spacing, {.k = int(k), .min_cluster_points = size_t(stray_cluster_points)});
+      if (!stray.ok()) {
+        agreement = stray.status();
+        return;
+      }
+      strays = std::move(*stray);
       ScanAgreementOptions options;
+      options.strays = strays;
       options.spacing_factor = spacing_factor;
       options.samples = static_cast<size_t>(samples);
       options.seed = static_cast<uint64_t>(seed);
@@ -228,6 +245,7 @@ Status Run(StageContext& ctx) {
     ctx.counter("invented_area_fraction", agreement->invented_area_fraction);
     ctx.counter("missing_fraction", agreement->missing_fraction);
     ctx.counter("scan_points", static_cast<double>(scan->cloud.size()));
+    ctx.counter("stray_points", static_cast<double>(agreement->stray_points));
     meta["median_spacing_m"] = agreement->median_spacing_m;
     meta["mean_edge_m"] = agreement->mean_edge_m;
   }
@@ -250,8 +268,9 @@ StageType GeometryMetricsStage() {
   StageType type;
   type.id = kId;
   // 3: the 'errors' output (per-vertex error maps); 4: local spacing r_k sqrt(pi / k), as mesh.trim
-  // (was r_k); 5: UV seams are no boundary edges.
-  type.version = 5;
+  // (was r_k); 5: UV seams are no boundary edges; 6: stray scan points are not
+  // missing surface (`stray_cluster_points`).
+  type.version = 6;
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
@@ -271,7 +290,9 @@ StageType GeometryMetricsStage() {
       "max(`spacing_factor` x local spacing, the mesh's mean edge) from each of their 16 nearest scan "
       "points (surface the scanner never saw); missing surface is the fraction of scan points "
       "(at most `samples`, evenly picked) farther than `spacing_factor` x their local spacing from "
-      "the mesh (what the scanner saw and the model lost). Connect `truth`, `points` or both.\n\n"
+      "the mesh (what the scanner saw and the model lost), stray points (clusters of fewer than "
+      "`stray_cluster_points` linked samples, points/strays.h) left out. Connect `truth`, `points` "
+      "or both.\n\n"
       "Output table columns: `direction` (mesh_to_truth, truth_to_mesh, symmetric with `truth`; "
       "mesh_to_scan, scan_to_mesh with `points`), `samples`, `mean_m`, `rms_m`, `p95_m`, "
       "`hausdorff_m`, `truth` (analytic, mesh or scan), `beyond_fraction` (mesh_to_scan: the invented "
@@ -288,7 +309,7 @@ StageType GeometryMetricsStage() {
       "`quality` = the first of those arrays, which MeshLab colors by, and each array as a float "
       "vertex property `scalar_NAME`, which CloudCompare loads as scalar field NAME).\n\n"
       "Counters: `mesh_faces`, `samples`, `boundary_edges_per_1000_faces`; with truth `truth_faces`, "
-      "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `invented_area_fraction`, "
+      "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `stray_points`, `invented_area_fraction`, "
       "`missing_fraction`, `invented_vertices`. Phases: `io`, `compute` (truth), `scan` (points).";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to evaluate (mesh.ply).", false},

@@ -313,10 +313,12 @@ TEST_F(RenderStagesTest, SplatsOfIsolatedPointsStaySmall) {
   PointCloud cloud = QuadPoints();
   cloud.positions.insert(cloud.positions.end(), {1.5f, 4.0f, 0.0f});
   cloud.colors.insert(cloud.colors.end(), {255, 255, 255});
-  FakeContext ctx(dir_, {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}});
+  // (stray_cluster_points 0: drawn, not left out as the default does; below.)
+  FakeContext ctx(dir_, {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"stray_cluster_points", 0}});
   ctx.AddInput("points", "points", WriteInputPoints("stray", cloud));
   ASSERT_TRUE(Run("render.splats", ctx).ok());
   EXPECT_EQ(ctx.counters_["radii_capped"], 1);
+  EXPECT_EQ(ctx.counters_["stray_points"], 0);
   const FrameSet frames = Frames(ctx).value();
   const Image& front = frames.frames[0].image;
   // The stray point projects to x = 32 + 1.5 / 4 * 55.4 = 52.8 px with a
@@ -326,6 +328,42 @@ TEST_F(RenderStagesTest, SplatsOfIsolatedPointsStaySmall) {
     for (int x = 0; x < 64; ++x) white += front.at_u8(x, y, 0) == 255 && front.at_u8(x, y, 2) == 255;
   EXPECT_GT(white, 10);
   EXPECT_LT(white, 40);
+}
+
+TEST_F(RenderStagesTest, StrayPointsAreLeftOutOfTheScansFrames) {
+  // The grid plus a lone return 1 m in front of it and a floating cluster
+  // of 9 returns 2 cm apart, 0.5 m in front: neither is a surface, so
+  // neither is drawn, counted as a sample or hides the grid.
+  PointCloud cloud = QuadPoints();
+  const size_t grid = cloud.size();
+  cloud.positions.insert(cloud.positions.end(), {0.2f, 4.0f, 0.1f});
+  for (int c = 0; c < 9; ++c)
+    cloud.positions.insert(cloud.positions.end(), {-0.5f + 0.02f * float(c % 3), 4.5f, 0.3f + 0.02f * float(c / 3)});
+  cloud.colors.resize(3 * cloud.size(), 255);
+  const auto render = [&](const std::string& name, const PointCloud& points, int64_t min_cluster) {
+    std::filesystem::create_directories(dir_ / name);
+    auto ctx = std::make_unique<FakeContext>(
+        dir_ / name, nlohmann::json{{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"stray_cluster_points", min_cluster}});
+    ctx->AddInput("points", "points", WriteInputPoints(name, points));
+    EXPECT_TRUE(Run("render.splats", *ctx).ok());
+    return ctx;
+  };
+  PointCloud quad = QuadPoints();
+  const auto with_strays = render("strays", cloud, 50);
+  const auto without = render("quad", quad, 50);
+  const auto drawn = render("drawn", cloud, 0);
+  EXPECT_EQ(with_strays->counters_["stray_points"], 10);
+  EXPECT_EQ(with_strays->counters_["points"], double(grid + 10));
+  EXPECT_EQ(without->counters_["stray_points"], 0);
+  EXPECT_EQ(drawn->counters_["stray_points"], 0);
+  // The same pixels and samples as the grid alone; drawn, the strays change
+  // both (their disks hide grid samples and add their own).
+  const FrameSet a = Frames(*with_strays).value(), b = Frames(*without).value(), c = Frames(*drawn).value();
+  EXPECT_EQ(a.frames[0].image.data, b.frames[0].image.data);
+  EXPECT_EQ(a.frames[0].samples.data, b.frames[0].samples.data);
+  EXPECT_EQ(with_strays->counters_["sample_pixels"], without->counters_["sample_pixels"]);
+  EXPECT_NE(c.frames[0].samples.data, b.frames[0].samples.data);
+  EXPECT_NE(c.frames[0].image.data, b.frames[0].image.data);
 }
 
 TEST_F(RenderStagesTest, SplatsReportBadInput) {
@@ -412,8 +450,11 @@ TEST_F(RenderStagesTest, HolesAreCountedOnTheScanSamplesNotOnItsDisks) {
       cloud.positions.insert(cloud.positions.end(), {-0.9f + 0.3f * float(i), 5.0f, z});
       cloud.colors.insert(cloud.colors.end(), {200, 200, 200});
     }
+  // (stray_cluster_points 0: the sparse rows are clusters of 7 and would be
+  // left out as strays.)
   nlohmann::json splat_params = {{"viewpoints", {Viewpoints()[0]}}, {"size", 64}, {"orient", false},
-                                 {"radius_scale", 3.0}, {"max_radius_spacings", 8.0}};
+                                 {"radius_scale", 3.0}, {"max_radius_spacings", 8.0},
+                                 {"stray_cluster_points", 0}};
   std::filesystem::create_directories(dir_ / "scan");
   FakeContext scan(dir_ / "scan", splat_params);
   scan.AddInput("points", "points", WriteInputPoints("cloud", cloud));

@@ -12,7 +12,9 @@
 #include "engine/stage.h"
 #include "stages/builtin.h"
 #include "stages/geometry/io/frames.h"
+#include "stages/geometry/points/knn.h"
 #include "stages/geometry/points/spacing.h"
+#include "stages/geometry/points/strays.h"
 #include "stages/geometry/points/surfels.h"
 #include "stages/geometry/render/splat.h"
 #include "stages/params.h"
@@ -107,6 +109,12 @@ constexpr const char* kSchema = R"({
       "default": 4,
       "description": "Largest local spacing a splat takes, in medians of the cloud's local spacings: an isolated point (a flying pixel at a depth edge, a stray return) has a huge k-NN distance and would be drawn as a large disk of surface nobody saw. 4 leaves a one-station scan's far field (spacing grows with range) its size."
     },
+    "stray_cluster_points": {
+      "type": "integer",
+      "minimum": 0,
+      "default": 50,
+      "description": "Points of a cluster of fewer samples are strays and left out (not drawn, not in the sample masks, hiding nothing): a cluster links each point to those of its k nearest that lie within 2 of the smaller of their local spacings (points/strays.h). A stray return in the air or a floating speck of dust is no surface a model should have, and drawn as the scan it charged every model with its pixels as holes; a one-station scan's sparse far field, a border or a wire of samples are clusters of their own size and stay. 0 keeps every point."
+    },
     "depth_tolerance": {
       "type": "number",
       "minimum": 0,
@@ -141,6 +149,7 @@ struct Options {
   double border_clip_spacings = 1;
   double max_surface_variation = 0.05;
   double max_radius_spacings = 0;
+  int64_t stray_cluster_points = 0;
   int size = 0;
   int k = 0;
   double radius_scale = 0;
@@ -168,6 +177,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.max_radius_spacings, NumberParam(ctx, kId, "max_radius_spacings"));
   if (!(options.max_radius_spacings > 0))
     return Status::Invalid(std::string(kId) + ": 'max_radius_spacings' must be > 0");
+  PB_ASSIGN_OR_RETURN(options.stray_cluster_points, IntegerParam(ctx, kId, "stray_cluster_points", {0}));
   PB_ASSIGN_OR_RETURN(options.splat.depth_tolerance, NumberParam(ctx, kId, "depth_tolerance"));
   PB_ASSIGN_OR_RETURN(options.splat.max_radius_px, NumberParam(ctx, kId, "max_radius_px"));
   if (!(options.radius_scale > 0)) return Status::Invalid(std::string(kId) + ": 'radius_scale' must be > 0");
@@ -185,17 +195,40 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const Options options, ReadOptions(ctx));
   PB_ASSIGN_OR_RETURN(const std::vector<View> views, ReadViewpoints(ctx, kId, options.size));
   PB_ASSIGN_OR_RETURN(const InputPoints input, ReadInputPoints(ctx, kId, 0.2));
-  const PointCloud& cloud = input.cloud;
 
   tbb::task_arena arena(std::max(1, ctx.threads()));
   std::vector<float> radius, spacing;
-  size_t capped = 0;
+  size_t capped = 0, strays = 0;
+  PointCloud kept;  // the cloud without its stray points, when it has some
   {
     PB_PHASE(ctx, "spacing");
+    const std::string where = std::string(kId) + ": input 'points' (" + input.path + ")";
+    Expected<KnnIndex> index = Status::Internal("not run");
     Expected<std::vector<float>> local = Status::Internal("not run");
-    arena.execute([&] { local = LocalSpacing(cloud, options.k); });
-    if (!local.ok()) return local.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
-    spacing = std::move(*local);
+    Expected<std::vector<uint8_t>> stray = Status::Internal("not run");
+    arena.execute([&] {
+      index = KnnIndex::Build(input.cloud.positions);
+      if (!index.ok()) return;
+      local = LocalSpacing(*index, options.k);
+      if (!local.ok()) return;
+      stray = StrayPoints(*index, *local,
+                          {.k = options.k, .min_cluster_points = size_t(options.stray_cluster_points)});
+    });
+    if (!index.ok()) return index.status().WithContext(where);
+    if (!local.ok()) return local.status().WithContext(where);
+    if (!stray.ok()) return stray.status().WithContext(where);
+    std::vector<uint32_t> keep;
+    for (size_t i = 0; i < stray->size(); ++i) {
+      if ((*stray)[i]) continue;
+      keep.push_back(uint32_t(i));
+      spacing.push_back((*local)[i]);
+    }
+    strays = stray->size() - keep.size();
+    if (strays > 0) kept = SelectPoints(input.cloud, keep);
+    if (keep.empty())
+      return Status::Invalid(where + ": every point is a stray (clusters of fewer than " +
+                             std::to_string(options.stray_cluster_points) +
+                             " points); lower `stray_cluster_points` or set it to 0");
     radius = spacing;
     std::vector<float> sorted = radius;
     std::nth_element(sorted.begin(), sorted.begin() + sorted.size() / 2, sorted.end());
@@ -208,6 +241,7 @@ Status Run(StageContext& ctx) {
       r = float(r * options.radius_scale);
     }
   }
+  const PointCloud& cloud = strays > 0 ? kept : input.cloud;
   Surfels surfels;
   std::vector<float> clip;
   size_t oriented_points = 0, projected_points = 0;
@@ -298,6 +332,7 @@ Status Run(StageContext& ctx) {
                     {"orient", options.orient},
                     {"border_points", options.orient ? surfels.border_points : size_t{0}},
                     {"median_radius_m", median_radius_m},
+                    {"stray_points", strays},
                     {"coverage", covered_samples / (pixels * ss * ss)}};
   if (options.samples) {
     meta["render"]["sample_coverage"] = double(sample_pixels) / pixels;
@@ -305,7 +340,8 @@ Status Run(StageContext& ctx) {
   }
   ctx.set_output_meta("frames", std::move(meta));
   ctx.counter("frames", double(views.size()));
-  ctx.counter("points", double(cloud.size()));
+  ctx.counter("points", double(input.cloud.size()));
+  ctx.counter("stray_points", double(strays));
   ctx.counter("splats_drawn", double(drawn));
   ctx.counter("radii_capped", double(capped));
   ctx.counter("border_points", options.orient ? double(surfels.border_points) : 0.0);
@@ -329,11 +365,13 @@ StageType SplatsStage() {
   // 2: tangent disks, clip lines at the border, spacing r_k sqrt(pi / k);
   // 3: the sample masks (`samples`), frames' PNGs unchanged;
   // 4: the sample masks of the points moved onto their local surface
-  // (`samples_on_surface`), frames' PNGs unchanged.
-  type.version = 4;
+  // (`samples_on_surface`), frames' PNGs unchanged; 5: stray points left
+  // out (`stray_cluster_points`).
+  type.version = 5;
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
-      "Draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
+      "Leaves out the stray points (clusters of fewer than `stray_cluster_points` linked samples, "
+      "points/strays.h: a return in the air, floating dust), then draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
       "(r_k sqrt(pi / k), r_k the distance to its `k`-th nearest other point, at most "
       "`max_radius_spacings` medians of the cloud's local spacings: isolated points stay small), "
       "lying in the point's tangent plane (`orient`; else facing the camera), a border point's disk "
@@ -353,7 +391,8 @@ StageType SplatsStage() {
       "pixels the scan has evidence of; metrics.image counts hole pixels on them), each point taken "
       "where it lies once moved onto the quadric fitted to its neighbourhood (`samples_on_surface`), "
       "so that range noise scattering points past a silhouette does not count as evidence.\n\n"
-      "Counters: `frames`, `points`, `splats_drawn` (over all frames), `radii_capped`, `border_points`, "
+      "Counters: `frames`, `points`, `stray_points` (left out), `splats_drawn` (over all frames), "
+      "`radii_capped`, `border_points`, "
       "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`), `projected_points`, "
       "`mean_projection_m` (with `samples_on_surface`: points moved, mean distance over all points). "
       "Phases: `io`, `spacing`, `surfels`, `compute`.";

@@ -29,6 +29,9 @@ Status CheckInputs(const Mesh& mesh, const PointCloud& scan, std::span<const flo
                            std::to_string(scan.size()) + " points");
   if (!(options.spacing_factor > 0) || options.samples == 0 || options.neighbors < 1)
     return Status::Invalid("scan agreement: spacing_factor, samples and neighbors must be positive");
+  if (!options.strays.empty() && options.strays.size() != scan.size())
+    return Status::Invalid("scan agreement: " + std::to_string(options.strays.size()) + " stray flags for " +
+                           std::to_string(scan.size()) + " points");
   return Status::Ok();
 }
 
@@ -91,11 +94,18 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
   const size_t n = scan.size();
   const size_t count = std::min(n, options.samples);
   const TriangleBvh bvh(mesh);
-  std::vector<uint8_t> missing(count, 0);
-  std::vector<double> to_mesh_m(count, 0.0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, count, 256), [&](const tbb::blocked_range<size_t>& range) {
+  std::vector<uint32_t> measured;  // the sampled scan points that are no strays
+  measured.reserve(count);
+  for (size_t j = 0; j < count; ++j) {
+    const size_t i = static_cast<size_t>(static_cast<uint64_t>(j) * n / count);
+    if (options.strays.empty() || !options.strays[i]) measured.push_back(static_cast<uint32_t>(i));
+  }
+  for (uint8_t v : options.strays) result.stray_points += v;
+  std::vector<uint8_t> missing(measured.size(), 0);
+  std::vector<double> to_mesh_m(measured.size(), 0.0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, measured.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
     for (size_t j = range.begin(); j < range.end(); ++j) {
-      const size_t i = static_cast<size_t>(static_cast<uint64_t>(j) * n / count);
+      const size_t i = measured[j];
       const float* p = &scan.positions[i * 3];
       const Vec3 absolute = {scan.origin[0] + p[0], scan.origin[1] + p[1], scan.origin[2] + p[2]};
       to_mesh_m[j] = bvh.Distance(absolute);
@@ -104,8 +114,8 @@ Expected<ScanAgreement> MeasureScanAgreement(const Mesh& mesh, const PointCloud&
   });
   size_t missing_count = 0;
   for (uint8_t v : missing) missing_count += v;
-  result.scan_points_measured = count;
-  result.missing_fraction = double(missing_count) / double(count);
+  result.scan_points_measured = measured.size();
+  result.missing_fraction = measured.empty() ? 0 : double(missing_count) / double(measured.size());
   result.mesh_to_scan = ComputeDistanceStats(std::move(nearest_m));
   result.scan_to_mesh = ComputeDistanceStats(std::move(to_mesh_m));
   return result;

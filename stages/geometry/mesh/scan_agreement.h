@@ -42,6 +42,9 @@ struct ScanAgreementOptions {
   size_t samples = 200000;    // mesh samples, and scan points measured at most
   uint64_t seed = 1;          // of the mesh samples
   int neighbors = 16;         // scan points checked per mesh sample, >= 1
+  // Empty, or one flag per scan point: 1 for a stray (points/strays.h), which
+  // missing surface leaves out (no model should have it).
+  std::span<const uint8_t> strays;
 };
 
 struct ScanAgreement {
@@ -52,7 +55,8 @@ struct ScanAgreement {
   double mean_edge_m = 0;             // over the faces' three edges
   double median_spacing_m = 0;        // of the local spacings given
   size_t mesh_samples = 0;
-  size_t scan_points_measured = 0;
+  size_t scan_points_measured = 0;  // strays left out
+  size_t stray_points = 0;          // of the scan, as flagged in the options
   // The distances behind the two fractions, meters: each mesh sample to its
   // nearest scan point, each measured scan point to the mesh.
   DistanceStats mesh_to_scan;

@@ -4,7 +4,9 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 #include <vector>
 
 namespace pb {
@@ -79,6 +81,22 @@ TEST(ScanAgreementTest, InventedAreaMissingPointsAndBoundary) {
   ASSERT_TRUE(one.ok());
   EXPECT_EQ(one->invented_area_fraction, r->invented_area_fraction);
   EXPECT_EQ(one->missing_fraction, r->missing_fraction);
+
+  // The 250 points flagged as strays (points/strays.h): not missing, not
+  // measured; the invented area stays.
+  std::vector<uint8_t> strays(scan.size(), 0);
+  std::fill(strays.begin() + std::ptrdiff_t(on_surface), strays.end(), uint8_t{1});
+  options.strays = strays;
+  Expected<ScanAgreement> flagged = Status::Internal("not run");
+  tbb::task_arena(2).execute([&] { flagged = MeasureScanAgreement(mesh, scan, spacing, options); });
+  ASSERT_TRUE(flagged.ok()) << flagged.status().message();
+  EXPECT_EQ(flagged->missing_fraction, 0.0);
+  EXPECT_EQ(flagged->scan_points_measured, on_surface);
+  EXPECT_EQ(flagged->stray_points, 250u);
+  EXPECT_EQ(flagged->invented_area_fraction, r->invented_area_fraction);
+  strays.pop_back();
+  options.strays = strays;
+  EXPECT_FALSE(MeasureScanAgreement(mesh, scan, spacing, options).ok());  // one flag short
 }
 
 // The invented-area rule at the vertices: the scan covers x <= 0.5 of the
