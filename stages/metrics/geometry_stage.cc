@@ -49,6 +49,12 @@ constexpr const char* kSchema = R"({
       "default": 50,
       "description": "With `points`: scan points in clusters of fewer samples are strays (points/strays.h, as render.splats leaves them out of the scan's frames: a return in the air, floating dust), which missing surface does not count. 0 counts every point."
     },
+    "stray_spacing_ratio": {
+      "type": "number",
+      "minimum": 1,
+      "default": 3,
+      "description": "Two neighbours link within 2 of the larger of their local spacings when those differ by at most this factor, else within 2 of the smaller (points/strays.h): a sparse row beside denser sampling (a wall's top seen at grazing angle, the ceiling above a tripod scanner) stays, a return far off a surface, whose spacing is its distance to it, does not. 1: the smaller always."
+    },
     "spacing_factor": {
       "type": "number",
       "exclusiveMinimum": 0,
@@ -141,6 +147,8 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t seed, IntegerParam(ctx, kId, "seed", {0}));
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 64}));
   PB_ASSIGN_OR_RETURN(const int64_t stray_cluster_points, IntegerParam(ctx, kId, "stray_cluster_points", {0}));
+  PB_ASSIGN_OR_RETURN(const double stray_spacing_ratio, NumberParam(ctx, kId, "stray_spacing_ratio"));
+  if (!(stray_spacing_ratio >= 1)) return Status::Invalid(std::string(kId) + ": 'stray_spacing_ratio' must be >= 1");
   PB_ASSIGN_OR_RETURN(const double spacing_factor, NumberParam(ctx, kId, "spacing_factor"));
   if (!(spacing_factor > 0)) return Status::Invalid(std::string(kId) + ": 'spacing_factor' must be > 0");
   const bool has_truth = ctx.has_input("truth"), has_points = ctx.has_input("points");
@@ -216,7 +224,9 @@ Status Run(StageContext& ctx) {
         return;
       }
       Expected<std::vector<uint8_t>> stray =
-          StrayPoints(*index, *spacing, {.k = int(k), .min_cluster_points = size_t(stray_cluster_points)});
+          StrayPoints(*index, *spacing,
+                      {.k = int(k), .max_spacing_ratio = stray_spacing_ratio,
+                       .min_cluster_points = size_t(stray_cluster_points)});
       if (!stray.ok()) {
         agreement = stray.status();
         return;

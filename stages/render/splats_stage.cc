@@ -115,6 +115,12 @@ constexpr const char* kSchema = R"({
       "default": 50,
       "description": "Points of a cluster of fewer samples are strays and left out (not drawn, not in the sample masks, hiding nothing): a cluster links each point to those of its k nearest that lie within 2 of the smaller of their local spacings (points/strays.h). A stray return in the air or a floating speck of dust is no surface a model should have, and drawn as the scan it charged every model with its pixels as holes; a one-station scan's sparse far field, a border or a wire of samples are clusters of their own size and stay. 0 keeps every point."
     },
+    "stray_spacing_ratio": {
+      "type": "number",
+      "minimum": 1,
+      "default": 3,
+      "description": "Two neighbours link within 2 of the larger of their local spacings when those differ by at most this factor, else within 2 of the smaller (points/strays.h): a sparse row beside denser sampling (a wall's top seen at grazing angle, the ceiling above a tripod scanner) stays, a return far off a surface, whose spacing is its distance to it, does not. 1: the smaller always."
+    },
     "depth_tolerance": {
       "type": "number",
       "minimum": 0,
@@ -150,6 +156,7 @@ struct Options {
   double max_surface_variation = 0.05;
   double max_radius_spacings = 0;
   int64_t stray_cluster_points = 0;
+  double stray_spacing_ratio = 3;
   int size = 0;
   int k = 0;
   double radius_scale = 0;
@@ -178,6 +185,9 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   if (!(options.max_radius_spacings > 0))
     return Status::Invalid(std::string(kId) + ": 'max_radius_spacings' must be > 0");
   PB_ASSIGN_OR_RETURN(options.stray_cluster_points, IntegerParam(ctx, kId, "stray_cluster_points", {0}));
+  PB_ASSIGN_OR_RETURN(options.stray_spacing_ratio, NumberParam(ctx, kId, "stray_spacing_ratio"));
+  if (!(options.stray_spacing_ratio >= 1))
+    return Status::Invalid(std::string(kId) + ": 'stray_spacing_ratio' must be >= 1");
   PB_ASSIGN_OR_RETURN(options.splat.depth_tolerance, NumberParam(ctx, kId, "depth_tolerance"));
   PB_ASSIGN_OR_RETURN(options.splat.max_radius_px, NumberParam(ctx, kId, "max_radius_px"));
   if (!(options.radius_scale > 0)) return Status::Invalid(std::string(kId) + ": 'radius_scale' must be > 0");
@@ -212,7 +222,9 @@ Status Run(StageContext& ctx) {
       local = LocalSpacing(*index, options.k);
       if (!local.ok()) return;
       stray = StrayPoints(*index, *local,
-                          {.k = options.k, .min_cluster_points = size_t(options.stray_cluster_points)});
+                          {.k = options.k,
+                           .max_spacing_ratio = options.stray_spacing_ratio,
+                           .min_cluster_points = size_t(options.stray_cluster_points)});
     });
     if (!index.ok()) return index.status().WithContext(where);
     if (!local.ok()) return local.status().WithContext(where);

@@ -1,5 +1,5 @@
 // Stray points (strays.h): clusters of the k-NN graph restricted to pairs
-// closer than a multiple of their local spacing, found with union-find
+// closer than a multiple of their local spacings, found with union-find
 // (Tarjan 1975, path halving and union by size).
 #include "stages/geometry/points/strays.h"
 
@@ -43,6 +43,8 @@ Expected<std::vector<uint8_t>> StrayPoints(const KnnIndex& index, std::span<cons
     return Status::Invalid("stray points: k must be in 1..64, got " + std::to_string(options.k));
   if (!(options.link_spacings > 0) || !std::isfinite(options.link_spacings))
     return Status::Invalid("stray points: link_spacings must be > 0");
+  if (!(options.max_spacing_ratio >= 1) || !std::isfinite(options.max_spacing_ratio))
+    return Status::Invalid("stray points: max_spacing_ratio must be >= 1");
   if (spacing.size() != index.size())
     return Status::Invalid("stray points: " + std::to_string(spacing.size()) + " spacings for " +
                            std::to_string(index.size()) + " points");
@@ -61,7 +63,9 @@ Expected<std::vector<uint8_t>> StrayPoints(const KnnIndex& index, std::span<cons
         uint32_t linked = i;
         if (int(j) < found) {
           const Neighbor& nb = neighbors[j];
-          const double reach = options.link_spacings * std::min(spacing[i], spacing[nb.index]);
+          const double lo = std::min(spacing[i], spacing[nb.index]);
+          const double hi = std::max(spacing[i], spacing[nb.index]);
+          const double reach = options.link_spacings * (hi <= options.max_spacing_ratio * lo ? hi : lo);
           if (nb.squared_distance_m2 <= reach * reach) linked = nb.index;
         }
         links[size_t(i) * k + j] = linked;

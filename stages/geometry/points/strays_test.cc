@@ -64,6 +64,27 @@ TEST(StrayPointsTest, ALoneReturnAndAFloatingClusterAreStraysTheSurfaceIsNot) {
   EXPECT_EQ(Strays(xyz, {.min_cluster_points = 0}).count, 0u);
 }
 
+// A sparse strip beside denser sampling (the top of a wall seen at grazing
+// angle beside its face, the ceiling where a tripod scanner's lines
+// converge): 45 points 7 mm apart, 16 mm from a patch sampled every 4 mm.
+// 16 mm is over twice the spacing of the patch (5.1 mm along its border,
+// more at its corners) but within twice the strip's (8.4 mm), and
+// the spacings differ by less than 3: the strip links. By the smaller
+// spacing alone (max_spacing_ratio 1) it was cut off as strays.
+TEST(StrayPointsTest, ASparseStripBesideDenserSamplingIsNoStray) {
+  std::vector<float> xyz;
+  for (int j = 0; j < 40; ++j)
+    for (int i = 0; i < 40; ++i) xyz.insert(xyz.end(), {0.004f * float(i), 0.004f * float(j), 0.0f});
+  const size_t patch = xyz.size() / 3;
+  for (int j = 0; j < 3; ++j)
+    for (int i = 0; i < 15; ++i)
+      xyz.insert(xyz.end(), {0.007f * float(i), 0.156f + 0.016f + 0.007f * float(j), 0.0f});
+  EXPECT_EQ(Strays(xyz).count, 0u);
+  const Flags cut = Strays(xyz, {.max_spacing_ratio = 1.0});
+  EXPECT_EQ(cut.count, 45u);
+  for (size_t i = patch; i < patch + 45; ++i) EXPECT_EQ(cut.stray[i], 1) << i;
+}
+
 TEST(StrayPointsTest, SameFlagsForAnyThreadCountAndBadOptions) {
   std::vector<float> xyz = FallingDensityPlane();
   xyz.insert(xyz.end(), {0.1f, 0.1f, 0.08f});
@@ -73,6 +94,7 @@ TEST(StrayPointsTest, SameFlagsForAnyThreadCountAndBadOptions) {
   ASSERT_TRUE(spacing.ok());
   EXPECT_FALSE(StrayPoints(*index, *spacing, {.k = 0}).ok());
   EXPECT_FALSE(StrayPoints(*index, *spacing, {.link_spacings = 0}).ok());
+  EXPECT_FALSE(StrayPoints(*index, *spacing, {.max_spacing_ratio = 0.5}).ok());
   EXPECT_FALSE(StrayPoints(*index, std::span<const float>(*spacing).first(10), {}).ok());
   std::vector<uint8_t> flags[2];
   for (int threads : {1, 2}) {
