@@ -218,27 +218,22 @@ Status Run(StageContext& ctx) {
         agreement = index.status();
         return;
       }
-      Expected<std::vector<float>> spacing = LocalSpacing(*index, int(k));
-      if (!spacing.ok()) {
-        agreement = spacing.status();
+      Expected<SpacingAndStrays> local =
+          LocalSpacingAndStrays(*index, {.k = int(k), .max_spacing_ratio = stray_spacing_ratio,
+                                         .min_cluster_points = size_t(stray_cluster_points)});
+      if (!local.ok()) {
+        agreement = local.status();
         return;
       }
-      Expected<std::vector<uint8_t>> stray =
-          StrayPoints(*index, *spacing,
-                      {.k = int(k), .max_spacing_ratio = stray_spacing_ratio,
-                       .min_cluster_points = size_t(stray_cluster_points)});
-      if (!stray.ok()) {
-        agreement = stray.status();
-        return;
-      }
-      strays = std::move(*stray);
+      strays = std::move(local->stray);
+      const std::vector<float>& spacing = local->spacing;
       ScanAgreementOptions options;
       options.strays = strays;
       options.spacing_factor = spacing_factor;
       options.samples = static_cast<size_t>(samples);
       options.seed = static_cast<uint64_t>(seed);
-      agreement = MeasureScanAgreement(mesh, scan->cloud, *index, *spacing, options);
-      if (agreement.ok()) at_vertices = MeasureVertexScanAgreement(mesh, scan->cloud, *index, *spacing, options);
+      agreement = MeasureScanAgreement(mesh, scan->cloud, *index, spacing, options);
+      if (agreement.ok()) at_vertices = MeasureVertexScanAgreement(mesh, scan->cloud, *index, spacing, options);
     });
     if (!agreement.ok())
       return agreement.status().WithContext(std::string(kId) + ": input 'points' (" + scan->path + ")");

@@ -13,7 +13,6 @@
 #include "stages/builtin.h"
 #include "stages/geometry/io/frames.h"
 #include "stages/geometry/points/knn.h"
-#include "stages/geometry/points/spacing.h"
 #include "stages/geometry/points/strays.h"
 #include "stages/geometry/points/surfels.h"
 #include "stages/geometry/render/splat.h"
@@ -214,28 +213,23 @@ Status Run(StageContext& ctx) {
     PB_PHASE(ctx, "spacing");
     const std::string where = std::string(kId) + ": input 'points' (" + input.path + ")";
     Expected<KnnIndex> index = Status::Internal("not run");
-    Expected<std::vector<float>> local = Status::Internal("not run");
-    Expected<std::vector<uint8_t>> stray = Status::Internal("not run");
+    Expected<SpacingAndStrays> local = Status::Internal("not run");
     arena.execute([&] {
       index = KnnIndex::Build(input.cloud.positions);
       if (!index.ok()) return;
-      local = LocalSpacing(*index, options.k);
-      if (!local.ok()) return;
-      stray = StrayPoints(*index, *local,
-                          {.k = options.k,
-                           .max_spacing_ratio = options.stray_spacing_ratio,
-                           .min_cluster_points = size_t(options.stray_cluster_points)});
+      local = LocalSpacingAndStrays(*index, {.k = options.k,
+                                             .max_spacing_ratio = options.stray_spacing_ratio,
+                                             .min_cluster_points = size_t(options.stray_cluster_points)});
     });
     if (!index.ok()) return index.status().WithContext(where);
     if (!local.ok()) return local.status().WithContext(where);
-    if (!stray.ok()) return stray.status().WithContext(where);
     std::vector<uint32_t> keep;
-    for (size_t i = 0; i < stray->size(); ++i) {
-      if ((*stray)[i]) continue;
+    for (size_t i = 0; i < local->stray.size(); ++i) {
+      if (local->stray[i]) continue;
       keep.push_back(uint32_t(i));
-      spacing.push_back((*local)[i]);
+      spacing.push_back(local->spacing[i]);
     }
-    strays = stray->size() - keep.size();
+    strays = local->stray.size() - keep.size();
     if (strays > 0) kept = SelectPoints(input.cloud, keep);
     if (keep.empty())
       return Status::Invalid(where + ": every point is a stray (clusters of fewer than " +

@@ -70,7 +70,6 @@ Expected<std::vector<float>> LocalSpacing(const KnnIndex& index, int k) {
   if (index.size() <= size_t(k))
     return Status::Invalid("local spacing: needs more than k = " + std::to_string(k) +
                            " points, the cloud has " + std::to_string(index.size()));
-  const double scale = std::sqrt(M_PI / k);
   std::vector<float> spacing(index.size());
   // Walk the tree's slot order: neighbouring queries share cache lines.
   tbb::parallel_for(tbb::blocked_range<size_t>(0, index.size(), 1024), [&](const tbb::blocked_range<size_t>& range) {
@@ -78,7 +77,7 @@ Expected<std::vector<float>> LocalSpacing(const KnnIndex& index, int k) {
     for (size_t slot = range.begin(); slot < range.end(); ++slot) {
       const uint32_t i = index.PointAtSlot(slot);
       const int found = index.QueryPoint(i, k, neighbors);
-      spacing[i] = float(std::sqrt(neighbors[size_t(found - 1)].squared_distance_m2) * scale);
+      spacing[i] = SpacingOfKthNeighbour(neighbors[size_t(found - 1)].squared_distance_m2, k);
     }
   });
   return spacing;

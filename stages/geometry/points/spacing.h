@@ -9,6 +9,7 @@
 // count the median is the mean of the two middle values.
 #pragma once
 
+#include <cmath>
 #include <cstddef>
 #include <span>
 #include <vector>
@@ -45,6 +46,12 @@ Expected<std::vector<float>> LocalSpacing(const PointCloud& cloud, int k);
 // The same for the points of `index` (KnnIndex::Build over the cloud's
 // positions), for a caller that keeps the index for its own queries.
 Expected<std::vector<float>> LocalSpacing(const KnnIndex& index, int k);
+// One point's local spacing from the squared distance to its k-th nearest
+// other point: the formula of LocalSpacing, for a caller that makes the k-NN
+// queries itself (strays.h).
+inline float SpacingOfKthNeighbour(double squared_distance_m2, int k) {
+  return float(std::sqrt(squared_distance_m2) * std::sqrt(M_PI / k));
+}
 
 // The median of local spacings (the upper middle value of an even count; 0
 // for none): the one figure the stages that count in local spacings report.

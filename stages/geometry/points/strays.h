@@ -38,6 +38,7 @@
 
 #include "base/status.h"
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/spacing.h"
 
 namespace pb {
 
@@ -48,11 +49,16 @@ struct StrayOptions {
   size_t min_cluster_points = 50;  // 0: no point is a stray
 };
 
-// `index`: KnnIndex::Build over the cloud's positions; `spacing`: one local
-// spacing per point of the index (LocalSpacing). Returns one flag per point,
-// 1 for a stray. Status::Invalid for options out of range or a spacing of
-// another length.
-Expected<std::vector<uint8_t>> StrayPoints(const KnnIndex& index, std::span<const float> spacing,
-                                           const StrayOptions& options);
+struct SpacingAndStrays {
+  std::vector<float> spacing;  // per point: LocalSpacing(index, options.k), the same values
+  std::vector<uint8_t> stray;  // per point: 1 for a stray, else 0
+};
+
+// The local spacing and the strays of the points of `index` (KnnIndex::Build
+// over the cloud's positions), from one k-NN query per point: a caller that
+// needs both (render.splats, metrics.geometry) does not query twice.
+// Status::Invalid for options out of range or at most k points (as
+// LocalSpacing).
+Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const StrayOptions& options);
 
 }  // namespace pb

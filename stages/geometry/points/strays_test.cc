@@ -26,10 +26,12 @@ Flags Strays(const std::vector<float>& xyz, const StrayOptions& options = {}) {
   EXPECT_TRUE(index.ok());
   Expected<std::vector<float>> spacing = LocalSpacing(*index, options.k);
   EXPECT_TRUE(spacing.ok());
-  Expected<std::vector<uint8_t>> stray = StrayPoints(*index, *spacing, options);
+  Expected<SpacingAndStrays> stray = LocalSpacingAndStrays(*index, options);
   EXPECT_TRUE(stray.ok()) << stray.status().message();
+  // The spacing of the same queries is LocalSpacing's, value for value.
+  EXPECT_EQ(stray->spacing, *spacing);
   Flags flags;
-  flags.stray = *stray;
+  flags.stray = stray->stray;
   for (uint8_t s : flags.stray) flags.count += s;
   return flags;
 }
@@ -90,12 +92,13 @@ TEST(StrayPointsTest, SameFlagsForAnyThreadCountAndBadOptions) {
   xyz.insert(xyz.end(), {0.1f, 0.1f, 0.08f});
   Expected<KnnIndex> index = KnnIndex::Build(xyz);
   ASSERT_TRUE(index.ok());
-  Expected<std::vector<float>> spacing = LocalSpacing(*index, 8);
-  ASSERT_TRUE(spacing.ok());
-  EXPECT_FALSE(StrayPoints(*index, *spacing, {.k = 0}).ok());
-  EXPECT_FALSE(StrayPoints(*index, *spacing, {.link_spacings = 0}).ok());
-  EXPECT_FALSE(StrayPoints(*index, *spacing, {.max_spacing_ratio = 0.5}).ok());
-  EXPECT_FALSE(StrayPoints(*index, std::span<const float>(*spacing).first(10), {}).ok());
+  EXPECT_FALSE(LocalSpacingAndStrays(*index, {.k = 0}).ok());
+  EXPECT_FALSE(LocalSpacingAndStrays(*index, {.link_spacings = 0}).ok());
+  EXPECT_FALSE(LocalSpacingAndStrays(*index, {.max_spacing_ratio = 0.5}).ok());
+  // At most k points: no k-th neighbour, as LocalSpacing says.
+  Expected<KnnIndex> few = KnnIndex::Build(std::span<const float>(xyz).first(3 * 8));
+  ASSERT_TRUE(few.ok());
+  EXPECT_FALSE(LocalSpacingAndStrays(*few, {}).ok());
   std::vector<uint8_t> flags[2];
   for (int threads : {1, 2}) {
     tbb::task_arena arena(threads);
