@@ -45,6 +45,14 @@ struct SplatCamera {
   V3 eye{}, right{}, up{}, forward{};
   int samples = 0;
   double half = 0, focal = 0;
+  // The view depth of `rel` (a position relative to the eye) and its sample
+  // coordinates (meaningless when the depth is below the near plane).
+  double Project(const V3& rel, double& x, double& y) const {
+    const double z = Dot(rel, forward);
+    x = half + focal * Dot(rel, right) / z;
+    y = half - focal * Dot(rel, up) / z;
+    return z;
+  }
 };
 
 Expected<SplatCamera> MakeCamera(const RenderCamera& camera, const std::array<double, 3>& origin,
@@ -126,12 +134,13 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
     for (size_t i = range.begin(); i < range.end(); ++i) {
       const float* p = &cloud.positions[i * 3];
       const V3 rel = Sub({double(p[0]), double(p[1]), double(p[2])}, cam.eye);
-      const double z = Dot(rel, cam.forward);
+      double x, y;
+      const double z = cam.Project(rel, x, y);
       const double r_m = radius_m[i];
       ScreenSplat& s = splats[i];
       if (!(z >= kNearPlaneM) || !(r_m > 0) || !std::isfinite(r_m)) continue;
-      s.x = cam.half + cam.focal * Dot(rel, cam.right) / z;
-      s.y = cam.half - cam.focal * Dot(rel, cam.up) / z;
+      s.x = x;
+      s.y = y;
       s.radius = std::min(cam.focal * r_m / z, max_radius);
       s.depth = float(z);
       double lo_x, hi_x, lo_y, hi_y;
@@ -164,10 +173,9 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
           for (const double sb : {-1.0, 1.0}) {
             V3 corner;
             for (int c = 0; c < 3; ++c) corner[c] = rel[c] + d.radius_m * (sa * a[c] + sb * b[c]);
-            const double cz = Dot(corner, cam.forward);
+            double cx, cy;
+            const double cz = cam.Project(corner, cx, cy);
             if (!(cz >= kNearPlaneM)) behind = true;
-            const double cx = cam.half + cam.focal * Dot(corner, cam.right) / cz;
-            const double cy = cam.half - cam.focal * Dot(corner, cam.up) / cz;
             lo_x = std::min(lo_x, cx), hi_x = std::max(hi_x, cx);
             lo_y = std::min(lo_y, cy), hi_y = std::max(hi_y, cy);
           }
@@ -376,11 +384,8 @@ Expected<Image> RenderSplats(const PointCloud& cloud, const SplatShapes& shapes,
       double x = splats[i].x, y = splats[i].y, depth = splats[i].depth;
       if (!shapes.sample_at.empty()) {
         const float* p = &shapes.sample_at[i * 3];
-        const V3 rel = Sub({double(p[0]), double(p[1]), double(p[2])}, cam.eye);
-        depth = Dot(rel, cam.forward);
+        depth = cam.Project(Sub({double(p[0]), double(p[1]), double(p[2])}, cam.eye), x, y);
         if (!(depth >= kNearPlaneM)) continue;
-        x = cam.half + cam.focal * Dot(rel, cam.right) / depth;
-        y = cam.half - cam.focal * Dot(rel, cam.up) / depth;
       }
       if (!(x >= 0 && y >= 0 && x < cam.samples && y < cam.samples)) continue;
       const double fx = x - std::floor(x / ss) * ss, fy = y - std::floor(y / ss) * ss;
