@@ -61,8 +61,14 @@ constexpr const char* kSchema = R"({
     "fill_hole_output_edges": {
       "type": "number",
       "minimum": 0,
-      "default": 6,
-      "description": "First fill the holes (boundary loops) whose perimeter is at most this many output mean edge lengths, without new vertices (CGAL's hole triangulation, as mesh.clean): the output cannot draw such a hole round, and held by the border planes it would end as a hole of a few low-poly triangles that a coarser surface of the same budget (a low-depth Poisson mesh) closes. 6 edges is a circle of one output edge's radius. 0 fills nothing."
+      "default": 24,
+      "description": "First fill the holes (boundary loops) whose perimeter is at most this many output mean edge lengths and whose patch stays within `fill_hole_reach` of the hole's rim, without new vertices (CGAL's hole triangulation, as mesh.clean): the output cannot draw such a hole, and held by the border planes it would end as a hole of a few low-poly triangles that a coarser surface of the same budget (a low-depth Poisson mesh) closes. The perimeter bounds the work (the patch is a triangulation of the loop's vertices); the reach decides. 0 fills nothing."
+    },
+    "fill_hole_reach": {
+      "type": "number",
+      "minimum": 0,
+      "default": 1,
+      "description": "A hole within `fill_hole_output_edges` is filled when every point of its patch lies within this many output mean edge lengths of the hole's rim (a round hole of perimeter 2 pi, a slit two wide of any length): metrics.geometry counts no invented area within one output edge of the scan. 0: every hole within the perimeter is filled (version 4, whose default perimeter was 6)."
     }
   },
   "oneOf": [{"required": ["target_faces"]}, {"required": ["ratio"]}]
@@ -82,6 +88,7 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.min_normal_dot, NumberParam(ctx, kId, "min_normal_dot"));
   PB_ASSIGN_OR_RETURN(options.fill_hole_output_edges,
                       NumberParam(ctx, kId, "fill_hole_output_edges"));
+  PB_ASSIGN_OR_RETURN(options.fill_hole_reach, NumberParam(ctx, kId, "fill_hole_reach"));
   double ratio = 0;
   int64_t target = 0;
   if (has_ratio) {
@@ -118,6 +125,8 @@ Status Run(StageContext& ctx) {
   ctx.counter("faces_out", static_cast<double>(report.faces_out));
   ctx.counter("holes_filled", static_cast<double>(report.holes_filled));
   ctx.counter("hole_faces", static_cast<double>(report.hole_faces));
+  ctx.counter("holes_too_wide", static_cast<double>(report.holes_too_wide));
+  ctx.counter("outlines_kept", static_cast<double>(report.outlines_kept));
   PB_RETURN_IF_ERROR(WriteOutputMesh(
       ctx, output,
       InputMeshMetaWith(ctx, output,
@@ -128,7 +137,9 @@ Status Run(StageContext& ctx) {
                            {"rejected_flip", report.rejected_flip},
                            {"rejected_degenerate", report.rejected_degenerate},
                            {"holes_filled", report.holes_filled},
-                           {"hole_faces", report.hole_faces}}}})));
+                           {"hole_faces", report.hole_faces},
+                           {"holes_too_wide", report.holes_too_wide},
+                           {"outlines_kept", report.outlines_kept}}}})));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -138,8 +149,8 @@ Status Run(StageContext& ctx) {
 StageType DecimateStage() {
   StageType type;
   type.id = kId;
-  type.version = 4;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it;
-                    // 4: fill_hole_output_edges
+  type.version = 5;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it;
+                    // 4: fill_hole_output_edges; 5: fill_hole_reach, perimeter 6 -> 24
   type.summary = "Quadric edge-collapse decimation to a face budget, keeping the mesh manifold";
   type.doc =
       "Collapses edges in order of quadric error (Garland & Heckbert 1997) until the face count "
@@ -151,7 +162,10 @@ StageType DecimateStage() {
       "resolution (`boundary_tolerance`). Colors, normals, uvs and tangents are "
       "interpolated along the collapsed edge. Deterministic: equal inputs give equal outputs. "
       "The budget can be missed when every remaining collapse is rejected.\n\n"
-      "Counters: `faces_in`, `faces_out`.";
+      "Counters: `faces_in`, `faces_out`, `holes_filled`, `hole_faces`, `holes_too_wide` "
+      "(`fill_hole_output_edges`, `fill_hole_reach`), `outlines_kept` (loops not filled because "
+      "the patch would be over a quarter of its connected surface's area: the outline of an "
+      "open sheet, which it would close into a shell).";
   type.params_schema = kSchema;
   type.inputs = {
       {"mesh", "mesh", "The mesh to decimate (mesh.ply; a synth truth works too).", false}};

@@ -57,11 +57,12 @@ class MeshStagesTest : public StageTest {
 TEST_F(MeshStagesTest, DecimateIsWellFormed) {
   const StageType* type = registry_.Find("mesh.decimate");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 4);
+  EXPECT_EQ(type->version, 5);
   const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["type"], "object");
   EXPECT_EQ(schema["properties"]["target_faces"]["type"], "integer");
-  EXPECT_EQ(schema["properties"]["fill_hole_output_edges"]["default"], 6);
+  EXPECT_EQ(schema["properties"]["fill_hole_output_edges"]["default"], 24);
+  EXPECT_EQ(schema["properties"]["fill_hole_reach"]["default"], 1);
   EXPECT_EQ(schema["properties"]["boundary_weight"]["default"], 1000);
   EXPECT_EQ(schema["properties"]["boundary_tolerance"]["default"], 0.2);
   EXPECT_EQ(schema["properties"]["boundary_erosion"]["default"], 0.5);

@@ -181,10 +181,15 @@ class Decimator {
     shape.positions = mesh_.positions;
     shape.indices = faces_;
     HoleFillOptions fill;
-    fill.max_perimeter_m = options_.fill_hole_output_edges * OutputEdge();
+    const double output_edge = OutputEdge();
+    fill.max_perimeter_m = options_.fill_hole_output_edges * output_edge;
+    fill.max_reach_m = options_.fill_hole_reach * output_edge;
+    fill.max_component_fraction = options_.fill_hole_max_component_fraction;
     HoleFillReport filled;
     PB_RETURN_IF_ERROR(FillSmallHoles(shape, fill, &filled));
     report_.holes_filled = filled.holes_filled;
+    report_.holes_too_wide = filled.holes_too_wide;
+    report_.outlines_kept = filled.outlines_kept;
     report_.hole_faces = filled.faces_added;
     faces_ = std::move(shape.indices);
     return Status::Ok();
@@ -844,6 +849,14 @@ Expected<Mesh> DecimateMesh(const Mesh& mesh, const DecimateOptions& options,
   if (!(options.fill_hole_output_edges >= 0) || !std::isfinite(options.fill_hole_output_edges)) {
     return Status::Invalid("decimate: fill_hole_output_edges must be finite and >= 0, got " +
                            std::to_string(options.fill_hole_output_edges));
+  }
+  if (!(options.fill_hole_max_component_fraction >= 0) ||
+      !std::isfinite(options.fill_hole_max_component_fraction)) {
+    return Status::Invalid("decimate: fill_hole_max_component_fraction must be finite and >= 0");
+  }
+  if (!(options.fill_hole_reach >= 0) || !std::isfinite(options.fill_hole_reach)) {
+    return Status::Invalid("decimate: fill_hole_reach must be finite and >= 0, got " +
+                           std::to_string(options.fill_hole_reach));
   }
   DecimateReport local;
   Decimator decimator(mesh, options, report ? report : &local);

@@ -89,14 +89,23 @@ struct DecimateOptions {
   // below this with its normal before the collapse or in the input.
   double min_normal_dot = 0.2;
   // Before collapsing, fill the holes (boundary loops) whose perimeter is
-  // at most this many output mean edge lengths (FillSmallHoles, holes.h; no
-  // new vertices). The output cannot draw such a hole round: held by the
-  // boundary planes it ends as a hole of a few low-poly triangles, which a
-  // coarser surface of the same budget (a low-depth Poisson mesh) would
-  // have closed. A loop of perimeter 2 pi times the output edge is a circle
-  // of that radius, so a patch of 6 edges reaches about one output edge
-  // from its rim. 0 fills nothing.
+  // at most `fill_hole_output_edges` output mean edge lengths and whose
+  // patch (FillSmallHoles, holes.h; no new vertices) stays within
+  // `fill_hole_reach` output edges of the hole's rim. The output cannot
+  // draw such a hole: held by the boundary planes it ends as a hole of a
+  // few low-poly triangles, which a coarser surface of the same budget (a
+  // low-depth Poisson mesh) would have closed. The reach, not the
+  // perimeter, says whether the output can draw a hole: a round hole of
+  // reach 1 has a perimeter of 2 pi output edges, a slit of the same reach
+  // any length (and a patch within one output edge of the scan is not
+  // invented surface by metrics.geometry's measure). 0 fills nothing; a
+  // reach of 0 fills every hole up to the perimeter (version 4).
   double fill_hole_output_edges = 0;
+  double fill_hole_reach = 0;
+  // A patch larger than this fraction of its connected surface's area is
+  // not filled: that loop is the outline of an open sheet (a thin fragment
+  // seen from one side), which a patch would close into a shell.
+  double fill_hole_max_component_fraction = 0.25;
   // Called with the fraction of the work done, in [0,1], every few thousand
   // collapses.
   std::function<void(double fraction)> progress;
@@ -113,6 +122,8 @@ struct DecimateReport {
   uint64_t rejected_degenerate = 0;  // a face would get (near) zero area
   uint64_t holes_filled = 0;         // fill_hole_output_edges
   uint64_t hole_faces = 0;           // faces the filled holes added
+  uint64_t holes_too_wide = 0;       // within the perimeter, past the reach
+  uint64_t outlines_kept = 0;        // open sheets' outlines, not filled
 };
 
 // Decimates `mesh` to about `options.target_faces` triangles. Status::Invalid

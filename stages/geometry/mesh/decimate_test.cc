@@ -436,6 +436,40 @@ TEST(MeshDecimate, HolesTheOutputCannotDrawAreFilledFirst) {
   EXPECT_GT(in.boundary_edges, 0u);
 }
 
+TEST(MeshDecimate, TheReachNotThePerimeterDecidesWhichHolesAreFilled) {
+  // A slit 0.08 m wide and about 0.78 m long (perimeter about 1.6 m, 16
+  // output edges of about 0.1 m, reaching 0.04 m from its rim) and a round
+  // hole of radius 0.15 (perimeter 0.94 m, 9 output edges, reaching 0.15 m).
+  std::vector<std::array<double, 3>> holes = {{0.6, 0.7, 0.15}};
+  for (double x = 0.15; x <= 0.85; x += 0.01) holes.push_back({x, 0.3, 0.04});
+  const Mesh holed = GridWithHoles(80, holes);
+  DecimateOptions options;
+  options.target_faces = 200;
+  DecimateReport by_perimeter, by_reach;
+  options.fill_hole_output_edges = 6;  // version 4: neither is below 6 edges
+  const auto v4 = DecimateMesh(holed, options, &by_perimeter);
+  options.fill_hole_output_edges = 24;
+  options.fill_hole_reach = 1;
+  const auto v5 = DecimateMesh(holed, options, &by_reach);
+  ASSERT_TRUE(v4.ok() && v5.ok());
+  EXPECT_EQ(by_perimeter.holes_filled, 0u);
+  EXPECT_EQ(BoundaryLoops(*v4).size(), 3u);
+  EXPECT_EQ(by_reach.holes_filled, 1u);     // the slit
+  EXPECT_EQ(by_reach.holes_too_wide, 1u);   // the round hole
+  EXPECT_EQ(BoundaryLoops(*v5).size(), 2u);  // the square, the round hole
+  const Topology out = Check(*v5);
+  EXPECT_EQ(out.nonmanifold_edges, 0u);
+  EXPECT_EQ(out.nonmanifold_vertices, 0u);
+  EXPECT_NEAR(Area(*v5), 1 - M_PI * 0.15 * 0.15, 0.02);
+  // Within the reach but above the perimeter: kept.
+  options.fill_hole_output_edges = 12;
+  DecimateReport short_perimeter;
+  ASSERT_TRUE(DecimateMesh(holed, options, &short_perimeter).ok());
+  EXPECT_EQ(short_perimeter.holes_filled, 0u);
+  options.fill_hole_reach = -1;
+  EXPECT_FALSE(DecimateMesh(holed, options, nullptr).ok());
+}
+
 TEST(MeshDecimate, TargetAboveInputCopiesMesh) {
   const Mesh grid = Grid(4);
   DecimateReport report;

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
+#include <span>
 #include <unordered_map>
 #include <unordered_set>
 
@@ -22,6 +24,89 @@ double EdgeLength(const Mesh& mesh, uint32_t a, uint32_t b) {
     sum += d * d;
   }
   return std::sqrt(sum);
+}
+
+// The largest distance from a point of the patch's triangles to the loop's
+// edges, sampled on each triangle's barycentric grid of step 1/8 (the
+// corners are on the loop); stops early once above `limit`.
+double PatchReach(std::span<const double> points, const std::vector<std::array<uint32_t, 3>>& patch,
+                  double limit) {
+  constexpr int kSteps = 8;
+  const size_t n = points.size() / 3;
+  const auto point = [&](size_t i) {
+    return std::array<double, 3>{points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+  };
+  double reach = 0;
+  for (const auto& t : patch) {
+    const std::array<double, 3> a = point(t[0]), b = point(t[1]), c = point(t[2]);
+    for (int i = 0; i <= kSteps; ++i) {
+      for (int j = 0; i + j <= kSteps; ++j) {
+        const int k = kSteps - i - j;
+        if (i == kSteps || j == kSteps || k == kSteps) continue;
+        std::array<double, 3> q;
+        for (int d = 0; d < 3; ++d) q[d] = (i * a[d] + j * b[d] + k * c[d]) / kSteps;
+        double nearest = std::numeric_limits<double>::infinity();
+        for (size_t e = 0; e < n && nearest > reach; ++e) {
+          const std::array<double, 3> p0 = point(e), p1 = point((e + 1) % n);
+          double along = 0, length2 = 0;
+          for (int d = 0; d < 3; ++d) {
+            along += (q[d] - p0[d]) * (p1[d] - p0[d]);
+            length2 += (p1[d] - p0[d]) * (p1[d] - p0[d]);
+          }
+          const double s = length2 > 0 ? std::clamp(along / length2, 0.0, 1.0) : 0.0;
+          double distance2 = 0;
+          for (int d = 0; d < 3; ++d) {
+            const double x = q[d] - (p0[d] + s * (p1[d] - p0[d]));
+            distance2 += x * x;
+          }
+          nearest = std::min(nearest, std::sqrt(distance2));
+        }
+        reach = std::max(reach, nearest);
+        if (reach > limit) return reach;
+      }
+    }
+  }
+  return reach;
+}
+
+double TriangleArea(std::span<const double> points, const std::array<uint32_t, 3>& t) {
+  double u[3], v[3];
+  for (int d = 0; d < 3; ++d) {
+    u[d] = points[3 * t[1] + d] - points[3 * t[0] + d];
+    v[d] = points[3 * t[2] + d] - points[3 * t[0] + d];
+  }
+  const double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
+               z = u[0] * v[1] - u[1] * v[0];
+  return 0.5 * std::sqrt(x * x + y * y + z * z);
+}
+
+// Per vertex, the area of the faces connected to it (through shared
+// vertices); 0 for a vertex of no face.
+std::vector<double> ComponentAreaOfVertices(const Mesh& mesh) {
+  std::vector<uint32_t> parent(mesh.vertex_count());
+  for (uint32_t v = 0; v < parent.size(); ++v) parent[v] = v;
+  const auto find = [&](uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    for (int k = 1; k < 3; ++k) {
+      const uint32_t a = find(t[0]), b = find(t[k]);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    }
+  }
+  std::vector<double> area(mesh.vertex_count(), 0);
+  std::vector<double> corners(9);
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    for (int k = 0; k < 3; ++k) {
+      for (int d = 0; d < 3; ++d) corners[3 * k + d] = mesh.positions[3 * size_t{t[k]} + d];
+    }
+    area[find(t[0])] += TriangleArea(corners, {0, 1, 2});
+  }
+  for (uint32_t v = 0; v < area.size(); ++v) area[v] = area[find(v)];
+  return area;
 }
 
 }  // namespace
@@ -82,8 +167,11 @@ std::vector<std::vector<uint32_t>> BoundaryLoops(const Mesh& mesh) {
 
 Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport* report) {
   PB_RETURN_IF_ERROR(Validate(mesh));
-  if (options.max_edges < 0 || !(options.max_perimeter_m >= 0)) {
-    return Status::Invalid("hole filling: need max_edges >= 0 and max_perimeter_m >= 0");
+  if (options.max_edges < 0 || !(options.max_perimeter_m >= 0) || !(options.max_reach_m >= 0) ||
+      !(options.max_component_fraction >= 0)) {
+    return Status::Invalid(
+        "hole filling: need max_edges, max_perimeter_m, max_reach_m and max_component_fraction "
+        ">= 0");
   }
   HoleFillReport local;
   HoleFillReport& r = report ? *report : local;
@@ -124,6 +212,9 @@ Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport
       opposite.emplace((static_cast<uint64_t>(a) << 32) | b, t[(k + 2) % 3]);
     }
   }
+  const std::vector<double> component_area =  // before any patch
+      options.max_component_fraction > 0 && !small_loops.empty() ? ComponentAreaOfVertices(mesh)
+                                                                 : std::vector<double>();
   for (const std::vector<uint32_t>* small_loop : small_loops) {
     const std::vector<uint32_t>& loop = *small_loop;
     const size_t n = loop.size();
@@ -151,6 +242,18 @@ Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport
     if (!valid) {
       ++r.holes_rejected;
       continue;
+    }
+    if (options.max_reach_m > 0 && PatchReach(points, patch, options.max_reach_m) > options.max_reach_m) {
+      ++r.holes_too_wide;
+      continue;
+    }
+    if (options.max_component_fraction > 0) {
+      double patch_area = 0;
+      for (const auto& t : patch) patch_area += TriangleArea(points, t);
+      if (patch_area > options.max_component_fraction * component_area[loop[0]]) {
+        ++r.outlines_kept;
+        continue;
+      }
     }
     // The hole runs against the faces around it and the patch runs the
     // hole forward, so the patch is wound like the faces around it.

@@ -34,6 +34,19 @@ struct HoleFillOptions {
   // is at most max_perimeter_m (either test; 0 disables it).
   int64_t max_edges = 0;
   double max_perimeter_m = 0;
+  // When > 0, a loop small enough by the tests above is filled only if its
+  // patch stays within this distance of the loop: every point of every
+  // patch triangle (sampled on a barycentric grid of step 1/8) is at most
+  // this far from the nearest loop edge. A round hole of perimeter P
+  // reaches P / (2 pi) from its rim; a slit reaches half its width however
+  // long it is.
+  double max_reach_m = 0;
+  // When > 0, a patch is kept only if its area is at most this fraction of
+  // the area of the connected faces around the loop. The loop of an open
+  // sheet (a thin fragment scanned from one side) is its outline, not a
+  // hole: its patch, about as large as the sheet, would close it into a
+  // shell.
+  double max_component_fraction = 0;
 };
 
 struct HoleFillReport {
@@ -41,6 +54,8 @@ struct HoleFillReport {
   uint64_t holes_filled = 0;
   uint64_t faces_added = 0;
   uint64_t holes_rejected = 0;  // small enough, but no valid patch
+  uint64_t holes_too_wide = 0;  // small enough, but the patch reaches past max_reach_m
+  uint64_t outlines_kept = 0;   // small enough, but an outline (max_component_fraction)
 };
 
 // Appends the patches of the small holes' loops to `mesh` (existing faces

@@ -80,6 +80,56 @@ TEST(HolesTest, FillsSmallHolesAndKeepsLargeOnesAndTheBorder) {
   EXPECT_TRUE(CheckManifold(mesh).ok());
 }
 
+TEST(HolesTest, TheReachKeepsWideHolesOpenAndFillsLongNarrowOnes) {
+  // A slit of 1 x 8 quads (18 edges, 1.8 m; its patch within 0.05 m of the
+  // rim) and a hole of 3 x 3 quads (12 edges, 1.2 m; its middle 0.15 m from
+  // the rim), both within the perimeter.
+  Mesh mesh = GridWithHoles(10, [](int i, int j) {
+    return (j == 2 && i >= 1 && i <= 8) || (i >= 5 && i <= 7 && j >= 6 && j <= 8);
+  });
+  HoleFillReport report;
+  ASSERT_TRUE(
+      FillSmallHoles(mesh, {.max_edges = 0, .max_perimeter_m = 2.0, .max_reach_m = 0.1}, &report)
+          .ok());
+  EXPECT_EQ(report.loops, 3u);
+  EXPECT_EQ(report.holes_filled, 1u);
+  EXPECT_EQ(report.holes_too_wide, 1u);
+  EXPECT_EQ(CountBoundaryEdges(mesh), 40u + 12u);  // the border and the square hole
+  EXPECT_EQ(Winding(mesh), 1);
+  EXPECT_TRUE(CheckManifold(mesh).ok());
+  // A reach just below the slit's half width keeps it open too.
+  Mesh again = GridWithHoles(10, [](int i, int j) { return j == 2 && i >= 1 && i <= 8; });
+  ASSERT_TRUE(
+      FillSmallHoles(again, {.max_edges = 0, .max_perimeter_m = 2.0, .max_reach_m = 0.045}, &report)
+          .ok());
+  EXPECT_EQ(report.holes_filled, 0u);
+  EXPECT_EQ(report.holes_too_wide, 1u);
+}
+
+TEST(HolesTest, TheOutlineOfAnOpenSheetIsNoHole) {
+  // A ridge of 6 x 2 quads alone, its middle row raised 0.05 m: its outline
+  // (16 edges, 1.6 m, within 0.1 m of itself) passes the size and reach
+  // tests, but its patch would span the ridge underneath, about as large as
+  // the sheet, closing it into a shell.
+  Mesh strip = GridWithHoles(10, [](int i, int j) { return !(j < 2 && i < 6); });
+  for (int i = 0; i <= 6; ++i) strip.positions[3 * (11 + i) + 2] = 0.05f;
+  const HoleFillOptions options = {
+      .max_edges = 0, .max_perimeter_m = 2.0, .max_reach_m = 0.15, .max_component_fraction = 0.25};
+  Mesh kept = strip;
+  HoleFillReport report;
+  ASSERT_TRUE(FillSmallHoles(kept, options, &report).ok());
+  EXPECT_EQ(report.loops, 1u);
+  EXPECT_EQ(report.holes_filled, 0u);
+  EXPECT_EQ(report.outlines_kept, 1u);
+  EXPECT_EQ(kept.indices, strip.indices);
+  Mesh closed = strip;
+  HoleFillOptions no_outline_test = options;
+  no_outline_test.max_component_fraction = 0;
+  ASSERT_TRUE(FillSmallHoles(closed, no_outline_test, &report).ok());
+  EXPECT_EQ(report.holes_filled, 1u);
+  EXPECT_EQ(CountBoundaryEdges(closed), 0u);
+}
+
 TEST(HolesTest, CleanFillsHolesBeforeDecimationCanGrowThem) {
   Mesh mesh = GridWithHoles(20, [](int i, int j) { return (i == 4 && j == 4) || (i == 12 && j == 9); });
   CleanOptions options;
@@ -103,6 +153,7 @@ TEST(HolesTest, RejectsNegativeLimits) {
   Mesh mesh = GridWithHoles(2, [](int, int) { return false; });
   const Status status = FillSmallHoles(mesh, {.max_edges = -1, .max_perimeter_m = 0}, nullptr);
   EXPECT_FALSE(status.ok());
+  EXPECT_FALSE(FillSmallHoles(mesh, {.max_edges = 1, .max_perimeter_m = 0, .max_reach_m = -1}, nullptr).ok());
 }
 
 }  // namespace
