@@ -61,14 +61,14 @@ constexpr const char* kSchema = R"({
     "fill_hole_output_edges": {
       "type": "number",
       "minimum": 0,
-      "default": 24,
-      "description": "First fill the holes (boundary loops) whose perimeter is at most this many output mean edge lengths and whose patch stays within `fill_hole_reach` of the hole's rim, without new vertices (CGAL's hole triangulation, as mesh.clean): the output cannot draw such a hole, and held by the border planes it would end as a hole of a few low-poly triangles that a coarser surface of the same budget (a low-depth Poisson mesh) closes. The perimeter bounds the work (the patch is a triangulation of the loop's vertices); the reach decides. 0 fills nothing."
+      "default": 8,
+      "description": "First fill the holes (boundary loops) whose perimeter is at most this many output mean edge lengths and whose patch stays within `fill_hole_reach` of the hole's rim, without new vertices (CGAL's hole triangulation, as mesh.clean): the output cannot draw such a hole, and held by the border planes it would end as a hole of a few low-poly triangles that a coarser surface of the same budget (a low-depth Poisson mesh) closes. A longer hole, even a narrow one (a window slit, a gap the scanner saw through), has enough border edges to be drawn, and stays. 0 fills nothing."
     },
     "fill_hole_reach": {
       "type": "number",
       "minimum": 0,
       "default": 1,
-      "description": "A hole within `fill_hole_output_edges` is filled when every point of its patch lies within this many output mean edge lengths of the hole's rim (a round hole of perimeter 2 pi, a slit two wide of any length): metrics.geometry counts no invented area within one output edge of the scan. 0: every hole within the perimeter is filled (version 4, whose default perimeter was 6)."
+      "description": "A hole within `fill_hole_output_edges` is filled when every point of its patch lies within this many output mean edge lengths of the hole's rim (a round hole of perimeter 2 pi; an oval of perimeter 8 less than two edges wide): metrics.geometry counts no invented area within one output edge of the scan. 0: every hole within the perimeter is filled (version 4, whose default perimeter was 6)."
     }
   },
   "oneOf": [{"required": ["target_faces"]}, {"required": ["ratio"]}]
@@ -150,7 +150,7 @@ StageType DecimateStage() {
   StageType type;
   type.id = kId;
   type.version = 5;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it;
-                    // 4: fill_hole_output_edges; 5: fill_hole_reach, perimeter 6 -> 24
+                    // 4: fill_hole_output_edges; 5: fill_hole_reach, perimeter 6 -> 8
   type.summary = "Quadric edge-collapse decimation to a face budget, keeping the mesh manifold";
   type.doc =
       "Collapses edges in order of quadric error (Garland & Heckbert 1997) until the face count "

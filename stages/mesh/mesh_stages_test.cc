@@ -61,7 +61,7 @@ TEST_F(MeshStagesTest, DecimateIsWellFormed) {
   const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["type"], "object");
   EXPECT_EQ(schema["properties"]["target_faces"]["type"], "integer");
-  EXPECT_EQ(schema["properties"]["fill_hole_output_edges"]["default"], 24);
+  EXPECT_EQ(schema["properties"]["fill_hole_output_edges"]["default"], 8);
   EXPECT_EQ(schema["properties"]["fill_hole_reach"]["default"], 1);
   EXPECT_EQ(schema["properties"]["boundary_weight"]["default"], 1000);
   EXPECT_EQ(schema["properties"]["boundary_tolerance"]["default"], 0.2);

@@ -94,12 +94,13 @@ struct DecimateOptions {
   // `fill_hole_reach` output edges of the hole's rim. The output cannot
   // draw such a hole: held by the boundary planes it ends as a hole of a
   // few low-poly triangles, which a coarser surface of the same budget (a
-  // low-depth Poisson mesh) would have closed. The reach, not the
-  // perimeter, says whether the output can draw a hole: a round hole of
-  // reach 1 has a perimeter of 2 pi output edges, a slit of the same reach
-  // any length (and a patch within one output edge of the scan is not
-  // invented surface by metrics.geometry's measure). 0 fills nothing; a
-  // reach of 0 fills every hole up to the perimeter (version 4).
+  // low-depth Poisson mesh) would have closed. A longer hole has border
+  // edges enough to be drawn, however narrow (a window slit stays open).
+  // The reach keeps a patch within one output edge of the rim, where
+  // metrics.geometry counts no invented area: a round hole of reach 1 has
+  // a perimeter of 2 pi output edges, an oval of perimeter 8 is filled when
+  // it is less than about two edges wide. 0 fills nothing; a reach of 0
+  // fills every hole up to the perimeter (version 4, with a perimeter of 6).
   double fill_hole_output_edges = 0;
   double fill_hole_reach = 0;
   // A patch larger than this fraction of its connected surface's area is
