@@ -243,7 +243,8 @@ Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport
       ++r.holes_rejected;
       continue;
     }
-    if (options.max_reach_m > 0 && PatchReach(points, patch, options.max_reach_m) > options.max_reach_m) {
+    if (options.max_reach_m > 0 &&
+        PatchReach(points, patch, options.max_reach_m) > options.max_reach_m) {
       ++r.holes_too_wide;
       continue;
     }

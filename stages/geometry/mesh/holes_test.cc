@@ -153,7 +153,8 @@ TEST(HolesTest, RejectsNegativeLimits) {
   Mesh mesh = GridWithHoles(2, [](int, int) { return false; });
   const Status status = FillSmallHoles(mesh, {.max_edges = -1, .max_perimeter_m = 0}, nullptr);
   EXPECT_FALSE(status.ok());
-  EXPECT_FALSE(FillSmallHoles(mesh, {.max_edges = 1, .max_perimeter_m = 0, .max_reach_m = -1}, nullptr).ok());
+  EXPECT_FALSE(
+      FillSmallHoles(mesh, {.max_edges = 1, .max_perimeter_m = 0, .max_reach_m = -1}, nullptr).ok());
 }
 
 }  // namespace
