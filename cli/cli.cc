@@ -229,7 +229,8 @@ std::string DemoCampaignFile() {
 // `campaign --dry-run` and `campaign explain`: each run's plan, in order. A
 // key an earlier run computes counts as "reuse" in the later ones (the runs
 // share the cache), so the totals say what the campaign would really run.
-int PrintCampaignPlan(const Campaign& campaign, Cache& cache, Registry& registry, bool explain) {
+int PrintCampaignPlan(const Campaign& campaign, Cache& cache, Registry& registry, bool explain,
+                      const std::vector<std::string>& force) {
   std::printf("campaign %s: %zu runs; %s\n", campaign.name.c_str(), campaign.runs.size(),
               explain ? "per stage: cached or not, and why" : "dry run, nothing runs");
   std::set<std::string> planned;
@@ -243,6 +244,7 @@ int PrintCampaignPlan(const Campaign& campaign, Cache& cache, Registry& registry
     if (!wf.ok()) return Fail(wf.status());
     PlanOptions plan_options;
     plan_options.planned_keys = &planned;
+    plan_options.force.insert(force.begin(), force.end());
     Expected<std::vector<PlanLine>> plan = PlanWorkflow(*wf, cache, plan_options);
     if (!plan.ok()) return Fail(plan.status());
     PlanCounts counts;
@@ -276,7 +278,10 @@ int CmdCampaign(const CampaignFlags& f, Registry& registry, const CampaignReport
   if (!cache.ok()) return Fail(cache.status());
   Expected<FileLock> shared = (*cache)->LockShared();
   if (!shared.ok()) return Fail(shared.status());
-  if (f.run.dry_run || f.explain) return PrintCampaignPlan(*campaign, **cache, registry, f.explain);
+  if (Status st = CheckCampaignStageIds(*campaign, f.run.force, "--force", registry); !st.ok())
+    return Fail(st);
+  if (f.run.dry_run || f.explain)
+    return PrintCampaignPlan(*campaign, **cache, registry, f.explain, f.run.force);
   CampaignOptions options;
   options.out_dir = f.run.out_dir;
   options.run.jobs = f.run.jobs;
@@ -284,6 +289,7 @@ int CmdCampaign(const CampaignFlags& f, Registry& registry, const CampaignReport
   options.run.keep_going = f.run.keep_going;
   options.run.threads_per_stage = f.run.threads;
   options.run.quiet = f.run.quiet;
+  options.run.force.insert(f.run.force.begin(), f.run.force.end());
   Expected<std::unique_ptr<Executor>> executor = MakeExecutor(f.run.executor);
   if (!executor.ok()) return Fail(executor.status());
   options.run.executor = executor->get();
@@ -320,6 +326,12 @@ void AddCampaignOptions(CLI::App* cmd, CampaignFlags& f) {
       ->type_name("N");
   cmd->add_flag("--keep-going", f.run.keep_going, "After a failure, still run independent stages");
   cmd->add_flag("-q,--quiet", f.run.quiet, "Print failures and summaries only");
+  cmd->add_option("--force", f.run.force,
+                  "Run STAGE in every run that has it even if it is cached, once per cache key "
+                  "(runs that share it reuse the new entry); its dependents re-run unless its "
+                  "outputs come out unchanged (repeatable)")
+      ->type_name("STAGE")
+      ->allow_extra_args(false);
   AddExecutorOptions(cmd, f.run.executor);
 }
 

@@ -7,10 +7,12 @@
 #include <fstream>
 #include <atomic>
 #include <mutex>
+#include <set>
 #include <thread>
 
 #include "base/env.h"
 #include "engine/progress.h"
+#include "engine/scheduler.h"
 #include "engine/schema.h"
 #include "engine/workflow.h"
 #include "engine/yaml_json.h"
@@ -193,6 +195,26 @@ Expected<Campaign> LoadCampaign(const std::string& path, Registry& registry) {
   return campaign;
 }
 
+Status CheckCampaignStageIds(const Campaign& campaign, const std::vector<std::string>& ids,
+                             const std::string& flag, Registry& registry) {
+  if (ids.empty()) return Status::Ok();
+  std::set<std::string> stages;
+  for (const CampaignRun& run : campaign.runs) {
+    LoadOptions opts;
+    opts.scene_file = run.scene_file;
+    opts.sets = run.sets;
+    PB_ASSIGN_OR_RETURN(Workflow wf, LoadWorkflow(run.workflow_file, opts, registry));
+    for (const auto& [id, node] : wf.stages) stages.insert(id);
+  }
+  std::string unknown, known;
+  for (const std::string& id : ids)
+    if (!stages.count(id)) unknown += (unknown.empty() ? "'" : ", '") + id + "'";
+  if (unknown.empty()) return Status::Ok();
+  for (const std::string& id : stages) known += (known.empty() ? "" : ", ") + id;
+  return Status::Invalid("<command line>: " + flag + ": no run of campaign " + campaign.name +
+                         " has a stage " + unknown + " (its runs' stages: " + known + ")");
+}
+
 CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const CampaignOptions& options,
                            Registry& registry, const CampaignReportWriter& report) {
   CampaignResult result;
@@ -204,6 +226,8 @@ CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const Campaig
   if (!result.report.ok()) return result;
   std::vector<json> rows(campaign.runs.size());
   std::mutex print_mu;
+  ForcedKeys forced_keys;  // --force: a stage the runs share is forced once
+  const size_t parallel = std::max<size_t>(1, std::min<size_t>(options.parallel_runs, campaign.runs.size()));
   auto run_one = [&](size_t i) {
     const CampaignRun& run = campaign.runs[i];
     {
@@ -232,6 +256,10 @@ CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const Campaig
     }
     WorkflowRunOptions run_options = options.run;
     run_options.sets = run.sets;
+    // One run at a time: the first run that forces a shared key has replaced
+    // its entry before the next run looks. Runs in parallel (a cluster)
+    // could find the old entry first, so there each run forces its own.
+    if (parallel == 1) run_options.forced_keys = &forced_keys;
     const WorkflowRunSummary s =
         RunWorkflowInto(*wf, cache, run_options, JoinPath(result.out_dir, run.dir));
     {
@@ -250,7 +278,6 @@ CampaignResult RunCampaign(const Campaign& campaign, Cache& cache, const Campaig
   // Runs in parallel (a cluster): each run's scheduler submits its ready
   // stages; a stage two runs share is computed once, the other run waits on
   // its key lock and reuses the entry.
-  const size_t parallel = std::max<size_t>(1, std::min<size_t>(options.parallel_runs, campaign.runs.size()));
   std::atomic<size_t> next{0};
   auto worker = [&] {
     for (size_t i; (i = next.fetch_add(1)) < campaign.runs.size();) run_one(i);

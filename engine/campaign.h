@@ -55,6 +55,12 @@ struct Campaign {
 // `file:line:column: message`, all at once.
 Expected<Campaign> LoadCampaign(const std::string& path, Registry& registry);
 
+// `campaign --force` (`flag`): every id must name a stage of at least one
+// run's workflow; Status::Invalid naming the others, with the stages the
+// runs have.
+Status CheckCampaignStageIds(const Campaign& campaign, const std::vector<std::string>& ids,
+                             const std::string& flag, Registry& registry);
+
 const nlohmann::json& CampaignSchemaJson();
 
 // Writes the report of a finished campaign folder into report_dir.

@@ -156,5 +156,46 @@ workflows:
   EXPECT_EQ(run1["stages"][1]["group"], "bake");
 }
 
+// `campaign --force up`: both runs of one.yaml share up's key; the first
+// run forces it, the second reuses the new entry. An id no run has is an
+// error before anything runs.
+TEST_F(CampaignTest, ForceRunsAStageTheRunsShareOnce) {
+  auto c = Load(R"(name: demo
+scenes: [../scenes/a.yaml]
+workflows:
+  - ../workflows/one.yaml
+  - { file: ../workflows/one.yaml, label: again }
+)");
+  ASSERT_TRUE(c.ok()) << c.status().message();
+  auto cache = Cache::Open(dir_.path() + "/cache");
+  ASSERT_TRUE(cache.ok()) << cache.status().message();
+  CampaignOptions options;
+  options.out_dir = dir_.path() + "/out";
+  options.run.in_process = true;
+  options.run.quiet = true;
+  const auto no_report = [](const std::string&, const std::string&) { return Status::Ok(); };
+  ASSERT_EQ(RunCampaign(*c, **cache, options, registry_, no_report).failed_runs, 0);
+  options.run.force = {"up"};
+  ASSERT_EQ(RunCampaign(*c, **cache, options, registry_, no_report).failed_runs, 0);
+  const auto status_of = [&](const std::string& run, const std::string& stage) {
+    std::ifstream in(options.out_dir + "/runs/room-a/" + run + "/run.json");
+    const nlohmann::json record = nlohmann::json::parse(in);
+    for (const auto& s : record["stages"])
+      if (s["stage"] == stage) return s["status"].get<std::string>();
+    return std::string("missing");
+  };
+  EXPECT_EQ(status_of("one", "up"), "ran");
+  EXPECT_EQ(status_of("one", "src"), "hit");
+  EXPECT_EQ(status_of("one+again", "up"), "hit");
+
+  EXPECT_TRUE(CheckCampaignStageIds(*c, {"up", "src"}, "--force", registry_).ok());
+  const Status unknown = CheckCampaignStageIds(*c, {"up", "upp"}, "--force", registry_);
+  ASSERT_FALSE(unknown.ok());
+  EXPECT_NE(unknown.message().find("--force: no run of campaign demo has a stage 'upp' (its runs' "
+                                   "stages: src, up)"),
+            std::string::npos)
+      << unknown.message();
+}
+
 }  // namespace
 }  // namespace pb

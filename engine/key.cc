@@ -153,7 +153,12 @@ Expected<std::vector<PlanLine>> PlanWorkflow(const Workflow& wf, Cache& cache,
     line.key = key;
     const bool forced = options.force.count(id) > 0;
     std::optional<CacheEntry> entry = cache.Lookup(KeyOf(comps));
-    if (forced) {
+    if (forced && planned_earlier) {
+      line.state = PlanLine::State::kEarlierRun;
+      line.reasons.push_back(
+          "forced (--force), and computed by an earlier run of this campaign (same key): a hit by "
+          "then");
+    } else if (forced) {
       line.state = PlanLine::State::kMiss;
       line.reasons.push_back(entry ? "forced (--force): in the cache, but runs again; its result "
                                      "replaces the entry"

@@ -42,6 +42,7 @@ WorkflowRunSummary RunWorkflowInto(const Workflow& wf, Cache& cache, const Workf
   opts.keep_going = o.keep_going;
   opts.threads_per_stage = o.threads_per_stage;
   opts.force = o.force;
+  opts.forced_keys = o.forced_keys;
   opts.log_dir = ResolvePath(".", out_dir + "/logs");
   LocalProcessExecutor local(SelfExe());
   InProcessExecutor in_process;

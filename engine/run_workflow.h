@@ -15,6 +15,8 @@
 
 namespace pb {
 
+class ForcedKeys;  // scheduler.h
+
 struct WorkflowRunOptions {
   int jobs = 1;                   // stages in parallel
   uint64_t mem_budget_bytes = 0;  // 0: no budget
@@ -25,6 +27,7 @@ struct WorkflowRunOptions {
   Executor* executor = nullptr;   // null: child processes on this machine
   std::vector<std::string> sets;  // recorded in run.json's options
   std::set<std::string> force;    // --force: run these stages whatever the cache holds
+  ForcedKeys* forced_keys = nullptr;  // campaigns: force a shared key once (scheduler.h)
   std::vector<std::string> until;  // --until (recorded; the workflow is already cut)
 };
 

@@ -93,7 +93,8 @@ void Scheduler::RunOne(StageOutcome& out, const std::map<std::string, StageOutco
     out.cached_record = entry.record;
     out.warnings = WarningsOf(entry.record);
   };
-  out.forced = options.force.count(out.id) > 0;
+  out.forced = options.force.count(out.id) > 0 &&
+               (!options.forced_keys || options.forced_keys->Claim(out.key));
   if (!out.forced)
     if (std::optional<CacheEntry> entry = cache_.Lookup(key)) return hit(std::move(*entry));
 

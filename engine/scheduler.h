@@ -4,6 +4,7 @@
 #pragma once
 
 #include <map>
+#include <mutex>
 #include <nlohmann/json.hpp>
 #include <set>
 #include <string>
@@ -15,6 +16,23 @@
 
 namespace pb {
 
+// The keys forced so far by the runs of one campaign: a stage that several
+// runs share (the same key) is forced once, by the first run that reaches
+// it; the later ones find its new entry. Thread-safe (runs may go in
+// parallel).
+class ForcedKeys {
+ public:
+  // True the first time `key` is claimed.
+  bool Claim(const std::string& key) {
+    std::lock_guard<std::mutex> lock(mu_);
+    return keys_.insert(key).second;
+  }
+
+ private:
+  std::mutex mu_;
+  std::set<std::string> keys_;
+};
+
 struct RunOptions {
   int jobs = 1;
   uint64_t mem_budget_bytes = 0;  // 0: no budget
@@ -25,6 +43,9 @@ struct RunOptions {
   // result replaces the entry. Their dependents follow the usual rule: they
   // hit if the forced stage's outputs come out unchanged (early cutoff).
   std::set<std::string> force;
+  // Campaigns: a forced stage's key already claimed here is not forced again
+  // (another run forced it); null: every forced stage runs.
+  ForcedKeys* forced_keys = nullptr;
 };
 
 struct StageOutcome {

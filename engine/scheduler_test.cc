@@ -288,5 +288,39 @@ stages:
   for (const auto& l : alone) EXPECT_NE(l.state, PlanLine::State::kEarlierRun) << l.stage;
 }
 
+// A campaign's --force: a stage the runs share (the same key) is forced by
+// the first run only; the plan says the later ones reuse it.
+TEST_F(SchedulerTest, ACampaignForcesASharedKeyOnce) {
+  const std::string yaml = R"(name: w
+stages:
+  src: { uses: t.text, with: { text: abc } }
+)";
+  Run(yaml);  // cached
+  executor_.ran();
+  ForcedKeys forced;
+  RunOptions opts;
+  opts.force = {"src"};
+  opts.forced_keys = &forced;
+  auto first = Run(yaml, {}, opts);
+  EXPECT_EQ(executor_.ran(), (std::vector<std::string>{"src"}));
+  EXPECT_TRUE(first[0].forced);
+  auto second = Run(yaml, {}, opts);
+  EXPECT_TRUE(executor_.ran().empty());
+  EXPECT_FALSE(second[0].forced);
+  EXPECT_EQ(second[0].state, StageOutcome::State::kHit);
+
+  std::set<std::string> planned;
+  PlanOptions plan_opts;
+  plan_opts.force = {"src"};
+  plan_opts.planned_keys = &planned;
+  const Workflow wf = LoadWorkflow(dir_.Write("w.yaml", yaml), {}, registry_).value();
+  EXPECT_EQ(PlanWorkflow(wf, *cache_, plan_opts).value()[0].state, PlanLine::State::kMiss);
+  const PlanLine again = PlanWorkflow(wf, *cache_, plan_opts).value()[0];
+  EXPECT_EQ(again.state, PlanLine::State::kEarlierRun);
+  ASSERT_FALSE(again.reasons.empty());
+  EXPECT_NE(again.reasons[0].find("forced (--force), and computed by an earlier run"),
+            std::string::npos);
+}
+
 }  // namespace
 }  // namespace pb
