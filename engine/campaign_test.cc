@@ -13,6 +13,14 @@ namespace {
 
 using testing::TempDir;
 
+// A campaign running one.yaml twice on scene a (the runs share every key).
+constexpr const char* kOneTwice = R"(name: demo
+scenes: [../scenes/a.yaml]
+workflows:
+  - ../workflows/one.yaml
+  - { file: ../workflows/one.yaml, label: again }
+)";
+
 class CampaignTest : public ::testing::Test {
  protected:
   void SetUp() override {
@@ -30,6 +38,15 @@ stages:
 stages:
   src: { uses: t.text, with: { text: "${scene.params.word}", count: 1 } }
 )");
+  }
+  // Runs in this process, printing failures and summaries only, into
+  // dir_ + `out`.
+  CampaignOptions InProcessInto(const std::string& out) {
+    CampaignOptions options;
+    options.out_dir = dir_.path() + out;
+    options.run.in_process = true;
+    options.run.quiet = true;
+    return options;
   }
   Expected<Campaign> Load(const std::string& text) {
     return LoadCampaign(dir_.Write("campaigns/c.yaml", text), registry_);
@@ -105,22 +122,13 @@ workflows: [../workflows/one.yaml, ../workflows/one.yaml]
 }
 
 TEST_F(CampaignTest, RunsShareTheCacheAndWriteTheManifestAndRecords) {
-  auto c = Load(R"(name: demo
-scenes: [../scenes/a.yaml]
-workflows:
-  - ../workflows/one.yaml
-  - { file: ../workflows/one.yaml, label: again }
-  - ../workflows/three.yaml
-)");
+  auto c = Load(std::string(kOneTwice) + "  - ../workflows/three.yaml\n");
   ASSERT_TRUE(c.ok()) << c.status().message();
   // A file that goes missing after the campaign was checked fails its run only.
   std::filesystem::remove(dir_.path() + "/workflows/data.txt");
   auto cache = Cache::Open(dir_.path() + "/cache");
   ASSERT_TRUE(cache.ok()) << cache.status().message();
-  CampaignOptions options;
-  options.out_dir = dir_.path() + "/out";
-  options.run.in_process = true;
-  options.run.quiet = true;
+  CampaignOptions options = InProcessInto("/out");
   std::string report_called;
   auto result = RunCampaign(*c, **cache, options, registry_,
                             [&](const std::string& campaign_dir, const std::string& report_dir) {
@@ -160,19 +168,11 @@ workflows:
 // run forces it, the second reuses the new entry. An id no run has is an
 // error before anything runs.
 TEST_F(CampaignTest, ForceRunsAStageTheRunsShareOnce) {
-  auto c = Load(R"(name: demo
-scenes: [../scenes/a.yaml]
-workflows:
-  - ../workflows/one.yaml
-  - { file: ../workflows/one.yaml, label: again }
-)");
+  auto c = Load(kOneTwice);
   ASSERT_TRUE(c.ok()) << c.status().message();
   auto cache = Cache::Open(dir_.path() + "/cache");
   ASSERT_TRUE(cache.ok()) << cache.status().message();
-  CampaignOptions options;
-  options.out_dir = dir_.path() + "/out";
-  options.run.in_process = true;
-  options.run.quiet = true;
+  CampaignOptions options = InProcessInto("/out");
   const auto no_report = [](const std::string&, const std::string&) { return Status::Ok(); };
   ASSERT_EQ(RunCampaign(*c, **cache, options, registry_, no_report).failed_runs, 0);
   options.run.force = {"up"};
