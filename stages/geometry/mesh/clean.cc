@@ -12,30 +12,11 @@
 #include <string>
 #include <vector>
 
+#include "stages/geometry/core/union_find.h"
 #include "stages/geometry/mesh/holes.h"
 
 namespace pb {
 namespace {
-
-class UnionFind {
- public:
-  explicit UnionFind(size_t n) : parent_(n) { std::iota(parent_.begin(), parent_.end(), 0); }
-  uint32_t Find(uint32_t x) {
-    while (parent_[x] != x) {
-      parent_[x] = parent_[parent_[x]];
-      x = parent_[x];
-    }
-    return x;
-  }
-  void Union(uint32_t a, uint32_t b) {
-    a = Find(a);
-    b = Find(b);
-    if (a != b) parent_[std::max(a, b)] = std::min(a, b);  // smallest index is the root
-  }
-
- private:
-  std::vector<uint32_t> parent_;
-};
 
 // One face side: the undirected edge key (low index << 32 | high index) and the
 // corner (3 * face + k) where the edge starts.

@@ -8,6 +8,8 @@
 #include <unordered_map>
 #include <unordered_set>
 
+#include "stages/geometry/core/union_find.h"
+#include "stages/geometry/core/vec3.h"
 #include "stages/geometry/mesh/hole_triangulation.h"
 
 namespace pb {
@@ -26,6 +28,12 @@ double EdgeLength(const Mesh& mesh, uint32_t a, uint32_t b) {
   return std::sqrt(sum);
 }
 
+using vec3::V3;
+
+V3 PointAt(std::span<const double> points, size_t i) {
+  return {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+}
+
 // The largest distance from a point of the patch's triangles to the loop's
 // edges, sampled on each triangle's barycentric grid of step 1/8 (the
 // corners are on the loop); stops early once above `limit`.
@@ -33,33 +41,24 @@ double PatchReach(std::span<const double> points, const std::vector<std::array<u
                   double limit) {
   constexpr int kSteps = 8;
   const size_t n = points.size() / 3;
-  const auto point = [&](size_t i) {
-    return std::array<double, 3>{points[3 * i], points[3 * i + 1], points[3 * i + 2]};
-  };
   double reach = 0;
   for (const auto& t : patch) {
-    const std::array<double, 3> a = point(t[0]), b = point(t[1]), c = point(t[2]);
+    const V3 a = PointAt(points, t[0]), b = PointAt(points, t[1]), c = PointAt(points, t[2]);
     for (int i = 0; i <= kSteps; ++i) {
       for (int j = 0; i + j <= kSteps; ++j) {
         const int k = kSteps - i - j;
         if (i == kSteps || j == kSteps || k == kSteps) continue;
-        std::array<double, 3> q;
-        for (int d = 0; d < 3; ++d) q[d] = (i * a[d] + j * b[d] + k * c[d]) / kSteps;
+        const V3 q = vec3::Scale(
+            vec3::Add(vec3::Add(vec3::Scale(a, i), vec3::Scale(b, j)), vec3::Scale(c, k)),
+            1.0 / kSteps);
         double nearest = std::numeric_limits<double>::infinity();
         for (size_t e = 0; e < n && nearest > reach; ++e) {
-          const std::array<double, 3> p0 = point(e), p1 = point((e + 1) % n);
-          double along = 0, length2 = 0;
-          for (int d = 0; d < 3; ++d) {
-            along += (q[d] - p0[d]) * (p1[d] - p0[d]);
-            length2 += (p1[d] - p0[d]) * (p1[d] - p0[d]);
-          }
-          const double s = length2 > 0 ? std::clamp(along / length2, 0.0, 1.0) : 0.0;
-          double distance2 = 0;
-          for (int d = 0; d < 3; ++d) {
-            const double x = q[d] - (p0[d] + s * (p1[d] - p0[d]));
-            distance2 += x * x;
-          }
-          nearest = std::min(nearest, std::sqrt(distance2));
+          const V3 p0 = PointAt(points, e), edge = vec3::Sub(PointAt(points, (e + 1) % n), p0);
+          const double length2 = vec3::Dot(edge, edge);
+          const double s =
+              length2 > 0 ? std::clamp(vec3::Dot(vec3::Sub(q, p0), edge) / length2, 0.0, 1.0) : 0.0;
+          const V3 closest = vec3::Add(p0, vec3::Scale(edge, s));
+          nearest = std::min(nearest, vec3::Norm(vec3::Sub(q, closest)));
         }
         reach = std::max(reach, nearest);
         if (reach > limit) return reach;
@@ -69,43 +68,29 @@ double PatchReach(std::span<const double> points, const std::vector<std::array<u
   return reach;
 }
 
-double TriangleArea(std::span<const double> points, const std::array<uint32_t, 3>& t) {
-  double u[3], v[3];
-  for (int d = 0; d < 3; ++d) {
-    u[d] = points[3 * t[1] + d] - points[3 * t[0] + d];
-    v[d] = points[3 * t[2] + d] - points[3 * t[0] + d];
-  }
-  const double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2],
-               z = u[0] * v[1] - u[1] * v[0];
-  return 0.5 * std::sqrt(x * x + y * y + z * z);
+double TriangleArea(const V3& a, const V3& b, const V3& c) {
+  return 0.5 * vec3::Norm(vec3::Cross(vec3::Sub(b, a), vec3::Sub(c, a)));
 }
 
 // Per vertex, the area of the faces connected to it (through shared
 // vertices); 0 for a vertex of no face.
 std::vector<double> ComponentAreaOfVertices(const Mesh& mesh) {
-  std::vector<uint32_t> parent(mesh.vertex_count());
-  for (uint32_t v = 0; v < parent.size(); ++v) parent[v] = v;
-  const auto find = [&](uint32_t v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
+  UnionFind components(mesh.vertex_count());
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    components.Union(t[0], t[1]);
+    components.Union(t[0], t[2]);
+  }
+  std::vector<double> area(mesh.vertex_count(), 0);
+  const auto position = [&](uint32_t v) {
+    return V3{mesh.positions[3 * size_t{v}], mesh.positions[3 * size_t{v} + 1],
+              mesh.positions[3 * size_t{v} + 2]};
   };
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
-    for (int k = 1; k < 3; ++k) {
-      const uint32_t a = find(t[0]), b = find(t[k]);
-      if (a != b) parent[std::max(a, b)] = std::min(a, b);
-    }
+    area[components.Find(t[0])] += TriangleArea(position(t[0]), position(t[1]), position(t[2]));
   }
-  std::vector<double> area(mesh.vertex_count(), 0);
-  std::vector<double> corners(9);
-  for (size_t f = 0; f < mesh.face_count(); ++f) {
-    const uint32_t* t = &mesh.indices[3 * f];
-    for (int k = 0; k < 3; ++k) {
-      for (int d = 0; d < 3; ++d) corners[3 * k + d] = mesh.positions[3 * size_t{t[k]} + d];
-    }
-    area[find(t[0])] += TriangleArea(corners, {0, 1, 2});
-  }
-  for (uint32_t v = 0; v < area.size(); ++v) area[v] = area[find(v)];
+  for (uint32_t v = 0; v < area.size(); ++v) area[v] = area[components.Find(v)];
   return area;
 }
 
@@ -250,7 +235,10 @@ Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport
     }
     if (options.max_component_fraction > 0) {
       double patch_area = 0;
-      for (const auto& t : patch) patch_area += TriangleArea(points, t);
+      for (const auto& t : patch) {
+        patch_area +=
+            TriangleArea(PointAt(points, t[0]), PointAt(points, t[1]), PointAt(points, t[2]));
+      }
       if (patch_area > options.max_component_fraction * component_area[loop[0]]) {
         ++r.outlines_kept;
         continue;

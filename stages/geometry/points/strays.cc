@@ -1,42 +1,19 @@
 // Stray points (strays.h): clusters of the k-NN graph restricted to pairs
 // closer than a multiple of their local spacings, found with union-find
-// (Tarjan 1975, path halving and union by size).
+// (core/union_find.h).
 #include "stages/geometry/points/strays.h"
 
 #include <algorithm>
 #include <array>
 #include <cmath>
-#include <numeric>
 #include <string>
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "stages/geometry/core/union_find.h"
+
 namespace pb {
-namespace {
-
-class UnionFind {
- public:
-  explicit UnionFind(size_t n) : parent_(n), size_(n, 1) { std::iota(parent_.begin(), parent_.end(), 0u); }
-  uint32_t Find(uint32_t x) {
-    while (parent_[x] != x) x = parent_[x] = parent_[parent_[x]];
-    return x;
-  }
-  void Union(uint32_t a, uint32_t b) {
-    a = Find(a);
-    b = Find(b);
-    if (a == b) return;
-    if (size_[a] < size_[b]) std::swap(a, b);
-    parent_[b] = a;
-    size_[a] += size_[b];
-  }
-  uint32_t SizeOf(uint32_t x) { return size_[Find(x)]; }
-
- private:
-  std::vector<uint32_t> parent_, size_;
-};
-
-}  // namespace
 
 Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const StrayOptions& options) {
   if (options.k < 1 || options.k > 64)
