@@ -278,7 +278,7 @@ int CmdCampaign(const CampaignFlags& f, Registry& registry, const CampaignReport
   if (!cache.ok()) return Fail(cache.status());
   Expected<FileLock> shared = (*cache)->LockShared();
   if (!shared.ok()) return Fail(shared.status());
-  if (Status st = CheckCampaignStageIds(*campaign, f.run.force, "--force", registry); !st.ok())
+  if (Status st = CheckCampaignStageIds(*campaign, f.run.force, "--force"); !st.ok())
     return Fail(st);
   if (f.run.dry_run || f.explain)
     return PrintCampaignPlan(*campaign, **cache, registry, f.explain, f.run.force);

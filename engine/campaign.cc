@@ -175,6 +175,7 @@ Expected<Campaign> LoadCampaign(const std::string& path, Registry& registry) {
           errors.push_back(wf.status().message());
         } else {
           run.workflow = wf->name;
+          for (const auto& [id, node] : wf->stages) run.stages.push_back(id);
           run.name = scene.name + "/" + wf->name + (variant.empty() ? "" : "+" + variant);
           run.dir = "runs/" + FolderSafe(scene.name) + "/" +
                     FolderSafe(wf->name + (variant.empty() ? "" : "+" + variant));
@@ -196,16 +197,10 @@ Expected<Campaign> LoadCampaign(const std::string& path, Registry& registry) {
 }
 
 Status CheckCampaignStageIds(const Campaign& campaign, const std::vector<std::string>& ids,
-                             const std::string& flag, Registry& registry) {
+                             const std::string& flag) {
   if (ids.empty()) return Status::Ok();
   std::set<std::string> stages;
-  for (const CampaignRun& run : campaign.runs) {
-    LoadOptions opts;
-    opts.scene_file = run.scene_file;
-    opts.sets = run.sets;
-    PB_ASSIGN_OR_RETURN(Workflow wf, LoadWorkflow(run.workflow_file, opts, registry));
-    for (const auto& [id, node] : wf.stages) stages.insert(id);
-  }
+  for (const CampaignRun& run : campaign.runs) stages.insert(run.stages.begin(), run.stages.end());
   std::string unknown, known;
   for (const std::string& id : ids)
     if (!stages.count(id)) unknown += (unknown.empty() ? "'" : ", '") + id + "'";

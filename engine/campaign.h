@@ -40,6 +40,7 @@ struct CampaignRun {
   std::string workflow_file;  // absolute
   std::string variant;        // "" or e.g. "interpolation=splat"
   std::vector<std::string> sets;  // STAGE.PARAM=VALUE, as --set
+  std::vector<std::string> stages;  // the workflow's stage ids, when the campaign was loaded
 };
 
 struct Campaign {
@@ -56,10 +57,10 @@ struct Campaign {
 Expected<Campaign> LoadCampaign(const std::string& path, Registry& registry);
 
 // `campaign --force` (`flag`): every id must name a stage of at least one
-// run's workflow; Status::Invalid naming the others, with the stages the
-// runs have.
+// run's workflow (CampaignRun::stages); Status::Invalid naming the others,
+// with the stages the runs have.
 Status CheckCampaignStageIds(const Campaign& campaign, const std::vector<std::string>& ids,
-                             const std::string& flag, Registry& registry);
+                             const std::string& flag);
 
 const nlohmann::json& CampaignSchemaJson();
 

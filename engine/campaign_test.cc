@@ -188,8 +188,8 @@ TEST_F(CampaignTest, ForceRunsAStageTheRunsShareOnce) {
   EXPECT_EQ(status_of("one", "src"), "hit");
   EXPECT_EQ(status_of("one+again", "up"), "hit");
 
-  EXPECT_TRUE(CheckCampaignStageIds(*c, {"up", "src"}, "--force", registry_).ok());
-  const Status unknown = CheckCampaignStageIds(*c, {"up", "upp"}, "--force", registry_);
+  EXPECT_TRUE(CheckCampaignStageIds(*c, {"up", "src"}, "--force").ok());
+  const Status unknown = CheckCampaignStageIds(*c, {"up", "upp"}, "--force");
   ASSERT_FALSE(unknown.ok());
   EXPECT_NE(unknown.message().find("--force: no run of campaign demo has a stage 'upp' (its runs' "
                                    "stages: src, up)"),
