@@ -96,6 +96,18 @@ constexpr const char* kSchema = R"({
       "default": 8,
       "description": "k of the local spacing: spacing = r_k * sqrt(pi / k), r_k the distance to the k-th nearest other point."
     },
+    "border_reach_edges": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.5,
+      "description": "After the rounds, border vertices move outward in their faces' planes until every border edge passes `border_margin_spacings` beyond the scan points whose closest point on the mesh lies on it (points within 45 degrees of the face's plane), at most this many of the vertex's mean edge lengths: the decimation may cut its border up to half an output edge into the scanned surface (mesh.decimate `boundary_erosion`), and the model's outline then falls short of the scan's. 0 turns it off (version 2)."
+    },
+    "border_margin_spacings": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.5,
+      "description": "How far past the outermost scan points the border pass puts a border, in their local spacings (the scan's own render, render.splats, draws the surface up to one spacing past its last point)."
+    },
     "threads": {
       "type": "integer",
       "minimum": 0,
@@ -124,6 +136,9 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t neighbors,
                       IntegerParam(ctx, kId, "spacing_neighbors", {1, 64}));
   options.spacing_neighbors = static_cast<int>(neighbors);
+  PB_ASSIGN_OR_RETURN(options.border_reach_edges, NumberParam(ctx, kId, "border_reach_edges"));
+  PB_ASSIGN_OR_RETURN(options.border_margin_spacings,
+                      NumberParam(ctx, kId, "border_margin_spacings"));
   PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", {0}));
   options.threads = threads > 0 ? static_cast<int>(threads) : ctx.threads();
 
@@ -148,6 +163,7 @@ Status Run(StageContext& ctx) {
   ctx.counter("vertices_moved", static_cast<double>(report.vertices_moved));
   ctx.counter("max_move_m", report.max_move_m);
   ctx.counter("mean_move_m", report.mean_move_m);
+  ctx.counter("border_vertices_moved", static_cast<double>(report.border_vertices_moved));
   nlohmann::json changes = {{"fit",
                              {{"points", report.points},
                               {"supported_before", report.supported_before},
@@ -162,6 +178,7 @@ Status Run(StageContext& ctx) {
                               {"max_move_m", report.max_move_m},
                               {"mean_move_m", report.mean_move_m},
                               {"steps_halved", report.steps_halved},
+                              {"border_vertices_moved", report.border_vertices_moved},
                               {"mean_edge_m", report.mean_edge_m},
                               {"median_local_spacing_m", report.median_spacing_m}}}};
   PB_RETURN_IF_ERROR(WriteOutputMesh(ctx, fitted, InputMeshMetaWith(ctx, fitted, changes)));
@@ -174,7 +191,7 @@ Status Run(StageContext& ctx) {
 StageType FitStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;  // 2: outside_weight (0.75; version 1 was 0.5)
+  type.version = 3;  // 2: outside_weight (0.75; version 1 was 0.5); 3: the border pass
   type.summary = "Moves a mesh's vertices along their normals so the surface fits the scan's points";
   type.doc =
       "A decimated mesh's vertices lie on the surface it was decimated from, so its chords cut "
@@ -195,7 +212,14 @@ StageType FitStage() {
       "`max_step_edges` of its mean edge per round and at most `max_offset_edges` from where it "
       "started. Border vertices move the same way, along "
       "the normal only. A move that would turn a face by more than `max_turn_deg` (from the "
-      "input or the round before) or collapse it is halved until none does. Faces, vertex "
+      "input or the round before) or collapse it is halved until none does. Then (version 3) "
+      "a border pass moves border vertices outward in their faces' planes until each border "
+      "edge passes `border_margin_spacings` local spacings beyond the points whose closest "
+      "point lies on it (points within 45 degrees of the face's plane, give or take two "
+      "spacings of noise), each edge's two ends by the least offsets whose line clears every "
+      "such point, each vertex at most `border_reach_edges` of its mean edge: the decimation "
+      "may cut a border up to half an output edge into the scanned surface, and the model's "
+      "outline then falls short of the scan's (hole pixels at the outline). Faces, vertex "
       "order, colors and uvs are kept; normals, when present, are the input's turned by the "
       "rotation of each vertex's face normal (recomputing them would light every facet of a "
       "decimated mesh). Place it after the low mesh's decimation, before uv.unwrap. Deterministic "
@@ -204,7 +228,8 @@ StageType FitStage() {
       "(mean |signed distance| of the supported points to the input and to the output), "
       "`mean_signed_distance_before_m`, `mean_signed_distance_after_m` (positive: points "
       "outside), `outside_fraction_before`, `outside_fraction_after` (share of those points "
-      "outside the surface), `vertices_moved`, `max_move_m`, `mean_move_m`. Phases: `io`, "
+      "outside the surface), `vertices_moved`, `max_move_m`, `mean_move_m`, "
+      "`border_vertices_moved` (by the border pass). Phases: `io`, "
       "`compute`.";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to fit (mesh.ply), e.g. the decimated low mesh.", false},

@@ -358,10 +358,12 @@ TEST_F(MeshStagesTest, TrimRemovesUnsupportedFacesAndCleanFillsPinHoles) {
 TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
   const StageType* type = registry_.Find("mesh.fit");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 2);
+  EXPECT_EQ(type->version, 3);
   const nlohmann::json schema = CheckedSchema(*type, true);
   EXPECT_EQ(schema["properties"]["iterations"]["default"], 12);
   EXPECT_EQ(schema["properties"]["outside_weight"]["default"], 0.75);
+  EXPECT_EQ(schema["properties"]["border_reach_edges"]["default"], 0.5);
+  EXPECT_EQ(schema["properties"]["border_margin_spacings"]["default"], 0.5);
   ASSERT_EQ(type->inputs.size(), 2u);
   EXPECT_EQ(type->inputs[1].name, "points");
 
@@ -386,7 +388,9 @@ TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
       grid.indices.insert(grid.indices.end(), {a, b, c, a, c, d});
     }
   }
-  FakeContext fit(dir_ / "fit", nlohmann::json::object(), 2);
+  // The border pass off (the rim lies on the outermost points already; the
+  // pass would move it half a spacing past them, below).
+  FakeContext fit(dir_ / "fit", {{"border_reach_edges", 0}}, 2);
   fit.AddInput("mesh", "mesh", WriteInputMesh("grid", grid), {{"source", "test"}});
   fit.AddInput("points", "points", WriteInputPoints("points", points));
   const Status status = Run("mesh.fit", fit);
@@ -407,6 +411,26 @@ TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
     EXPECT_NEAR(fitted->mesh.positions[3 * v + 2], 0.0, 2e-4) << "vertex " << v;
     EXPECT_NEAR(fitted->mesh.positions[3 * v], grid.positions[3 * v], 1e-6);
   }
+  EXPECT_EQ(fit.counters_["border_vertices_moved"], 0);
+
+  // With the defaults the rim moves out in the plane, past the outermost
+  // points by a fraction of their spacing (1 cm).
+  FakeContext border(dir_ / "border", nlohmann::json::object(), 2);
+  border.AddInput("mesh", "mesh", WriteInputMesh("grid3", grid));
+  border.AddInput("points", "points", WriteInputPoints("points3", points));
+  ASSERT_TRUE(Run("mesh.fit", border).ok());
+  EXPECT_EQ(border.counters_["border_vertices_moved"], 4 * n);
+  auto bordered = ReadPlyMesh(border.outputs_["mesh"]);
+  ASSERT_TRUE(bordered.ok());
+  float min_x = 1, max_x = 0;
+  for (size_t v = 0; v < bordered->mesh.vertex_count(); ++v) {
+    min_x = std::min(min_x, bordered->mesh.positions[3 * v]);
+    max_x = std::max(max_x, bordered->mesh.positions[3 * v]);
+  }
+  EXPECT_LT(min_x, -0.002f);
+  EXPECT_GT(min_x, -0.012f);
+  EXPECT_GT(max_x, 1.002f);
+  EXPECT_LT(max_x, 1.012f);
 
   PointCloud few;
   few.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0};

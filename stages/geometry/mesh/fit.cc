@@ -143,6 +143,269 @@ std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& posit
   return out;
 }
 
+// The face-turn guard of a move. `place()` writes `moved` from the current
+// `scale` of each vertex's move (1 to start); while a face with a moving
+// corner turns further than acos(cos_turn) from its normal before the move
+// (`before`) or in the input (`input`), or loses its area, the scales of its
+// moving corners halve, six times, then drop to 0. `halved` counts the cuts.
+template <typename Place>
+void GuardFaceTurns(const Mesh& mesh, const std::vector<V3>& before,
+                    const std::vector<V3>& input, double cos_turn,
+                    const std::vector<uint8_t>& moving, std::vector<double>& scale,
+                    const std::vector<float>& moved, const Place& place, uint64_t& halved) {
+  const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
+  const auto still = [&](uint32_t v) { return !moving[v] || scale[v] == 0; };
+  place();
+  for (int pass = 0;; ++pass) {
+    const std::vector<V3> now = FaceCrosses(mesh, moved);
+    std::vector<uint8_t> mark(nv, 0);
+    bool bad = false;
+    for (size_t f = 0; f < nf; ++f) {
+      const uint32_t* t = &mesh.indices[3 * f];
+      if (still(t[0]) && still(t[1]) && still(t[2])) continue;
+      const double len = Norm(now[f]);
+      const double len_before = Norm(before[f]), len_input = Norm(input[f]);
+      bool ok = len > 0;
+      if (ok && len_before > 0) ok = Dot(now[f], before[f]) >= cos_turn * len * len_before;
+      if (ok && len_input > 0) ok = Dot(now[f], input[f]) >= cos_turn * len * len_input;
+      if (!ok) {
+        bad = true;
+        for (int k = 0; k < 3; ++k) mark[t[k]] = 1;
+      }
+    }
+    if (!bad) return;
+    for (size_t v = 0; v < nv; ++v) {
+      if (!mark[v] || still(static_cast<uint32_t>(v))) continue;
+      scale[v] = pass < 6 ? 0.5 * scale[v] : 0.0;
+      ++halved;
+    }
+    place();
+  }
+}
+
+// The border pass (fit.h, "Borders"): moves border vertices outward in
+// their faces' planes so that every border edge passes border_margin_spacings
+// of a local spacing beyond the supported points whose closest point lies on
+// it. Returns the vertices moved.
+uint64_t ExtendBorders(const Mesh& mesh, std::vector<float>& positions,
+                       const std::vector<V3>& local, const std::vector<float>& spacing,
+                       const PointCloud& points, const FitOptions& options, double edge_floor_m,
+                       std::vector<uint32_t>& nearest_face, const std::vector<double>& input_edge,
+                       double cos_turn, const std::vector<V3>& input_crosses,
+                       FitReport& report) {
+  const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
+  // Border edges: the directed edges (corner k of face f to k + 1) whose
+  // undirected edge has one face.
+  std::vector<std::pair<uint64_t, uint32_t>> edges;  // (key, 3 f + k)
+  edges.reserve(3 * nf);
+  for (size_t f = 0; f < nf; ++f) {
+    for (int k = 0; k < 3; ++k) {
+      const uint64_t a = mesh.indices[3 * f + k], b = mesh.indices[3 * f + (k + 1) % 3];
+      edges.emplace_back(std::min(a, b) << 32 | std::max(a, b), static_cast<uint32_t>(3 * f + k));
+    }
+  }
+  std::sort(edges.begin(), edges.end());
+  std::vector<uint8_t> border_corner(3 * nf, 0);  // 1: the edge from corner k to k + 1 is a border
+  std::vector<uint8_t> border_count(nv, 0);
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i == 1) {
+      border_corner[edges[i].second] = 1;
+      const uint32_t f = edges[i].second / 3, k = edges[i].second % 3;
+      for (uint32_t c : {k, (k + 1) % 3}) {
+        uint8_t& n = border_count[mesh.indices[3 * size_t{f} + c]];
+        n = static_cast<uint8_t>(std::min(n + 1, 3));
+      }
+    }
+    i = j;
+  }
+  uint64_t total_moved = 0;
+  std::vector<uint8_t> ever_moved(nv, 0);
+  const std::vector<float> start = positions;
+  for (int pass = 0; pass < 2; ++pass) {
+    const std::vector<V3> crosses = FaceCrosses(mesh, positions);
+    const std::vector<Assignment> assigned = Assign(mesh, positions, crosses, local, spacing, points,
+                                                    options, edge_floor_m, nearest_face);
+    // Outward unit direction of each border edge in its face's plane.
+    std::vector<V3> outward(3 * nf, V3{0, 0, 0});
+    for (size_t e = 0; e < 3 * nf; ++e) {
+      if (!border_corner[e]) continue;
+      const size_t f = e / 3;
+      const int k = static_cast<int>(e % 3);
+      const V3 a = Position(positions, mesh.indices[3 * f + k]);
+      const V3 b = Position(positions, mesh.indices[3 * f + (k + 1) % 3]);
+      const V3 c = Position(positions, mesh.indices[3 * f + (k + 2) % 3]);
+      const V3 ab = Unit(Sub(b, a));
+      const V3 ac = Sub(c, a);
+      const double along = Dot(ac, ab);
+      outward[e] = Unit(V3{along * ab[0] - ac[0], along * ab[1] - ac[1], along * ab[2] - ac[2]});
+    }
+    // The points beyond each border edge: (edge, s, goal), s the place of
+    // the point's closest point along the edge (0 at corner k, 1 at k + 1),
+    // goal how far the edge's line must move outward there.
+    struct Beyond {
+      uint32_t edge;
+      double s, goal;
+    };
+    std::vector<Beyond> beyond_points;
+    for (size_t i = 0; i < assigned.size(); ++i) {
+      const Assignment& as = assigned[i];
+      if (as.face == UINT32_MAX) continue;
+      const size_t f = as.face;
+      const uint32_t* t = &mesh.indices[3 * f];
+      V3 q = {0, 0, 0};
+      for (int k = 0; k < 3; ++k) {
+        const V3 p = Position(positions, t[k]);
+        for (int c = 0; c < 3; ++c) q[c] += as.b[k] * p[c];
+      }
+      const V3 n = Unit(crosses[f]);
+      const V3 pq = Sub(local[i], q);
+      const double height = std::abs(Dot(pq, n));
+      for (int k = 0; k < 3; ++k) {
+        // The edge from corner k to k + 1, opposite corner k + 2.
+        const size_t e = 3 * f + k;
+        if (!border_corner[e] || as.b[(k + 2) % 3] > 1e-6f) continue;
+        // On the edge or past it (>= 0 but for rounding: the closest point
+        // is on the edge).
+        const double beyond = std::max(0.0, Dot(pq, outward[e]));
+        // The surface continuing past the border lies within 45 degrees of
+        // the face's plane, give or take the scan's noise (two spacings); a
+        // point farther off it is another surface's (a wall behind the
+        // border, a mixed return along the ray at a depth step). The spacing
+        // is the point's local one but at most the cloud's median: a sparse
+        // point (a flying pixel at a depth step, whose spacing is inflated)
+        // earns no wider tolerance nor margin.
+        const double s_i = std::min<double>(spacing[i], report.median_spacing_m);
+        if (height > beyond + 2 * s_i) continue;
+        const double goal = beyond + options.border_margin_spacings * s_i;
+        const double sa = as.b[k], sb = as.b[(k + 1) % 3];
+        beyond_points.push_back(
+            {static_cast<uint32_t>(e), sa + sb > 0 ? sb / (sa + sb) : 0.5, goal});
+      }
+    }
+    // Per edge, the offsets (m_a, m_b) of its two ends whose line
+    // (1 - s) m_a + s m_b passes over every goal with the least m_a + m_b
+    // (the least area added), both >= 0: the upper convex hull of the goals
+    // and of (0, 0) and (1, 0), read at s = 1/2 and extended to both ends.
+    std::sort(beyond_points.begin(), beyond_points.end(), [](const Beyond& x, const Beyond& y) {
+      return x.edge != y.edge ? x.edge < y.edge : x.s != y.s ? x.s < y.s : x.goal < y.goal;
+    });
+    std::vector<std::array<double, 2>> need(3 * nf, std::array<double, 2>{0, 0});
+    std::vector<std::array<double, 2>> hull;
+    for (size_t i = 0; i < beyond_points.size();) {
+      size_t j = i;
+      while (j < beyond_points.size() && beyond_points[j].edge == beyond_points[i].edge) ++j;
+      hull.clear();
+      const auto push = [&](double hs, double hg) {
+        // Monotone chain (s ascending): drop the last point while it lies on
+        // or under the line from the one before it to the new one.
+        while (hull.size() >= 2) {
+          const auto& o = hull[hull.size() - 2];
+          const auto& a = hull.back();
+          if ((a[0] - o[0]) * (hg - o[1]) - (a[1] - o[1]) * (hs - o[0]) >= 0) {
+            hull.pop_back();
+          } else {
+            break;
+          }
+        }
+        hull.push_back({hs, hg});
+      };
+      push(0, 0);
+      for (size_t k = i; k < j; ++k) push(beyond_points[k].s, beyond_points[k].goal);
+      push(1, 0);
+      size_t seg = 0;
+      while (seg + 2 < hull.size() && hull[seg + 1][0] < 0.5) ++seg;
+      const auto& p0 = hull[seg];
+      const auto& p1 = hull[seg + 1];
+      const double slope = p1[0] > p0[0] ? (p1[1] - p0[1]) / (p1[0] - p0[0]) : 0;
+      need[beyond_points[i].edge] = {std::max(0.0, p0[1] - slope * p0[0]),
+                                     std::max(0.0, p0[1] + slope * (1 - p0[0]))};
+      i = j;
+    }
+    // Per border vertex of exactly two border edges: the shortest move in
+    // the span of their outward directions that meets both needs, at most
+    // border_reach_edges of its input mean edge.
+    std::vector<std::array<double, 2>> vneed(nv, std::array<double, 2>{0, 0});
+    std::vector<std::array<V3, 2>> vdir(nv);
+    std::vector<uint8_t> vslots(nv, 0);
+    for (size_t e = 0; e < 3 * nf; ++e) {
+      if (!border_corner[e]) continue;
+      const size_t f = e / 3;
+      const int k = static_cast<int>(e % 3);
+      const uint32_t ends[2] = {mesh.indices[3 * f + k], mesh.indices[3 * f + (k + 1) % 3]};
+      for (int end = 0; end < 2; ++end) {
+        const uint32_t v = ends[end];
+        if (border_count[v] != 2 || vslots[v] >= 2) continue;
+        vdir[v][vslots[v]] = outward[e];
+        vneed[v][vslots[v]] = need[e][end];
+        ++vslots[v];
+      }
+    }
+    std::vector<V3> move(nv, V3{0, 0, 0});
+    bool any = false;
+    for (size_t v = 0; v < nv; ++v) {
+      if (vslots[v] != 2 || input_edge[v] == 0) continue;
+      const double m1 = vneed[v][0], m2 = vneed[v][1];
+      if (m1 <= 0 && m2 <= 0) continue;
+      const V3 &o1 = vdir[v][0], &o2 = vdir[v][1];
+      const double c = Dot(o1, o2);
+      const double slack = 1e-9;
+      V3 d = {0, 0, 0};
+      bool found = false;
+      // The shortest candidate meeting both needs: one direction alone,
+      // else the corner of the two constraints.
+      for (int which = 0; which < 2 && !found; ++which) {
+        const int first = m1 >= m2 ? which : 1 - which;
+        const V3& o = first == 0 ? o1 : o2;
+        const double m = first == 0 ? m1 : m2;
+        const V3 cand = {o[0] * m, o[1] * m, o[2] * m};
+        if (Dot(cand, o1) >= m1 - slack && Dot(cand, o2) >= m2 - slack) {
+          d = cand;
+          found = true;
+        }
+      }
+      if (!found && c > -0.5 && c < 0.999) {
+        const double alpha = (m1 - c * m2) / (1 - c * c), beta = (m2 - c * m1) / (1 - c * c);
+        for (int x = 0; x < 3; ++x) d[x] = alpha * o1[x] + beta * o2[x];
+        found = true;
+      }
+      if (!found) continue;
+      // At most border_reach_edges of the vertex's mean edge from where the
+      // pass found it, over both rounds of the pass.
+      const V3 done = Sub(Position(positions, static_cast<uint32_t>(v)), Position(start, static_cast<uint32_t>(v)));
+      V3 total = {done[0] + d[0], done[1] + d[1], done[2] + d[2]};
+      const double length = Norm(total);
+      const double limit = options.border_reach_edges * input_edge[v];
+      if (length > limit) {
+        for (int x = 0; x < 3; ++x) total[x] *= limit / length;
+      }
+      move[v] = Sub(total, done);
+      any = true;
+    }
+    if (!any) break;
+    std::vector<uint8_t> moving(nv, 0);
+    for (size_t v = 0; v < nv; ++v) moving[v] = Norm(move[v]) > 0;
+    std::vector<double> scale(nv, 1.0);
+    std::vector<float> moved(positions.size());
+    GuardFaceTurns(mesh, crosses, input_crosses, cos_turn, moving, scale, moved, [&] {
+      for (size_t v = 0; v < nv; ++v) {
+        for (int c = 0; c < 3; ++c) {
+          moved[3 * v + c] = static_cast<float>(positions[3 * v + c] + scale[v] * move[v][c]);
+        }
+      }
+    }, report.steps_halved);
+    for (size_t v = 0; v < nv; ++v) {
+      if (moving[v] && scale[v] > 0 && !ever_moved[v]) {
+        ever_moved[v] = 1;
+        ++total_moved;
+      }
+    }
+    positions.swap(moved);
+  }
+  return total_moved;
+}
+
 Status CheckOptions(const FitOptions& o) {
   const auto bad = [](const std::string& what) {
     return Status::Invalid("mesh fit: option " + what);
@@ -164,6 +427,8 @@ Status CheckOptions(const FitOptions& o) {
   if (!(o.max_offset_edges > 0)) return bad("max_offset_edges must be > 0");
   if (!(o.max_turn_deg > 0 && o.max_turn_deg < 180)) return bad("max_turn_deg must be in (0, 180)");
   if (o.spacing_neighbors < 1) return bad("spacing_neighbors must be >= 1");
+  if (!(o.border_reach_edges >= 0)) return bad("border_reach_edges must be >= 0");
+  if (!(o.border_margin_spacings >= 0)) return bad("border_margin_spacings must be >= 0");
   return Status::Ok();
 }
 
@@ -337,55 +602,35 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
       const double limit = options.max_step_edges * input_edge[v];
       step[v] = options.damping * std::clamp(u[v], -limit, limit);
     }
-    // The face-turn guard: halve the steps of the vertices of faces that turn
-    // too far (or lose their area), then drop them. A vertex never ends
-    // farther than max_offset_edges of its edge from where it started.
+    // The face-turn guard halves the steps of the vertices of faces that
+    // turn too far (or lose their area), then drops them. A vertex never
+    // ends farther than max_offset_edges of its edge from where it started.
+    std::vector<uint8_t> moving(nv, 0);
+    for (size_t v = 0; v < nv; ++v) moving[v] = step[v] != 0;
+    std::vector<double> scale(nv, 1.0);
     std::vector<float> moved(positions.size());
-    const auto apply = [&] {
+    GuardFaceTurns(mesh, crosses, input_crosses, cos_turn, moving, scale, moved, [&] {
       for (size_t v = 0; v < nv; ++v) {
+        const double s = step[v] * scale[v];
         V3 p;
-        for (int c = 0; c < 3; ++c) p[c] = positions[3 * v + c] + step[v] * vnormals[v][c];
+        for (int c = 0; c < 3; ++c) p[c] = positions[3 * v + c] + s * vnormals[v][c];
         const V3 p0 = Position(mesh.positions, static_cast<uint32_t>(v));
         const V3 offset = Sub(p, p0);
         const double length = Norm(offset);
         const double limit = options.max_offset_edges * input_edge[v];
-        if (step[v] != 0 && length > limit) {
+        if (s != 0 && length > limit) {
           for (int c = 0; c < 3; ++c) p[c] = p0[c] + offset[c] * (limit / length);
         }
         for (int c = 0; c < 3; ++c) moved[3 * v + c] = static_cast<float>(p[c]);
       }
-    };
-    const auto bad_faces = [&] {
-      std::vector<uint32_t> bad;
-      const std::vector<V3> now = FaceCrosses(mesh, moved);
-      for (size_t f = 0; f < nf; ++f) {
-        const uint32_t* t = &mesh.indices[3 * f];
-        if (step[t[0]] == 0 && step[t[1]] == 0 && step[t[2]] == 0) continue;
-        const double len = Norm(now[f]);
-        const double before = Norm(crosses[f]), input = Norm(input_crosses[f]);
-        bool ok = len > 0;
-        if (ok && before > 0) ok = Dot(now[f], crosses[f]) >= cos_turn * len * before;
-        if (ok && input > 0) ok = Dot(now[f], input_crosses[f]) >= cos_turn * len * input;
-        if (!ok) bad.push_back(static_cast<uint32_t>(f));
-      }
-      return bad;
-    };
-    apply();
-    for (int pass = 0;; ++pass) {
-      const std::vector<uint32_t> bad = bad_faces();
-      if (bad.empty()) break;
-      std::vector<uint8_t> mark(nv, 0);
-      for (uint32_t f : bad) {
-        for (int k = 0; k < 3; ++k) mark[mesh.indices[3 * size_t{f} + k]] = 1;
-      }
-      for (size_t v = 0; v < nv; ++v) {
-        if (!mark[v] || step[v] == 0) continue;
-        step[v] = pass < 6 ? 0.5 * step[v] : 0.0;
-        ++report.steps_halved;
-      }
-      apply();
-    }
+    }, report.steps_halved);
     positions.swap(moved);
+  }
+
+  if (options.border_reach_edges > 0) {
+    report.border_vertices_moved =
+        ExtendBorders(mesh, positions, local, spacing, points, options, edge_floor, nearest_face,
+                      input_edge, cos_turn, input_crosses, report);
   }
 
   // The figures after, on the points supported before.

@@ -47,11 +47,33 @@
 //    never ends farther than max_offset_edges of that length from its input
 //    position (a chord's sagitta is a fraction of an edge; a vertex pulled
 //    farther is pulled by another surface's points). Border vertices move
-//    the same way, along the normal only: that widens a pipe's outline
-//    without growing the mesh's borders into unscanned space.
+//    the same way, along the normal only, in the rounds.
 //  * No face may turn by more than `max_turn_deg` from its normal before the
 //    step or in the input, nor lose its area: the steps of the vertices of
 //    such faces are halved (up to 6 times, then dropped) until none does.
+// Borders (version 3 of the stage): after the rounds, a border pass moves
+// border vertices outward in their faces' planes so that the model's
+// outline reaches the scan's. mesh.decimate may cut a border up to half an
+// output edge into the scanned surface (`boundary_erosion`), and the
+// outermost points beyond it are hole pixels at the outline
+// (docs/mesh-real-scans.md, "Borders out to the scan's outline"). Twice:
+//  * every supported point whose closest point lies on a border edge (its
+//    barycentric coordinate of the opposite corner is 0), outside it in the
+//    face's plane by t >= 0, and off that plane by at most t + 2 s (the
+//    surface continuing, within 45 degrees give or take the noise; a wall
+//    behind the border or a mixed return along the ray at a depth step is
+//    farther off), asks the edge's line to move outward by
+//    t + border_margin_spacings x s at its place along the edge, s the
+//    point's local spacing but at most the cloud's median (a sparse flying
+//    pixel's inflated spacing buys no tolerance);
+//  * per edge, the end offsets (m_a, m_b) >= 0 whose line (1 - s) m_a +
+//    s m_b passes over every such goal with the least m_a + m_b: the upper
+//    convex hull of the goals and of (0, 0) and (1, 0), read at s = 1/2;
+//  * a border vertex with exactly two border edges moves by the shortest
+//    vector in the span of their outward directions that meets both ends'
+//    offsets, at most border_reach_edges of its input mean edge from where
+//    the pass found it; the face-turn guard below halves the moves as in
+//    the rounds. Interior vertices, and vertices where borders meet, stay.
 // Faces, vertex order and every attribute but positions and normals are
 // kept; normals, when present, are the input's turned by the rotation that
 // takes the vertex's area-weighted face normal before the fit to the one
@@ -84,6 +106,8 @@ struct FitOptions {
   double max_offset_edges = 0.5;    // farthest a vertex ends from its input position, same unit, > 0
   double max_turn_deg = 60.0;       // largest turn of a face normal, (0, 180)
   int spacing_neighbors = 8;        // k of the local spacing, >= 1
+  double border_reach_edges = 0.5;  // farthest a border vertex moves outward, in its mean edges; 0: off
+  double border_margin_spacings = 0.5;  // border this many local spacings past the outermost points, >= 0
   int threads = 0;                  // 0: TBB's default (all cores)
 };
 
@@ -101,6 +125,7 @@ struct FitReport {
   double max_move_m = 0;            // largest displacement of a vertex, input to output
   double mean_move_m = 0;           // over all vertices
   uint64_t steps_halved = 0;        // vertex steps halved by the face-turn guard, all rounds
+  uint64_t border_vertices_moved = 0;  // border vertices moved outward by the border pass
   double mean_edge_m = 0;
   double median_spacing_m = 0;      // of the points' local spacings
 };

@@ -160,6 +160,7 @@ TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
   FitOptions options;
   options.iterations = 6;
   options.outside_weight = 0.5;
+  options.border_reach_edges = 0;  // the border pass would move the rim outward (next test)
   FitReport report;
   Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
   ASSERT_TRUE(fitted.ok()) << fitted.status().message();
@@ -175,6 +176,97 @@ TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
   EXPECT_LT(hi, 0.0015);
   EXPECT_LT(hi - lo, 0.0015);  // noise amplitude 4 mm
   EXPECT_LT(report.mean_abs_distance_after_m, report.mean_abs_distance_before_m);
+}
+
+// True when (x, y) lies in the xy projection of one of the mesh's faces.
+bool CoveredFromAbove(const Mesh& mesh, double x, double y) {
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    double px[3], py[3];
+    for (int k = 0; k < 3; ++k) {
+      px[k] = mesh.positions[3 * size_t{mesh.indices[3 * f + k]}];
+      py[k] = mesh.positions[3 * size_t{mesh.indices[3 * f + k]} + 1];
+    }
+    bool negative = false, positive = false;
+    for (int k = 0; k < 3; ++k) {
+      const int l = (k + 1) % 3;
+      const double side = (px[l] - px[k]) * (y - py[k]) - (py[l] - py[k]) * (x - px[k]);
+      negative |= side < 0;
+      positive |= side > 0;
+    }
+    if (!(negative && positive)) return true;
+  }
+  return false;
+}
+
+// A 1 m grid whose rim lies 3 cm inside the scan's outline (as a decimation
+// that cut its border into the surface leaves it): the border pass moves the
+// rim outward in the plane until it passes the outermost points, by about
+// half a local spacing and never farther than border_reach_edges of an edge;
+// off, the rim stays.
+TEST(FitTest, TheBorderPassMovesTheRimOutToTheScansOutline) {
+  const Mesh mesh = FlatGrid(10, 0.0f);
+  PointCloud points;
+  for (int j = 0; j <= 212; ++j) {
+    for (int i = 0; i <= 212; ++i) {
+      points.positions.insert(points.positions.end(), {static_cast<float>(-0.03 + 0.005 * i),
+                                                       static_cast<float>(-0.03 + 0.005 * j), 0.0f});
+    }
+  }
+  FitOptions options;
+  options.iterations = 2;
+  FitReport report;
+  Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
+  ASSERT_TRUE(fitted.ok()) << fitted.status().message();
+  EXPECT_EQ(report.border_vertices_moved, 40u);  // the whole rim of the 11 x 11 vertices
+  double min_x = 1, max_x = 0, min_y = 1, max_y = 0;
+  for (size_t v = 0; v < fitted->vertex_count(); ++v) {
+    const double x = fitted->positions[3 * v], y = fitted->positions[3 * v + 1];
+    min_x = std::min(min_x, x);
+    max_x = std::max(max_x, x);
+    min_y = std::min(min_y, y);
+    max_y = std::max(max_y, y);
+    EXPECT_NEAR(fitted->positions[3 * v + 2], 0.0, 1e-6);  // in the plane
+    // At most half an edge (the grid's edges: 0.1 m, diagonals 0.14 m).
+    const double move = std::hypot(x - mesh.positions[3 * v], y - mesh.positions[3 * v + 1]);
+    EXPECT_LE(move, 0.5 * 0.1 * (1 + std::sqrt(2.0)) / 2 * 1.5 + 1e-6);
+  }
+  // Past the outermost points (at -0.03 and 1.03) by a fraction of their
+  // local spacing (5 mm grid: 4.4 mm inside, 6 mm on the outline).
+  for (double low : {min_x, min_y}) {
+    EXPECT_LT(low, -0.0315);
+    EXPECT_GT(low, -0.0375);
+  }
+  for (double high : {max_x, max_y}) {
+    EXPECT_GT(high, 1.0315);
+    EXPECT_LT(high, 1.0375);
+  }
+  for (size_t i = 0; i < points.size(); i += 7) {
+    ASSERT_TRUE(CoveredFromAbove(*fitted, points.positions[3 * i], points.positions[3 * i + 1]))
+        << "point " << i << " at " << points.positions[3 * i] << ", " << points.positions[3 * i + 1];
+  }
+
+  // Off: the rim stays where the decimation left it.
+  options.border_reach_edges = 0;
+  Expected<Mesh> kept = FitMeshToPoints(mesh, points, options, &report);
+  ASSERT_TRUE(kept.ok());
+  EXPECT_EQ(report.border_vertices_moved, 0u);
+  EXPECT_EQ(kept->positions, mesh.positions);
+  EXPECT_FALSE(CoveredFromAbove(*kept, -0.02, 0.5));
+
+  // A short leash: the rim stops at border_reach_edges of the vertices' mean
+  // edge, short of the points.
+  options.border_reach_edges = 0.1;
+  Expected<Mesh> short_leash = FitMeshToPoints(mesh, points, options, &report);
+  ASSERT_TRUE(short_leash.ok());
+  for (size_t v = 0; v < short_leash->vertex_count(); ++v) {
+    const double move = std::hypot(short_leash->positions[3 * v] - mesh.positions[3 * v],
+                                   short_leash->positions[3 * v + 1] - mesh.positions[3 * v + 1]);
+    EXPECT_LE(move, 0.1 * 0.1 * (1 + std::sqrt(2.0)) / 2 * 1.5 + 1e-6);
+  }
+  EXPECT_FALSE(CoveredFromAbove(*short_leash, -0.028, 0.5));
+
+  options.border_margin_spacings = -1;
+  EXPECT_FALSE(FitMeshToPoints(mesh, points, options, nullptr).ok());
 }
 
 // A flat grid under points spread uniformly over z in [-a, a] (a = 2 mm):
