@@ -2,13 +2,16 @@
 // (stages/geometry/mesh/decimate.h).
 #include <cmath>
 #include <cstdio>
+#include <optional>
 #include <string>
 #include <utility>
 
 #include "engine/stage.h"
 #include "stages/geometry/mesh/decimate.h"
+#include "stages/geometry/mesh/sight.h"
 #include "stages/mesh_io.h"
 #include "stages/params.h"
+#include "stages/points_io.h"
 
 namespace pb {
 namespace {
@@ -69,6 +72,18 @@ constexpr const char* kSchema = R"({
       "minimum": 0,
       "default": 1,
       "description": "A hole within `fill_hole_output_edges` is filled when every point of its patch lies within this many output mean edge lengths of the hole's rim (a round hole of perimeter 2 pi; an oval of perimeter 8 less than two edges wide): metrics.geometry counts no invented area within one output edge of the scan. 0: every hole within the perimeter is filled (version 4, whose default perimeter was 6)."
+    },
+    "seen_through_points": {
+      "type": "integer",
+      "minimum": 0,
+      "default": 3,
+      "description": "With the scan on the `points` input and its scanner stations known: a hole is not filled when at least this many lines of sight (station to point) cross its patch `seen_through_clearance` or more before their point, and they outnumber the lines ending on the patch (within that clearance). The scanner saw through it: free space or a surface behind, which a patch would hide (invented surface). At least a few, so that one stray return does not decide; the majority, so that a few mixed returns behind a depth step (an RGB-D camera's flying pixels) do not open a hole the scanner mostly saw as surface. 0: no test."
+    },
+    "seen_through_clearance": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.25,
+      "description": "How far before its point a line of sight must cross a patch to count, in output mean edge lengths: a point just behind a patch over its own hole's rim is that surface, not seen through it."
     }
   },
   "oneOf": [{"required": ["target_faces"]}, {"required": ["ratio"]}]
@@ -112,6 +127,33 @@ Status Run(StageContext& ctx) {
                 " faces, within the budget of " + std::to_string(options.target_faces) +
                 ": unchanged");
   }
+  // The scan's lines of sight, for the holes the scanner saw through.
+  PB_ASSIGN_OR_RETURN(const int64_t seen_through,
+                      IntegerParam(ctx, kId, "seen_through_points", {0}));
+  PB_ASSIGN_OR_RETURN(const double clearance, NumberParam(ctx, kId, "seen_through_clearance"));
+  std::optional<LinesOfSight> sight;
+  bool without_stations = false;
+  if (ctx.has_input("points") && seen_through > 0 && options.fill_hole_output_edges > 0) {
+    PB_ASSIGN_OR_RETURN(InputPoints points, ReadInputPoints(ctx, kId, 0.25));
+    if (points.cloud.has_stations()) {
+      Expected<LinesOfSight> built = LinesOfSight::Build(points.cloud, mesh.origin);
+      if (!built.ok()) return built.status().WithContext(points.path);
+      sight = std::move(*built);
+      options.keep_hole_open = [&](const std::vector<std::array<double, 9>>& patch,
+                                   double output_edge) {
+        size_t behind = 0, near = 0;
+        for (const auto& t : patch) {
+          const LinesOfSight::Counts counts = sight->Through(
+              {t[0], t[1], t[2]}, {t[3], t[4], t[5]}, {t[6], t[7], t[8]}, clearance * output_edge);
+          behind += counts.behind;
+          near += counts.near;
+        }
+        return behind >= static_cast<size_t>(seen_through) && behind > near;
+      };
+    } else {
+      without_stations = true;
+    }
+  }
   options.progress = [&ctx](double fraction) { ctx.progress(0.2 + 0.7 * fraction); };
   DecimateReport report;
   Mesh output;
@@ -127,6 +169,11 @@ Status Run(StageContext& ctx) {
   ctx.counter("hole_faces", static_cast<double>(report.hole_faces));
   ctx.counter("holes_too_wide", static_cast<double>(report.holes_too_wide));
   ctx.counter("outlines_kept", static_cast<double>(report.outlines_kept));
+  ctx.counter("holes_seen_through", static_cast<double>(report.holes_seen_through));
+  if (without_stations && report.holes_filled > 0) {
+    ctx.warning("the scan has no scanner stations: " + std::to_string(report.holes_filled) +
+                " holes filled without the lines-of-sight test (seen_through_points)");
+  }
   PB_RETURN_IF_ERROR(WriteOutputMesh(
       ctx, output,
       InputMeshMetaWith(ctx, output,
@@ -139,7 +186,8 @@ Status Run(StageContext& ctx) {
                            {"holes_filled", report.holes_filled},
                            {"hole_faces", report.hole_faces},
                            {"holes_too_wide", report.holes_too_wide},
-                           {"outlines_kept", report.outlines_kept}}}})));
+                           {"outlines_kept", report.outlines_kept},
+                           {"holes_seen_through", report.holes_seen_through}}}})));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -149,8 +197,9 @@ Status Run(StageContext& ctx) {
 StageType DecimateStage() {
   StageType type;
   type.id = kId;
-  type.version = 5;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it;
-                    // 4: fill_hole_output_edges; 5: fill_hole_reach, perimeter 6 -> 8
+  type.version = 6;  // 2: smooth_boundary; 3: boundary_tolerance (chords) replaces it;
+                    // 4: fill_hole_output_edges; 5: fill_hole_reach, perimeter 6 -> 8;
+                    // 6: seen_through_points (the `points` input)
   type.summary = "Quadric edge-collapse decimation to a face budget, keeping the mesh manifold";
   type.doc =
       "Collapses edges in order of quadric error (Garland & Heckbert 1997) until the face count "
@@ -165,10 +214,15 @@ StageType DecimateStage() {
       "Counters: `faces_in`, `faces_out`, `holes_filled`, `hole_faces`, `holes_too_wide` "
       "(`fill_hole_output_edges`, `fill_hole_reach`), `outlines_kept` (loops not filled because "
       "the patch would be over a quarter of its connected surface's area: the outline of an "
-      "open sheet, which it would close into a shell).";
+      "open sheet, which it would close into a shell), `holes_seen_through` (not filled: "
+      "`seen_through_points` lines of sight of the scan on `points` cross the patch).";
   type.params_schema = kSchema;
   type.inputs = {
-      {"mesh", "mesh", "The mesh to decimate (mesh.ply; a synth truth works too).", false}};
+      {"mesh", "mesh", "The mesh to decimate (mesh.ply; a synth truth works too).", false},
+      {"points", "points",
+       "Optional: the scan (points.ply). With its scanner stations, a hole the scanner saw "
+       "through is not filled (`seen_through_points`).",
+       true}};
   type.outputs = {{"mesh", "mesh", "The decimated mesh (mesh.ply).", false}};
   type.run = &Run;
   return type;

@@ -7,6 +7,7 @@
 #include <filesystem>
 #include <fstream>
 #include <map>
+#include <memory>
 #include <set>
 #include <string>
 
@@ -57,7 +58,7 @@ class MeshStagesTest : public StageTest {
 TEST_F(MeshStagesTest, DecimateIsWellFormed) {
   const StageType* type = registry_.Find("mesh.decimate");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 5);
+  EXPECT_EQ(type->version, 6);
   const nlohmann::json schema = CheckedSchema(*type);
   EXPECT_EQ(schema["type"], "object");
   EXPECT_EQ(schema["properties"]["target_faces"]["type"], "integer");
@@ -67,10 +68,16 @@ TEST_F(MeshStagesTest, DecimateIsWellFormed) {
   EXPECT_EQ(schema["properties"]["boundary_tolerance"]["default"], 0.2);
   EXPECT_EQ(schema["properties"]["boundary_erosion"]["default"], 0.5);
   EXPECT_EQ(schema["properties"]["min_normal_dot"]["default"], 0.2);
+  EXPECT_EQ(schema["properties"]["seen_through_points"]["default"], 3);
+  EXPECT_EQ(schema["properties"]["seen_through_clearance"]["default"], 0.25);
   EXPECT_EQ(schema["oneOf"].size(), 2u);
-  ASSERT_EQ(type->inputs.size(), 1u);
+  ASSERT_EQ(type->inputs.size(), 2u);
   EXPECT_EQ(type->inputs[0].name, "mesh");
   EXPECT_EQ(type->inputs[0].type, "mesh");
+  EXPECT_FALSE(type->inputs[0].optional);
+  EXPECT_EQ(type->inputs[1].name, "points");
+  EXPECT_EQ(type->inputs[1].type, "points");
+  EXPECT_TRUE(type->inputs[1].optional);
   ASSERT_EQ(type->outputs.size(), 1u);
   EXPECT_EQ(type->outputs[0].name, "mesh");
   EXPECT_EQ(type->outputs[0].type, "mesh");
@@ -95,6 +102,89 @@ TEST_F(MeshStagesTest, DecimateToTargetFaces) {
   EXPECT_TRUE(out->mesh.has_colors());
   EXPECT_EQ(ctx.meta_["mesh"]["faces"], out->mesh.face_count());
   EXPECT_EQ(ctx.meta_["mesh"]["source"], "test");  // input meta passed on
+}
+
+// A 1 m grid with a round hole of radius 6 cm, decimated to 200 faces
+// (output edge about 0.11 m): small enough to fill. Scanned from 1 m above
+// the hole: when the scan also has a floor 0.5 m below, seen through the
+// hole, the hole is real and stays open; without the floor (the scanner
+// got nothing back through it, as over a gap in the scan) it is filled;
+// without stations there is no telling, and it is filled with a warning.
+// A few returns behind a hole the scan mostly saw as surface do not open it.
+TEST_F(MeshStagesTest, DecimateKeepsAHoleTheScannerSawThroughOpen) {
+  Mesh holed;
+  holed.origin = {500.0, 20.0, 3.0};
+  const int n = 40;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      holed.positions.insert(holed.positions.end(),
+                             {static_cast<float>(i) / n, static_cast<float>(j) / n, 0.0f});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      const double x = (i + 0.5) / n - 0.5, y = (j + 0.5) / n - 0.5;
+      if (x * x + y * y < 0.06 * 0.06) continue;
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      holed.indices.insert(holed.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  // `floor_step`: a floor every that many cm (0: none); `in_hole`: points on
+  // the plane inside the hole too (the mesh lost surface the scan has).
+  const auto scan = [&](int floor_step, bool stations, bool in_hole = false) {
+    PointCloud cloud;
+    cloud.origin = {500.0, 20.0, 3.0};
+    for (int j = 0; j <= 100; ++j) {
+      for (int i = 0; i <= 100; ++i) {
+        const double x = i / 100.0, y = j / 100.0;
+        if (!in_hole && (x - 0.5) * (x - 0.5) + (y - 0.5) * (y - 0.5) < 0.07 * 0.07) continue;
+        cloud.positions.insert(cloud.positions.end(),
+                               {static_cast<float>(x), static_cast<float>(y), 0.0f});
+      }
+    }
+    for (int j = 30; floor_step > 0 && j <= 70; j += floor_step) {
+      for (int i = 30; i <= 70; i += floor_step) {
+        cloud.positions.insert(cloud.positions.end(), {i / 100.0f, j / 100.0f, -0.5f});
+      }
+    }
+    if (stations) {
+      cloud.stations = {{500.5, 20.5, 4.0}};
+      cloud.station_ids.assign(cloud.size(), 0);
+    }
+    return cloud;
+  };
+  const auto decimate = [&](const std::string& name, const PointCloud& points) {
+    auto ctx = std::make_unique<FakeContext>(dir_ / name, nlohmann::json{{"target_faces", 200}});
+    ctx->AddInput("mesh", "mesh", WriteInputMesh(name + "_mesh", holed));
+    ctx->AddInput("points", "points", WriteInputPoints(name + "_points", points));
+    const Status status = Run("mesh.decimate", *ctx);
+    EXPECT_TRUE(status.ok()) << status.message();
+    return ctx;
+  };
+  const auto seen = decimate("seen", scan(1, true));
+  EXPECT_EQ(seen->counters_["holes_seen_through"], 1);
+  EXPECT_EQ(seen->counters_["holes_filled"], 0);
+  EXPECT_EQ(seen->meta_["mesh"]["decimate"]["holes_seen_through"], 1);
+  const auto unseen = decimate("unseen", scan(0, true));
+  EXPECT_EQ(unseen->counters_["holes_seen_through"], 0);
+  EXPECT_EQ(unseen->counters_["holes_filled"], 1);
+  EXPECT_TRUE(unseen->warnings_.empty());
+  const auto blind = decimate("blind", scan(1, false));
+  EXPECT_EQ(blind->counters_["holes_filled"], 1);
+  ASSERT_EQ(blind->warnings_.size(), 1u);
+  EXPECT_THAT(blind->warnings_[0], HasSubstr("no scanner stations"));
+  // seen_through_points: 0 turns the test off.
+  FakeContext off(dir_ / "off", {{"target_faces", 200}, {"seen_through_points", 0}});
+  off.AddInput("mesh", "mesh", WriteInputMesh("off_mesh", holed));
+  off.AddInput("points", "points", WriteInputPoints("off_points", scan(1, true)));
+  ASSERT_TRUE(Run("mesh.decimate", off).ok());
+  EXPECT_EQ(off.counters_["holes_filled"], 1);
+  // The scan has surface in the hole and a few returns behind it (a sparse
+  // floor, as an RGB-D camera's flying pixels past a depth step): the lines
+  // ending on the patch outnumber those through it, and it is filled.
+  const auto mixed = decimate("mixed", scan(4, true, true));
+  EXPECT_EQ(mixed->counters_["holes_seen_through"], 0);
+  EXPECT_EQ(mixed->counters_["holes_filled"], 1);
 }
 
 TEST_F(MeshStagesTest, DecimateByRatioFromAnyFileName) {

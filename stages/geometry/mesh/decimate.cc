@@ -185,11 +185,17 @@ class Decimator {
     fill.max_perimeter_m = options_.fill_hole_output_edges * output_edge;
     fill.max_reach_m = options_.fill_hole_reach * output_edge;
     fill.max_component_fraction = options_.fill_hole_max_component_fraction;
+    if (options_.keep_hole_open) {
+      fill.keep_open = [&](const std::vector<std::array<double, 9>>& patch) {
+        return options_.keep_hole_open(patch, output_edge);
+      };
+    }
     HoleFillReport filled;
     PB_RETURN_IF_ERROR(FillSmallHoles(shape, fill, &filled));
     report_.holes_filled = filled.holes_filled;
     report_.holes_too_wide = filled.holes_too_wide;
     report_.outlines_kept = filled.outlines_kept;
+    report_.holes_seen_through = filled.holes_kept_open;
     report_.hole_faces = filled.faces_added;
     faces_ = std::move(shape.indices);
     return Status::Ok();

@@ -52,9 +52,11 @@
 // 5.2e6 -> 2.5e5 in 17 s (icosphere, poor vertex locality), one core.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <cstdint>
 #include <functional>
+#include <vector>
 
 #include "base/status.h"
 #include "stages/geometry/core/mesh.h"
@@ -107,6 +109,12 @@ struct DecimateOptions {
   // not filled: that loop is the outline of an open sheet (a thin fragment
   // seen from one side), which a patch would close into a shell.
   double fill_hole_max_component_fraction = 0.25;
+  // When set, asked for each hole the tests above would fill, with its
+  // patch's triangles (mesh frame) and the output's mean edge length; true
+  // keeps it open (the stage passes the scan's lines of sight, sight.h: a
+  // hole the scanner saw through is no surface to fill).
+  std::function<bool(const std::vector<std::array<double, 9>>& patch, double output_edge_m)>
+      keep_hole_open;
   // Called with the fraction of the work done, in [0,1], every few thousand
   // collapses.
   std::function<void(double fraction)> progress;
@@ -125,6 +133,7 @@ struct DecimateReport {
   uint64_t hole_faces = 0;           // faces the filled holes added
   uint64_t holes_too_wide = 0;       // within the perimeter, past the reach
   uint64_t outlines_kept = 0;        // open sheets' outlines, not filled
+  uint64_t holes_seen_through = 0;   // kept open by keep_hole_open
 };
 
 // Decimates `mesh` to about `options.target_faces` triangles. Status::Invalid

@@ -436,6 +436,43 @@ TEST(MeshDecimate, HolesTheOutputCannotDrawAreFilledFirst) {
   EXPECT_GT(in.boundary_edges, 0u);
 }
 
+// keep_hole_open sees each patch the size tests let through, with the output
+// edge, and keeps the hole open when it says so.
+TEST(MeshDecimate, AHoleTheHookKeepsOpenStaysOpen) {
+  const Mesh holed = GridWithHoles(60, {{0.3, 0.3, 0.05}, {0.65, 0.65, 0.15}});
+  DecimateOptions options;
+  options.target_faces = 200;
+  options.fill_hole_output_edges = 6;
+  int asked = 0;
+  double edge = 0, x = 0, y = 0;
+  options.keep_hole_open = [&](const std::vector<std::array<double, 9>>& patch, double output_edge) {
+    ++asked;
+    edge = output_edge;
+    for (const auto& t : patch) {
+      for (int k = 0; k < 3; ++k) {
+        x += t[3 * k] / (3.0 * static_cast<double>(patch.size()));
+        y += t[3 * k + 1] / (3.0 * static_cast<double>(patch.size()));
+      }
+    }
+    return true;
+  };
+  DecimateReport report;
+  const auto kept = DecimateMesh(holed, options, &report);
+  ASSERT_TRUE(kept.ok());
+  EXPECT_EQ(asked, 1);  // the small hole only
+  EXPECT_NEAR(edge, 0.103, 0.003);
+  EXPECT_NEAR(x, 0.3, 0.02);
+  EXPECT_NEAR(y, 0.3, 0.02);
+  EXPECT_EQ(report.holes_filled, 0u);
+  EXPECT_EQ(report.holes_seen_through, 1u);
+  EXPECT_EQ(BoundaryLoops(*kept).size(), 3u);
+  options.keep_hole_open = [](const std::vector<std::array<double, 9>>&, double) { return false; };
+  const auto filled = DecimateMesh(holed, options, &report);
+  ASSERT_TRUE(filled.ok());
+  EXPECT_EQ(report.holes_filled, 1u);
+  EXPECT_EQ(report.holes_seen_through, 0u);
+}
+
 TEST(MeshDecimate, TheReachNotThePerimeterDecidesWhichHolesAreFilled) {
   // A slit 0.08 m wide and about 0.78 m long (perimeter about 1.6 m, 16
   // output edges of about 0.1 m, reaching 0.04 m from its rim) and a round

@@ -244,6 +244,21 @@ Status FillSmallHoles(Mesh& mesh, const HoleFillOptions& options, HoleFillReport
         continue;
       }
     }
+    if (options.keep_open) {
+      std::vector<std::array<double, 9>> triangles;
+      triangles.reserve(patch.size());
+      for (const auto& t : patch) {
+        std::array<double, 9> corners;
+        for (int k = 0; k < 3; ++k) {
+          for (int c = 0; c < 3; ++c) corners[3 * k + c] = points[3 * size_t{t[k]} + c];
+        }
+        triangles.push_back(corners);
+      }
+      if (options.keep_open(triangles)) {
+        ++r.holes_kept_open;
+        continue;
+      }
+    }
     // The hole runs against the faces around it and the patch runs the
     // hole forward, so the patch is wound like the faces around it.
     for (const auto& t : patch) {

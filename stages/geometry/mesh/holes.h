@@ -13,7 +13,9 @@
 // exists in the mesh, which would make that edge non-manifold.
 #pragma once
 
+#include <array>
 #include <cstdint>
+#include <functional>
 #include <vector>
 
 #include "base/status.h"
@@ -47,6 +49,11 @@ struct HoleFillOptions {
   // hole: its patch, about as large as the sheet, would close it into a
   // shell.
   double max_component_fraction = 0;
+  // When set, asked last for each patch the tests above let through, with
+  // its triangles' corners (mesh frame); true keeps the hole open. E.g. the
+  // scan's lines of sight (sight.h): a hole the scanner saw through is
+  // free space, not missing surface.
+  std::function<bool(const std::vector<std::array<double, 9>>& triangles)> keep_open;
 };
 
 struct HoleFillReport {
@@ -56,6 +63,7 @@ struct HoleFillReport {
   uint64_t holes_rejected = 0;  // small enough, but no valid patch
   uint64_t holes_too_wide = 0;  // small enough, but the patch reaches past max_reach_m
   uint64_t outlines_kept = 0;   // small enough, but an outline (max_component_fraction)
+  uint64_t holes_kept_open = 0; // small enough, but keep_open said so
 };
 
 // Appends the patches of the small holes' loops to `mesh` (existing faces
