@@ -127,32 +127,44 @@ Status Run(StageContext& ctx) {
                 " faces, within the budget of " + std::to_string(options.target_faces) +
                 ": unchanged");
   }
-  // The scan's lines of sight, for the holes the scanner saw through.
+  // The scan's lines of sight, for the holes the scanner saw through. Read
+  // when the first hole the size tests would fill asks (most decimations
+  // have none, and the scan can be much larger than the mesh).
   PB_ASSIGN_OR_RETURN(const int64_t seen_through,
                       IntegerParam(ctx, kId, "seen_through_points", {0}));
   PB_ASSIGN_OR_RETURN(const double clearance, NumberParam(ctx, kId, "seen_through_clearance"));
   std::optional<LinesOfSight> sight;
-  bool without_stations = false;
-  if (ctx.has_input("points") && seen_through > 0 && options.fill_hole_output_edges > 0) {
-    PB_ASSIGN_OR_RETURN(InputPoints points, ReadInputPoints(ctx, kId, 0.25));
-    if (points.cloud.has_stations()) {
-      Expected<LinesOfSight> built = LinesOfSight::Build(points.cloud, mesh.origin);
-      if (!built.ok()) return built.status().WithContext(points.path);
-      sight = std::move(*built);
-      options.keep_hole_open = [&](const std::vector<std::array<double, 9>>& patch,
-                                   double output_edge) {
-        size_t behind = 0, near = 0;
-        for (const auto& t : patch) {
-          const LinesOfSight::Counts counts = sight->Through(
-              {t[0], t[1], t[2]}, {t[3], t[4], t[5]}, {t[6], t[7], t[8]}, clearance * output_edge);
-          behind += counts.behind;
-          near += counts.near;
+  bool read = false, without_stations = false;
+  Status sight_status = Status::Ok();
+  if (ctx.has_input("points") && seen_through > 0) {
+    options.keep_hole_open = [&](const std::vector<std::array<double, 9>>& patch,
+                                 double output_edge) {
+      if (!read) {
+        read = true;
+        Expected<InputPoints> points = ReadInputPoints(ctx, kId, 0.2);
+        if (!points.ok()) {
+          sight_status = points.status();
+        } else if (!points->cloud.has_stations()) {
+          without_stations = true;
+        } else {
+          Expected<LinesOfSight> built = LinesOfSight::Build(points->cloud, mesh.origin);
+          if (built.ok()) {
+            sight = std::move(*built);
+          } else {
+            sight_status = built.status().WithContext(points->path);
+          }
         }
-        return behind >= static_cast<size_t>(seen_through) && behind > near;
-      };
-    } else {
-      without_stations = true;
-    }
+      }
+      if (!sight) return false;
+      size_t behind = 0, near = 0;
+      for (const auto& t : patch) {
+        const LinesOfSight::Counts counts = sight->Through(
+            {t[0], t[1], t[2]}, {t[3], t[4], t[5]}, {t[6], t[7], t[8]}, clearance * output_edge);
+        behind += counts.behind;
+        near += counts.near;
+      }
+      return behind >= static_cast<size_t>(seen_through) && behind > near;
+    };
   }
   options.progress = [&ctx](double fraction) { ctx.progress(0.2 + 0.7 * fraction); };
   DecimateReport report;
@@ -160,6 +172,7 @@ Status Run(StageContext& ctx) {
   {
     PB_PHASE(ctx, "compute");
     auto decimated = DecimateMesh(mesh, options, &report);
+    if (!sight_status.ok()) return sight_status;
     if (!decimated.ok()) return decimated.status().WithContext(input.path);
     output = std::move(*decimated);
   }

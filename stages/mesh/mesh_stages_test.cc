@@ -185,6 +185,27 @@ TEST_F(MeshStagesTest, DecimateKeepsAHoleTheScannerSawThroughOpen) {
   const auto mixed = decimate("mixed", scan(4, true, true));
   EXPECT_EQ(mixed->counters_["holes_seen_through"], 0);
   EXPECT_EQ(mixed->counters_["holes_filled"], 1);
+
+  // The scan is read only when a hole asks: a truncated points file fails
+  // the decimation of the holed grid, naming the file, and does not matter
+  // to a grid without holes.
+  const std::filesystem::path truncated = dir_ / "truncated" / "points.ply";
+  std::filesystem::create_directories(truncated.parent_path());
+  {
+    std::ofstream out(truncated);
+    out << "ply\nformat binary_little_endian 1.0\nelement vertex 1000\nproperty float x\n"
+           "property float y\nproperty float z\nend_header\n";
+  }
+  FakeContext broken(dir_ / "broken", {{"target_faces", 200}});
+  broken.AddInput("mesh", "mesh", WriteInputMesh("broken_mesh", holed));
+  broken.AddInput("points", "points", truncated.string());
+  const Status broken_status = Run("mesh.decimate", broken);
+  EXPECT_FALSE(broken_status.ok());
+  EXPECT_THAT(broken_status.message(), HasSubstr("points.ply"));
+  FakeContext whole(dir_ / "whole", {{"target_faces", 200}});
+  whole.AddInput("mesh", "mesh", WriteGrid("whole.ply"));
+  whole.AddInput("points", "points", truncated.string());
+  EXPECT_TRUE(Run("mesh.decimate", whole).ok());
 }
 
 TEST_F(MeshStagesTest, DecimateByRatioFromAnyFileName) {
