@@ -6,6 +6,7 @@
 #include <cmath>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <memory>
 #include <set>
@@ -104,6 +105,26 @@ TEST_F(MeshStagesTest, DecimateToTargetFaces) {
   EXPECT_EQ(ctx.meta_["mesh"]["source"], "test");  // input meta passed on
 }
 
+// An n x n quad grid of the unit square on z = 0, two triangles a quad,
+// without the quads (i, j) for which `skip` holds.
+Mesh UnitGrid(int n, const std::function<bool(int i, int j)>& skip) {
+  Mesh grid;
+  for (int j = 0; j <= n; ++j) {
+    for (int i = 0; i <= n; ++i) {
+      grid.positions.insert(grid.positions.end(),
+                            {static_cast<float>(i) / n, static_cast<float>(j) / n, 0.0f});
+    }
+  }
+  for (int j = 0; j < n; ++j) {
+    for (int i = 0; i < n; ++i) {
+      if (skip(i, j)) continue;
+      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      grid.indices.insert(grid.indices.end(), {a, b, c, a, c, d});
+    }
+  }
+  return grid;
+}
+
 // A 1 m grid with a round hole of radius 6 cm, decimated to 200 faces
 // (output edge about 0.11 m): small enough to fill. Scanned from 1 m above
 // the hole: when the scan also has a floor 0.5 m below, seen through the
@@ -112,23 +133,12 @@ TEST_F(MeshStagesTest, DecimateToTargetFaces) {
 // without stations there is no telling, and it is filled with a warning.
 // A few returns behind a hole the scan mostly saw as surface do not open it.
 TEST_F(MeshStagesTest, DecimateKeepsAHoleTheScannerSawThroughOpen) {
-  Mesh holed;
-  holed.origin = {500.0, 20.0, 3.0};
   const int n = 40;
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) {
-      holed.positions.insert(holed.positions.end(),
-                             {static_cast<float>(i) / n, static_cast<float>(j) / n, 0.0f});
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      const double x = (i + 0.5) / n - 0.5, y = (j + 0.5) / n - 0.5;
-      if (x * x + y * y < 0.06 * 0.06) continue;
-      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      holed.indices.insert(holed.indices.end(), {a, b, c, a, c, d});
-    }
-  }
+  Mesh holed = UnitGrid(n, [&](int i, int j) {
+    const double x = (i + 0.5) / n - 0.5, y = (j + 0.5) / n - 0.5;
+    return x * x + y * y < 0.06 * 0.06;
+  });
+  holed.origin = {500.0, 20.0, 3.0};
   // `floor_step`: a floor every that many cm (0: none); `in_hole`: points on
   // the plane inside the hole too (the mesh lost surface the scan has).
   const auto scan = [&](int floor_step, bool stations, bool in_hole = false) {
@@ -421,21 +431,9 @@ TEST_F(MeshStagesTest, TrimRemovesUnsupportedFacesAndCleanFillsPinHoles) {
       points.positions.insert(points.positions.end(), {i / 100.0f, j / 100.0f, 0.0f});
     }
   }
-  Mesh grid;
+  // A pin-hole in scanned surface at quad (5, 5).
   const int n = 50;
-  for (int j = 0; j <= n; ++j) {
-    for (int i = 0; i <= n; ++i) {
-      grid.positions.insert(grid.positions.end(),
-                            {static_cast<float>(i) / n, static_cast<float>(j) / n, 0.0f});
-    }
-  }
-  for (int j = 0; j < n; ++j) {
-    for (int i = 0; i < n; ++i) {
-      if (i == 5 && j == 5) continue;  // a pin-hole in scanned surface
-      const uint32_t a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
-      grid.indices.insert(grid.indices.end(), {a, b, c, a, c, d});
-    }
-  }
+  const Mesh grid = UnitGrid(n, [](int i, int j) { return i == 5 && j == 5; });
   FakeContext trim(dir_ / "trim", nlohmann::json::object(), 2);
   trim.AddInput("mesh", "mesh", WriteInputMesh("grid", grid), {{"source", "test"}});
   trim.AddInput("points", "points", WriteInputPoints("points", points));
