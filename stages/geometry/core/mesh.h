@@ -36,6 +36,11 @@ struct Mesh {
   bool has_tangents() const { return !tangents.empty(); }
 };
 
+// The key of the undirected edge {a, b}: the smaller index in the high half.
+inline uint64_t EdgeKey(uint32_t a, uint32_t b) {
+  return (static_cast<uint64_t>(a < b ? a : b) << 32) | (a < b ? b : a);
+}
+
 Bounds LocalBounds(const Mesh& mesh);
 Bounds AbsoluteBounds(const Mesh& mesh);
 

@@ -26,10 +26,6 @@ struct EdgeUse {
   bool operator<(const EdgeUse& o) const { return key != o.key ? key < o.key : corner < o.corner; }
 };
 
-uint64_t EdgeKey(uint32_t a, uint32_t b) {
-  return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
-
 // The edge uses of all faces in `indices`, sorted by edge.
 std::vector<EdgeUse> SortedEdges(const std::vector<uint32_t>& indices) {
   std::vector<EdgeUse> edges;

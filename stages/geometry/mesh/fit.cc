@@ -20,6 +20,7 @@
 
 #include "stages/geometry/core/vec3.h"
 #include "stages/geometry/mesh/distance.h"
+#include "stages/geometry/mesh/holes.h"  // BorderSides
 #include "stages/geometry/mesh/trim.h"  // MeanEdgeLength
 #include "stages/geometry/points/knn.h"
 #include "stages/geometry/points/spacing.h"
@@ -194,31 +195,17 @@ uint64_t ExtendBorders(const Mesh& mesh, std::vector<float>& positions,
                        double cos_turn, const std::vector<V3>& input_crosses,
                        FitReport& report) {
   const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
-  // Border edges: the directed edges (corner k of face f to k + 1) whose
-  // undirected edge has one face.
-  std::vector<std::pair<uint64_t, uint32_t>> edges;  // (key, 3 f + k)
-  edges.reserve(3 * nf);
-  for (size_t f = 0; f < nf; ++f) {
-    for (int k = 0; k < 3; ++k) {
-      const uint64_t a = mesh.indices[3 * f + k], b = mesh.indices[3 * f + (k + 1) % 3];
-      edges.emplace_back(std::min(a, b) << 32 | std::max(a, b), static_cast<uint32_t>(3 * f + k));
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  std::vector<uint8_t> border_corner(3 * nf, 0);  // 1: the edge from corner k to k + 1 is a border
+  // Border sides (corner k of face f to k + 1, alone on their edge) and
+  // each vertex's number of them (up to 3).
+  const std::vector<uint8_t> border_corner = BorderSides(mesh);
   std::vector<uint8_t> border_count(nv, 0);
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
-    if (j - i == 1) {
-      border_corner[edges[i].second] = 1;
-      const uint32_t f = edges[i].second / 3, k = edges[i].second % 3;
-      for (uint32_t c : {k, (k + 1) % 3}) {
-        uint8_t& n = border_count[mesh.indices[3 * size_t{f} + c]];
-        n = static_cast<uint8_t>(std::min(n + 1, 3));
-      }
+  for (size_t e = 0; e < border_corner.size(); ++e) {
+    if (!border_corner[e]) continue;
+    const size_t f = e / 3, k = e % 3;
+    for (size_t c : {k, (k + 1) % 3}) {
+      uint8_t& n = border_count[mesh.indices[3 * f + c]];
+      n = static_cast<uint8_t>(std::min(n + 1, 3));
     }
-    i = j;
   }
   uint64_t total_moved = 0;
   std::vector<uint8_t> ever_moved(nv, 0);

@@ -15,10 +15,6 @@
 namespace pb {
 namespace {
 
-uint64_t EdgeKey(uint32_t a, uint32_t b) {
-  return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
-
 double EdgeLength(const Mesh& mesh, uint32_t a, uint32_t b) {
   double sum = 0;
   for (int c = 0; c < 3; ++c) {
@@ -96,36 +92,40 @@ std::vector<double> ComponentAreaOfVertices(const Mesh& mesh) {
 
 }  // namespace
 
-std::vector<std::vector<uint32_t>> BoundaryLoops(const Mesh& mesh) {
-  // Directed sides of faces, sorted by undirected edge; a side alone on its
-  // edge is a boundary side u -> v, and the hole runs v -> u.
-  struct Side {
-    uint64_t key;
-    uint32_t from, to, opposite;
-  };
-  std::vector<Side> sides;
-  sides.reserve(mesh.indices.size());
+std::vector<uint8_t> BorderSides(const Mesh& mesh) {
+  const size_t sides = mesh.indices.size();
+  std::vector<std::pair<uint64_t, uint32_t>> keyed;  // (edge key, side)
+  keyed.reserve(sides);
   for (size_t f = 0; f < mesh.face_count(); ++f) {
     const uint32_t* t = &mesh.indices[3 * f];
     for (int k = 0; k < 3; ++k) {
-      sides.push_back({EdgeKey(t[k], t[(k + 1) % 3]), t[k], t[(k + 1) % 3], t[(k + 2) % 3]});
+      keyed.emplace_back(EdgeKey(t[k], t[(k + 1) % 3]), static_cast<uint32_t>(3 * f + k));
     }
   }
-  std::sort(sides.begin(), sides.end(),
-            [](const Side& a, const Side& b) { return a.key < b.key; });
+  std::sort(keyed.begin(), keyed.end());
+  std::vector<uint8_t> border(sides, 0);
+  for (size_t i = 0; i < keyed.size();) {
+    size_t j = i;
+    while (j < keyed.size() && keyed[j].first == keyed[i].first) ++j;
+    if (j - i == 1) border[keyed[i].second] = 1;
+    i = j;
+  }
+  return border;
+}
+
+std::vector<std::vector<uint32_t>> BoundaryLoops(const Mesh& mesh) {
+  // A border side u -> v: the hole runs v -> u.
+  const std::vector<uint8_t> border = BorderSides(mesh);
   constexpr uint32_t kNone = UINT32_MAX, kAmbiguous = UINT32_MAX - 1;
   std::vector<uint32_t> hole_next(mesh.vertex_count(), kNone);  // v -> next vertex along the hole
   std::vector<uint8_t> starts(mesh.vertex_count(), 0);
-  for (size_t i = 0; i < sides.size();) {
-    size_t j = i;
-    while (j < sides.size() && sides[j].key == sides[i].key) ++j;
-    if (j - i == 1) {
-      const Side& s = sides[i];
-      // Hole edge s.to -> s.from.
-      hole_next[s.to] = hole_next[s.to] == kNone ? s.from : kAmbiguous;
-      starts[s.from] = starts[s.from] < 2 ? starts[s.from] + 1 : 2;
-    }
-    i = j;
+  for (size_t side = 0; side < border.size(); ++side) {
+    if (!border[side]) continue;
+    const size_t f = side / 3, k = side % 3;
+    const uint32_t from = mesh.indices[3 * f + k], to = mesh.indices[3 * f + (k + 1) % 3];
+    // Hole edge to -> from.
+    hole_next[to] = hole_next[to] == kNone ? from : kAmbiguous;
+    starts[from] = starts[from] < 2 ? starts[from] + 1 : 2;
   }
   std::vector<std::vector<uint32_t>> loops;
   std::vector<uint8_t> visited(mesh.vertex_count(), 0);

@@ -31,6 +31,10 @@ namespace pb {
 // is left out.
 std::vector<std::vector<uint32_t>> BoundaryLoops(const Mesh& mesh);
 
+// Per face side (3 f + k: from corner k to corner k + 1 of face f), 1 when
+// no other face has that undirected edge: a border side, its face inside.
+std::vector<uint8_t> BorderSides(const Mesh& mesh);
+
 struct HoleFillOptions {
   // A loop is filled when it has at most max_edges edges or its perimeter
   // is at most max_perimeter_m (either test; 0 disables it).

@@ -98,10 +98,6 @@ double TriangleArea(const std::array<double, 3>& a, const std::array<double, 3>&
   return 0.5 * std::sqrt(x * x + y * y + z * z);
 }
 
-uint64_t EdgeKey(uint32_t a, uint32_t b) {
-  return (static_cast<uint64_t>(std::min(a, b)) << 32) | std::max(a, b);
-}
-
 // (edge key, face) for every side of every face, sorted.
 std::vector<std::pair<uint64_t, uint32_t>> SortedFaceEdges(const Mesh& mesh) {
   std::vector<std::pair<uint64_t, uint32_t>> edges;
