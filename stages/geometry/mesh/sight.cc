@@ -25,6 +25,22 @@ std::array<double, 2> Angles(const V3& d) {
   return {std::atan2(d[1], d[0]), std::atan2(d[2], horizontal)};
 }
 
+// Moller-Trumbore: where the line station + t d meets the triangle
+// corner0 + u e1 + v e2 (`to_station` = station - corner0), the t > 0 of
+// the crossing, or 0 when it misses.
+double CrossingAt(const V3& d, const V3& e1, const V3& e2, const V3& to_station) {
+  const V3 p = Cross(d, e2);
+  const double det = Dot(e1, p);
+  if (std::abs(det) < 1e-300) return 0;
+  const double inv = 1 / det;
+  const double u = Dot(to_station, p) * inv;
+  if (u < 0 || u > 1) return 0;
+  const V3 q = Cross(to_station, e1);
+  const double v = Dot(d, q) * inv;
+  if (v < 0 || u + v > 1) return 0;
+  return std::max(0.0, Dot(e2, q) * inv);
+}
+
 }  // namespace
 
 Expected<LinesOfSight> LinesOfSight::Build(const PointCloud& points,
@@ -138,19 +154,8 @@ LinesOfSight::Counts LinesOfSight::Through(const std::array<double, 3>& a,
     // A cell of margin covers edges bulging between corners; a triangle
     // around the straight up or down direction reaches the pole between its
     // corners, and then spans every azimuth.
-    const auto around = [&](double z) {
-      // Does the line station + t (0, 0, z), t > 0, cross the triangle?
-      const V3 d = {0, 0, z};
-      const V3 p = Cross(d, e2);
-      const double det = Dot(e1, p);
-      if (std::abs(det) < 1e-300) return false;
-      const double u = Dot(to_station, p) / det;
-      const V3 q = Cross(to_station, e1);
-      const double v = Dot(d, q) / det;
-      return u >= 0 && v >= 0 && u + v <= 1 && Dot(e2, q) / det > 0;
-    };
-    if (around(1)) el_hi = kPi / 2;
-    if (around(-1)) el_lo = -kPi / 2;
+    if (CrossingAt({0, 0, 1}, e1, e2, to_station) > 0) el_hi = kPi / 2;
+    if (CrossingAt({0, 0, -1}, e1, e2, to_station) > 0) el_lo = -kPi / 2;
     const int64_t row_lo = std::clamp<int64_t>(
         static_cast<int64_t>((el_lo + kPi / 2) / cell_) - 1, 0, rows_ - 1);
     const int64_t row_hi = std::clamp<int64_t>(
@@ -170,20 +175,10 @@ LinesOfSight::Counts LinesOfSight::Through(const std::array<double, 3>& a,
           const auto& o = station.offsets[static_cast<size_t>(it - station.keys.begin())];
           const V3 d = {o[0], o[1], o[2]};  // station -> point
           const double length = Norm(d);
-          // Moller-Trumbore: station + t d = corner0 + u e1 + v e2.
-          const V3 p = Cross(d, e2);
-          const double det = Dot(e1, p);
-          if (std::abs(det) < 1e-300) continue;
           // The angle between the line and the plane: |d . n| / (|d| |n|).
           if (std::abs(Dot(d, normal)) < min_sin * length * normal_length) continue;
-          const double inv = 1 / det;
-          const double u = Dot(to_station, p) * inv;
-          if (u < 0 || u > 1) continue;
-          const V3 q = Cross(to_station, e1);
-          const double v = Dot(d, q) * inv;
-          if (v < 0 || u + v > 1) continue;
           // The crossing at t of the way from the station to the point.
-          const double t = Dot(e2, q) * inv;
+          const double t = CrossingAt(d, e1, e2, to_station);
           if (t <= 0) continue;
           const double before_point = (1 - t) * length;  // < 0: the point lies before it
           if (before_point >= clearance_m) {
