@@ -191,7 +191,7 @@ Status Run(StageContext& ctx) {
 StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
-  type.version = 4;  // 4: units
+  type.version = 5;  // 4: units; 5: the station of an unposed structured scan (grid_station.h)
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters (a file in "
@@ -199,11 +199,15 @@ StageType ReadPointsStage() {
       "and 8-bit sRGB colors, intensities and scanner stations when the file has them.\n\n"
       "Formats (chosen by extension, or `format:`): PLY (ascii, binary little and big endian; "
       "any scalar types; unknown elements and properties ignored); PCD v0.6/0.7 (ascii, binary, "
-      "binary_compressed; VIEWPOINT applied and kept as the station); XYZ/TXT/CSV/PTS (columns "
+      "binary_compressed; VIEWPOINT applied and kept as the station; an organized cloud with the "
+      "identity VIEWPOINT has its sensor at the origin when its pixel grid was swept from there); "
+      "XYZ/TXT/CSV/PTS (columns "
       "declared with `columns:` or detected); PTX (several scans; each scan's 4x4 transform "
       "applied, its scanner position kept as a station, 0,0,0 points dropped); E57 (ASTM E2807: "
       "CRC-32C checked, bitPackCodec, float/scaled-integer/integer fields, cartesian or "
-      "spherical, poses, several scans, color and intensity); LAS 1.0-1.4, point formats 0-10, "
+      "spherical, poses, several scans, color and intensity; a scan without a pose has its scanner "
+      "at its frame's origin when it is spherical, or when its row/column grid was swept from "
+      "there: a station for normal orientation and lines of sight); LAS 1.0-1.4, point formats 0-10, "
       "and LAZ (LASzip-compressed LAS, COPC included: point formats 0-3 and 6-8, decoded in "
       "parallel over chunks; docs/laz.md).\n\n"
       "Double-precision (e.g. georeferenced) coordinates are stored as float32 offsets from an "

@@ -15,6 +15,7 @@
 
 #include "stages/geometry/io/e57_binary.h"
 #include "stages/geometry/io/e57_xml.h"
+#include "stages/geometry/io/grid_station.h"
 
 namespace pb {
 namespace {
@@ -39,6 +40,8 @@ enum Role : int {
   kIntensity,
   kCartesianInvalid,
   kSphericalInvalid,
+  kRowIndex,
+  kColumnIndex,
   kRoleCount
 };
 constexpr std::string_view kRoleNames[kRoleCount] = {"cartesianX",
@@ -52,7 +55,9 @@ constexpr std::string_view kRoleNames[kRoleCount] = {"cartesianX",
                                                      "colorBlue",
                                                      "intensity",
                                                      "cartesianInvalidState",
-                                                     "sphericalInvalidState"};
+                                                     "sphericalInvalidState",
+                                                     "rowIndex",
+                                                     "columnIndex"};
 
 struct Range {
   double min = 0.0;
@@ -93,7 +98,7 @@ class E57Reader {
                         bool top_level);
   Expected<ScanSpec> ParseScan(const XmlElement& element, int index);
   Status DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_intensity,
-                    bool keep_stations);
+                    GridStationTest* grid);
   void ReportProgress();
 
   std::string path_;
@@ -431,8 +436,9 @@ double Normalize(double value, const Range& range) {
   return t < 0.0 ? 0.0 : (t > 1.0 ? 1.0 : t);
 }
 
+// `grid` (optional) is given the records' grid cells and local positions.
 Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_intensity,
-                             bool keep_stations) {
+                             GridStationTest* grid) {
   PointCloud& cloud = result_.points;
   const auto& f = scan.field;
   const int invalid_field = scan.spherical ? f[kSphericalInvalid] : f[kCartesianInvalid];
@@ -445,7 +451,6 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
       {1 - 2 * (qy * qy + qz * qz), 2 * (qx * qy - w * qz), 2 * (qx * qz + w * qy)},
       {2 * (qx * qy + w * qz), 1 - 2 * (qx * qx + qz * qz), 2 * (qy * qz - w * qx)},
       {2 * (qx * qz - w * qy), 2 * (qy * qz + w * qx), 1 - 2 * (qx * qx + qy * qy)}};
-  const uint16_t station = static_cast<uint16_t>(scan.index);
   uint64_t record = 0;
 
   auto on_batch = [&](size_t count, const std::vector<std::vector<double>>& columns) -> Status {
@@ -455,6 +460,7 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
     for (size_t i = 0; i < count; ++i, ++record) {
       if (invalid_field >= 0 && columns[invalid_field][i] != 0.0) {
         ++result_.dropped_points;
+        if (grid != nullptr) grid->Break();
         continue;
       }
       double local[3];
@@ -477,11 +483,16 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
           !std::isfinite(absolute[2])) {
         if (options_.drop_invalid_points) {
           ++result_.dropped_points;
+          if (grid != nullptr) grid->Break();
           continue;
         }
         return Status::Invalid(path_ + ": data3D scan " + std::to_string(scan.index) + " point " +
                                std::to_string(record) +
                                " has a NaN or infinite coordinate (drop_invalid_points skips it)");
+      }
+      if (grid != nullptr) {
+        grid->Add(static_cast<int64_t>(columns[f[kRowIndex]][i]),
+                  static_cast<int64_t>(columns[f[kColumnIndex]][i]), local);
       }
       if (!have_origin_) {
         for (int a = 0; a < 3; ++a) {
@@ -506,7 +517,6 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
         cloud.intensities.push_back(
             static_cast<float>(Normalize(columns[f[kIntensity]][i], scan.intensity_range)));
       }
-      if (keep_stations) cloud.station_ids.push_back(station);
     }
     ReportProgress();
     return Status::Ok();
@@ -541,15 +551,12 @@ Expected<ScanReadResult> E57Reader::Read() {
   }
 
   bool all_colors = true, any_colors = false, all_intensity = true, any_intensity = false;
-  bool all_poses = true, any_pose = false;
   uint64_t total_records = 0;
   for (const ScanSpec& scan : scans) {
     all_colors &= scan.has_colors;
     any_colors |= scan.has_colors;
     all_intensity &= scan.has_intensity;
     any_intensity |= scan.has_intensity;
-    all_poses &= scan.has_pose;
-    any_pose |= scan.has_pose;
     total_records += scan.points.record_count;
   }
   if (any_colors && !all_colors) {
@@ -557,9 +564,6 @@ Expected<ScanReadResult> E57Reader::Read() {
   }
   if (any_intensity && !all_intensity) {
     result_.warnings.push_back("intensities dropped: not every scan has intensity");
-  }
-  if (any_pose && !all_poses) {
-    result_.warnings.push_back("stations dropped: not every scan has a pose");
   }
   if (scans.size() > 1) result_.warnings.push_back(std::to_string(scans.size()) + " scans merged");
 
@@ -569,11 +573,60 @@ Expected<ScanReadResult> E57Reader::Read() {
   cloud.positions.reserve(reserve * 3);
   if (all_colors) cloud.colors.reserve(reserve * 3);
   if (all_intensity) cloud.intensities.reserve(reserve);
-  if (all_poses) cloud.station_ids.reserve(reserve);
 
+  // Each scan's scanner: at its pose's translation; without a pose (the
+  // identity) at the origin of its frame when that is known to be the
+  // scanner's: spherical coordinates are measured from it, and a row/column
+  // grid evenly spaced in angle seen from it was swept from it
+  // (grid_station.h). Stations are kept when every scan has one.
+  std::vector<size_t> first_point(scans.size() + 1, 0);
+  std::vector<std::string> unknown;  // why a scan's scanner is not known
+  bool worth_saying = false;         // a scan's station is known, or a grid failed the test
   for (const ScanSpec& scan : scans) {
-    PB_RETURN_IF_ERROR(DecodeScan(scan, all_colors, all_intensity, all_poses));
-    if (all_poses) cloud.stations.push_back(scan.translation);
+    const std::string name = "data3D scan " + std::to_string(scan.index);
+    const bool grid = !scan.has_pose && !scan.spherical && scan.field[kRowIndex] >= 0 &&
+                      scan.field[kColumnIndex] >= 0;
+    GridStationTest test;
+    first_point[scan.index] = cloud.size();
+    PB_RETURN_IF_ERROR(DecodeScan(scan, all_colors, all_intensity, grid ? &test : nullptr));
+    if (scan.has_pose) {
+      worth_saying = true;
+      continue;
+    }
+    if (scan.spherical) {
+      worth_saying = true;
+      result_.warnings.push_back(name +
+                                 " has no pose: its scanner taken at its frame's origin, from "
+                                 "which its spherical coordinates are measured");
+    } else if (!grid) {
+      unknown.push_back(name + " has no pose and no row/column grid");
+    } else if (const GridStationTest::Verdict verdict = test.Decide(); verdict.at_origin) {
+      worth_saying = true;
+      result_.warnings.push_back(name + " has no pose: its scanner taken at its frame's origin (" +
+                                 verdict.Describe() + ")");
+    } else {
+      worth_saying = true;
+      unknown.push_back(name + " has no pose, and its frame's origin is not its scanner's (" +
+                        verdict.Describe() + ")");
+    }
+  }
+  first_point[scans.size()] = cloud.size();
+  if (unknown.empty()) {
+    cloud.station_ids.resize(cloud.size());
+    for (const ScanSpec& scan : scans) {
+      cloud.stations.push_back(scan.translation);  // {0, 0, 0} without a pose
+      std::fill(cloud.station_ids.begin() + first_point[scan.index],
+                cloud.station_ids.begin() + first_point[scan.index + 1],
+                static_cast<uint16_t>(scan.index));
+    }
+  } else if (worth_saying) {
+    // Some scanners known, or a grid that was not swept from its origin:
+    // say why there are no stations (normals are then oriented without
+    // them). Clouds without any pose or grid (merged, converted) say nothing.
+    result_.warnings.push_back("no scanner stations: " + unknown.front() +
+                               (unknown.size() > 1
+                                    ? " (and " + std::to_string(unknown.size() - 1) + " more)"
+                                    : std::string()));
   }
 
   // Re-center on the bounding-box center rounded to 1 m. Both origins are

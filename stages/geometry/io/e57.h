@@ -30,13 +30,20 @@
 //     field's minimum/maximum, else [0, 1] for Float fields); intensity ->
 //     [0, 1] using intensityLimits the same way. Colors / intensities are
 //     kept only if every scan has them (a warning says when they are not);
-//   - stations: when every scan has a `pose`, one station per scan at its
-//     translation (absolute meters) and station_ids per point; without poses
-//     the scanner position is unknown and no stations are recorded;
+//   - stations: one per scan, station_ids per point, when every scan's
+//     scanner is known: at its pose's translation (absolute meters); a scan
+//     without a pose (the identity) has its scanner at its frame's origin
+//     when spherical coordinates are measured from there, or when its
+//     rowIndex/columnIndex grid was swept from there (grid_station.h: the
+//     angle between grid neighbours seen from the origin is constant; the
+//     pump sample passes, a scan whose registration was baked into its
+//     coordinates fails). Otherwise no stations, and a warning says which
+//     scan and why, unless no scan had a pose or a grid to go by;
 //   - origin: the bounding-box center of all points rounded to 1 m, positions
 //     are float32 relative to it;
-//   - rowIndex, columnIndex, timeStamp, returnIndex, extension fields
-//     (prefixed names) and other unknown fields are decoded and ignored;
+//   - rowIndex, columnIndex: only for the station test above; timeStamp,
+//     returnIndex, extension fields (prefixed names) and other unknown
+//     fields are decoded and ignored;
 //     images2D and pointGroupingSchemes are ignored.
 // Memory: the output arrays, the XML text, and one packet per stream.
 //

@@ -281,7 +281,15 @@ TEST_F(E57Test, PumpMatchesDecodedPly) {
   EXPECT_EQ(read->dropped_points, 0u);
   ASSERT_TRUE(cloud.has_colors());
   ASSERT_TRUE(cloud.has_intensities());
-  EXPECT_FALSE(cloud.has_stations());  // no pose in this file
+  // No pose in this file, but its 1074 x 345 grid was swept from its
+  // frame's origin: the scanner stood there (grid_station.h).
+  ASSERT_TRUE(cloud.has_stations());
+  EXPECT_EQ(cloud.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+  EXPECT_EQ(cloud.station_ids, std::vector<uint16_t>(cloud.size(), 0));
+  ASSERT_EQ(read->warnings.size(), 1u);
+  EXPECT_THAT(read->warnings[0],
+              HasSubstr("data3D scan 0 has no pose: its scanner taken at its frame's origin "
+                        "(seen from there, 100.0 % of the 154190 steps"));
   EXPECT_GE(progress_calls, 1);
   EXPECT_TRUE(Validate(cloud).ok());
   for (float intensity : cloud.intensities) {
@@ -325,6 +333,9 @@ TEST_F(E57Test, BunnyDoubles) {
   EXPECT_NEAR(bounds.min_m[2], -0.061873, 1e-6);
   EXPECT_NEAR(bounds.max_m[2], 0.058799, 1e-6);
   EXPECT_EQ(read->points.origin, (std::array<double, 3>{0, 0, 0}));
+  // Merged range images without pose or grid: no scanner known, nothing to say.
+  EXPECT_FALSE(read->points.has_stations());
+  EXPECT_TRUE(read->warnings.empty());
 }
 
 TEST_F(E57Test, FlippedByteIsCrcErrorNamingThePage) {
@@ -421,7 +432,7 @@ TEST_F(E57Test, SphericalConvertedToCartesian) {
 TEST_F(E57Test, InvalidStatesAreDroppedAndCounted) {
   TestScan scan = XyzScan({1, 2, 3, 4}, {1, 2, 3, 4}, {1, 2, 3, 4});
   scan.fields.push_back(Integer("cartesianInvalidState", 0, 2, {0, 1, 0, 2}));
-  scan.fields.push_back(Integer("rowIndex", 0, 2047, {5, 6, 7, 8}));  // decoded, ignored
+  scan.fields.push_back(Integer("rowIndex", 0, 2047, {5, 6, 7, 8}));  // alone: no grid
   auto read = ReadE57(WriteScans({scan}), {});
   ASSERT_TRUE(read.ok()) << read.status().message();
   EXPECT_EQ(read->dropped_points, 2u);
@@ -463,6 +474,88 @@ TEST_F(E57Test, TwoScansWithPosesMerge) {
   EXPECT_EQ(cloud.stations[1], (std::array<double, 3>{1002, 2000, 10}));
   EXPECT_EQ(cloud.station_ids, (std::vector<uint16_t>{0, 0, 1}));
   EXPECT_THAT(read->warnings, ::testing::Contains("2 scans merged"));
+}
+
+// A structured scan without a pose: a grid of `rows` x `columns` records,
+// column after column, swept from `station` (0.01 rad down a column, 0.02
+// rad along a row) over surfaces at two depths.
+TestScan GridScan(int rows, int columns, const std::array<double, 3>& station) {
+  std::vector<double> x, y, z, row_index, column_index;
+  for (int column = 0; column < columns; ++column) {
+    for (int row = 0; row < rows; ++row) {
+      const double elevation = 0.3 - 0.01 * row, azimuth = 0.02 * column;
+      const double range = (row / 8 + column / 6) % 2 == 0 ? 2.0 : 5.5;
+      x.push_back(station[0] + range * std::cos(elevation) * std::cos(azimuth));
+      y.push_back(station[1] + range * std::cos(elevation) * std::sin(azimuth));
+      z.push_back(station[2] + range * std::sin(elevation));
+      row_index.push_back(row);
+      column_index.push_back(column);
+    }
+  }
+  TestScan scan = XyzScan(std::move(x), std::move(y), std::move(z));
+  scan.fields.push_back(Integer("rowIndex", 0, rows - 1, std::move(row_index)));
+  scan.fields.push_back(Integer("columnIndex", 0, columns - 1, std::move(column_index)));
+  return scan;
+}
+
+TEST_F(E57Test, APoselessGridScanHasItsScannerAtItsOrigin) {
+  auto read = ReadE57(WriteScans({GridScan(30, 25, {0, 0, 0})}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  EXPECT_EQ(cloud.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+  EXPECT_EQ(cloud.station_ids, std::vector<uint16_t>(750, 0));
+  EXPECT_THAT(read->warnings,
+              ::testing::Contains(HasSubstr("data3D scan 0 has no pose: its scanner taken at "
+                                            "its frame's origin (seen from there, 100.0 %")));
+}
+
+TEST_F(E57Test, APoselessGridScanSweptFromElsewhereHasNoStation) {
+  // The registration baked into the coordinates: the scanner 30 cm off.
+  auto read = ReadE57(WriteScans({GridScan(30, 25, {0.3, 0, 0})}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_FALSE(read->points.has_stations());
+  EXPECT_TRUE(read->points.stations.empty());
+  EXPECT_THAT(read->warnings,
+              ::testing::Contains(HasSubstr("no scanner stations: data3D scan 0 has no pose, and "
+                                            "its frame's origin is not its scanner's")));
+  // Too small a grid to tell: no station either.
+  auto small = ReadE57(WriteScans({GridScan(10, 10, {0, 0, 0})}), {});
+  ASSERT_TRUE(small.ok()) << small.status().message();
+  EXPECT_FALSE(small->points.has_stations());
+  EXPECT_THAT(small->warnings, ::testing::Contains(HasSubstr("too few to tell")));
+}
+
+TEST_F(E57Test, APoselessSphericalScanHasItsScannerAtItsOrigin) {
+  TestScan scan;
+  scan.fields = {Float64("sphericalRange", {2.0, 3.0}), Float64("sphericalAzimuth", {0.0, 1.0}),
+                 Float64("sphericalElevation", {0.0, 0.5})};
+  auto read = ReadE57(WriteScans({scan}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_EQ(read->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+  EXPECT_EQ(read->points.station_ids, (std::vector<uint16_t>{0, 0}));
+}
+
+TEST_F(E57Test, StationsNeedEveryScansScanner) {
+  // Scan 0 posed, scan 1 neither posed nor gridded: no stations at all (a
+  // normal without its scanner cannot be oriented by one), and why.
+  TestScan a = XyzScan({1, 2}, {0, 0}, {0, 1});
+  a.extra_xml =
+      "<pose type=\"Structure\"><translation type=\"Structure\"><x type=\"Float\">3</x>"
+      "</translation></pose>";
+  auto read = ReadE57(WriteScans({a, XyzScan({0}, {0}, {0})}), {});
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_TRUE(read->points.stations.empty());
+  EXPECT_TRUE(read->points.station_ids.empty());
+  EXPECT_THAT(read->warnings,
+              ::testing::Contains("no scanner stations: data3D scan 1 has no pose and no "
+                                  "row/column grid"));
+  // A posed scan and a poseless one swept from its origin: both stations.
+  auto both = ReadE57(WriteScans({a, GridScan(30, 25, {0, 0, 0})}), {});
+  ASSERT_TRUE(both.ok()) << both.status().message();
+  EXPECT_EQ(both->points.stations, (std::vector<std::array<double, 3>>{{3, 0, 0}, {0, 0, 0}}));
+  ASSERT_EQ(both->points.station_ids.size(), 752u);
+  EXPECT_EQ(both->points.station_ids[1], 0);
+  EXPECT_EQ(both->points.station_ids[2], 1);
 }
 
 TEST_F(E57Test, ColorAndIntensityNormalizedByLimits) {

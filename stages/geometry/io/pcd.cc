@@ -15,11 +15,13 @@
 #include <cstring>
 #include <functional>
 #include <limits>
+#include <optional>
 #include <string_view>
 #include <vector>
 
 #include "stages/geometry/core/buffered_input.h"
 #include "stages/geometry/core/text_parse.h"
+#include "stages/geometry/io/grid_station.h"
 
 namespace pb {
 namespace {
@@ -388,6 +390,9 @@ class PcdReader {
     coordinates_f4_ = true;
     for (Role role : {kX, kY, kZ}) coordinates_f4_ &= header_.fields[of[role]].size == 4;
     recenter_ = !coordinates_f4_ || translate_;
+    // An organized cloud in its sensor's frame (identity VIEWPOINT): the
+    // sensor stands at the origin if the image grid was swept from there.
+    if (organized_ && !rotate_ && !translate_) grid_.emplace();
 
     // Reserve, but never more than the bytes left in the file could hold, so a
     // corrupt POINTS fails as truncation instead of exhausting memory.
@@ -412,6 +417,7 @@ class PcdReader {
       return DropOrFail(p, index, place);
     }
     PointCloud& cloud = result_.points;
+    if (grid_) AddToGrid(index, p);
     float out[3];
     ToOutputFrame(p, out);
     cloud.positions.insert(cloud.positions.end(), out, out + 3);
@@ -443,7 +449,15 @@ class PcdReader {
                              "); drop such points with drop_invalid_points");
     }
     ++result_.dropped_points;
+    if (grid_) grid_->Break();
     return Status::Ok();
+  }
+
+  // Point `index` of an organized cloud, as read (sensor frame), to the
+  // grid test: WIDTH points per row.
+  void AddToGrid(uint64_t index, const double* p) {
+    grid_->Add(static_cast<int64_t>(index / header_.width),
+               static_cast<int64_t>(index % header_.width), p);
   }
 
   // Non-finite (also after narrowing to float) intensities carry no signal.
@@ -487,6 +501,22 @@ class PcdReader {
     if (rotate_ || translate_) {
       cloud.stations = {{header_.viewpoint[0], header_.viewpoint[1], header_.viewpoint[2]}};
       cloud.station_ids.assign(cloud.size(), 0);
+    } else if (grid_) {
+      // An organized cloud with the identity VIEWPOINT: its sensor at the
+      // origin when the image grid was swept from there (grid_station.h).
+      const GridStationTest::Verdict verdict = grid_->Decide();
+      if (verdict.at_origin) {
+        cloud.stations = {{0.0, 0.0, 0.0}};
+        cloud.station_ids.assign(cloud.size(), 0);
+        result_.warnings.push_back(
+            "organized cloud with the identity VIEWPOINT: its sensor taken at the origin (" +
+            verdict.Describe() + ")");
+      } else {
+        result_.warnings.push_back(
+            "no sensor station: organized cloud with the identity VIEWPOINT, and the origin is "
+            "not its sensor's (" +
+            verdict.Describe() + ")");
+      }
     }
     if (!recenter_ || cloud.empty()) return;
     // The bounding-box center rounded to 1 m; the shift is whole meters, so
@@ -814,6 +844,14 @@ class PcdReader {
         PB_RETURN_IF_ERROR(DropOrFail(p, i, ""));
         continue;
       }
+      if (grid_) {
+        // Identity VIEWPOINT: the values as read are the streamed ones.
+        double p[3];
+        for (int axis = 0; axis < 3; ++axis) {
+          p[axis] = (coordinates_f4_ ? 0.0 : stream_origin_[axis]) + f[axis];
+        }
+        AddToGrid(i, p);
+      }
       float out[3];
       if (in_place) {
         std::copy(f, f + 3, out);
@@ -955,6 +993,7 @@ class PcdReader {
   // value (plus the translation when there is no rotation) rounded to 1 m.
   std::array<bool, 3> have_stream_origin_{};
   std::array<double, 3> stream_origin_{};
+  std::optional<GridStationTest> grid_;  // organized, identity VIEWPOINT
   ScanReadResult result_;
 };
 

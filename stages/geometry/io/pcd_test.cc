@@ -561,6 +561,67 @@ TEST_F(PcdTest, OfficeKinectBinaryCompressed) {
   EXPECT_EQ(cloud.station_ids.size(), cloud.size());
 }
 
+// An organized depth frame, 40 x 30 pixels of a pinhole 60 degrees across
+// looking down -z, over two depths, moved by `shift`; NaN (no return) at
+// every 9th pixel. x y z as F4 in DATA `data`, identity VIEWPOINT.
+std::string OrganizedFrame(const std::string& data, const std::array<float, 3>& shift) {
+  const int width = 40, height = 30;
+  const double focal = 20.0 / std::tan(M_PI / 6);
+  std::vector<std::array<float, 3>> points;
+  for (int row = 0; row < height; ++row) {
+    for (int column = 0; column < width; ++column) {
+      const double depth = (row / 6 + column / 8) % 2 == 0 ? 1.5 : 3.2;
+      const double x = (column - 19.5) / focal * depth, y = (row - 14.5) / focal * depth;
+      points.push_back({float(x) + shift[0], float(y) + shift[1], float(-depth) + shift[2]});
+      if ((row * width + column) % 9 == 4)
+        points.back()[1] = std::numeric_limits<float>::quiet_NaN();
+    }
+  }
+  std::string body;
+  if (data == "ascii") {
+    for (const auto& p : points) {
+      body += std::isnan(p[1]) ? std::string("nan nan nan\n")
+                               : std::to_string(p[0]) + " " + std::to_string(p[1]) + " " +
+                                     std::to_string(p[2]) + "\n";
+    }
+  } else if (data == "binary") {
+    for (const auto& p : points)
+      for (float v : p) Append(&body, v);
+  } else {
+    std::string soa;
+    for (int axis = 0; axis < 3; ++axis)
+      for (const auto& p : points) Append(&soa, p[axis]);
+    body = CompressedBody(soa);
+  }
+  return "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 40\n"
+         "HEIGHT 30\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1200\nDATA " +
+         data + "\n" + body;
+}
+
+TEST_F(PcdTest, AnOrganizedFrameInItsSensorsFrameHasItsSensorAtTheOrigin) {
+  // The identity VIEWPOINT makes no station by itself (a fused cloud has it
+  // too); an image grid swept from the origin does (grid_station.h).
+  for (const std::string data : {"ascii", "binary", "binary_compressed"}) {
+    SCOPED_TRACE(data);
+    const auto read = ReadPcd(Write(OrganizedFrame(data, {0, 0, 0})), {});
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    EXPECT_EQ(read->dropped_points, 133u);
+    EXPECT_EQ(read->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+    EXPECT_EQ(read->points.station_ids, std::vector<uint16_t>(1200 - 133, 0));
+    EXPECT_THAT(read->warnings,
+                ::testing::Contains(HasSubstr("organized cloud with the identity VIEWPOINT: its "
+                                              "sensor taken at the origin (seen from there")));
+    // The same frame moved 25 cm: the origin is not the sensor's.
+    const auto moved = ReadPcd(Write(OrganizedFrame(data, {0.25f, 0, 0}), "moved.pcd"), {});
+    ASSERT_TRUE(moved.ok()) << moved.status().message();
+    EXPECT_TRUE(moved->points.stations.empty());
+    EXPECT_TRUE(moved->points.station_ids.empty());
+    EXPECT_THAT(moved->warnings,
+                ::testing::Contains(HasSubstr("no sensor station: organized cloud with the "
+                                              "identity VIEWPOINT, and the origin is not")));
+  }
+}
+
 TEST_F(PcdTest, LivingroomFragmentBinaryWithNormals) {
   const std::string data = SharedData();
   if (data.empty()) GTEST_SKIP() << "shared data not found";

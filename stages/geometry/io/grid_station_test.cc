@@ -1,0 +1,126 @@
+#include "stages/geometry/io/grid_station.h"
+
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstdint>
+
+namespace pb {
+namespace {
+
+using ::testing::HasSubstr;
+
+// A scene of boxes at different depths: the range of grid cell (row,
+// column) jumps every few cells, as at the edges of real objects.
+double Range(int64_t row, int64_t column) {
+  return 2.0 + 2.5 * double((row / 10 + column / 15) % 3) + 0.01 * std::sin(0.3 * double(row));
+}
+
+// A terrestrial scanner's sweep from `station`: column-major records (a
+// vertical line per azimuth step), 0.01 rad down a column, 0.02 rad along a
+// row; positions relative to the frame's origin. `skip` > 0 leaves every
+// skip-th record out of the file (no return, not recorded: the next record
+// is two cells on), `invalid` > 0 breaks the run at every invalid-th.
+GridStationTest::Verdict Sweep(const double station[3], int64_t rows, int64_t columns, int skip = 0,
+                               int invalid = 0) {
+  GridStationTest test;
+  int64_t record = 0;
+  for (int64_t column = 0; column < columns; ++column) {
+    for (int64_t row = 0; row < rows; ++row, ++record) {
+      if (skip > 0 && record % skip == 0) continue;
+      if (invalid > 0 && record % invalid == 0) {
+        test.Break();
+        continue;
+      }
+      const double elevation = 0.4 - 0.01 * double(row), azimuth = 0.02 * double(column);
+      const double r = Range(row, column);
+      const double p[3] = {station[0] + r * std::cos(elevation) * std::cos(azimuth),
+                           station[1] + r * std::cos(elevation) * std::sin(azimuth),
+                           station[2] + r * std::sin(elevation)};
+      test.Add(row, column, p);
+    }
+  }
+  return test.Decide();
+}
+
+TEST(GridStationTest, AGridSweptFromTheOriginPasses) {
+  const double origin[3] = {0, 0, 0};
+  const GridStationTest::Verdict verdict = Sweep(origin, 80, 120);
+  EXPECT_TRUE(verdict.decided);
+  EXPECT_TRUE(verdict.at_origin);
+  EXPECT_GT(verdict.regular, 0.999);
+  EXPECT_EQ(verdict.steps, 79u * 120u);  // down each column; the jump to the next is no step
+  EXPECT_THAT(verdict.Describe(), HasSubstr("100.0 % of the 9480 steps"));
+}
+
+TEST(GridStationTest, AGridSweptFromElsewhereFails) {
+  // The same sweep with its registration baked into the coordinates: the
+  // scanner 40 cm from the frame's origin. Seen from the origin the steps
+  // vary with range and jump at the depth edges.
+  const double station[3] = {0.4, -0.2, 0.1};
+  const GridStationTest::Verdict verdict = Sweep(station, 80, 120);
+  EXPECT_TRUE(verdict.decided);
+  EXPECT_FALSE(verdict.at_origin);
+  EXPECT_LT(verdict.regular, 0.95);
+  // Far away, as a site frame's origin usually is.
+  const double far[3] = {250, 1200, 30};
+  EXPECT_FALSE(Sweep(far, 80, 120).at_origin);
+}
+
+TEST(GridStationTest, MissingRecordsCountAsSeveralCellsAndInvalidOnesBreakTheRun) {
+  const double origin[3] = {0, 0, 0};
+  // Every 5th record not in the file: the next one is 2 cells on, a double step.
+  const GridStationTest::Verdict skipped = Sweep(origin, 80, 120, /*skip=*/5);
+  EXPECT_TRUE(skipped.at_origin);
+  EXPECT_GT(skipped.regular, 0.999);
+  // Every 7th record invalid: no step across it.
+  const GridStationTest::Verdict broken = Sweep(origin, 80, 120, 0, /*invalid=*/7);
+  EXPECT_TRUE(broken.at_origin);
+  EXPECT_LT(broken.steps, 80u * 120u * 6u / 7u);
+}
+
+TEST(GridStationTest, ACamerasPixelGridPasses) {
+  // An organized RGB-D frame: 160 x 120 pixels, 60 degrees across, looking
+  // down -z; a pinhole's angle per pixel shrinks toward the corners.
+  GridStationTest test;
+  const double focal = 80.0 / std::tan(M_PI / 6);
+  for (int64_t row = 0; row < 120; ++row) {
+    for (int64_t column = 0; column < 160; ++column) {
+      const double x = (double(column) - 79.5) / focal, y = (double(row) - 59.5) / focal;
+      const double depth = Range(row, column);
+      const double p[3] = {x * depth, y * depth, -depth};
+      test.Add(row, column, p);
+    }
+  }
+  const GridStationTest::Verdict verdict = test.Decide();
+  EXPECT_TRUE(verdict.at_origin) << verdict.Describe();
+}
+
+TEST(GridStationTest, TooFewStepsDecideNothing) {
+  const double origin[3] = {0, 0, 0};
+  const GridStationTest::Verdict verdict = Sweep(origin, 20, 20);
+  EXPECT_FALSE(verdict.decided);
+  EXPECT_FALSE(verdict.at_origin);
+  EXPECT_THAT(verdict.Describe(), HasSubstr("380 steps between neighbours"));
+  EXPECT_THAT(verdict.Describe(), HasSubstr("too few to tell"));
+  // A point at the origin itself has no direction: it breaks the run.
+  GridStationTest test;
+  const double zero[3] = {0, 0, 0};
+  for (int64_t row = 0; row < 2000; ++row) test.Add(row, 0, zero);
+  EXPECT_EQ(test.Decide().steps, 0u);
+}
+
+TEST(GridStationTest, AScanOfMillionsKeepsAnEvenSample) {
+  // More steps than a direction keeps (2^20): the kept ones are thinned
+  // evenly and the verdict still holds; every step is counted.
+  const double origin[3] = {0, 0, 0};
+  const GridStationTest::Verdict at = Sweep(origin, 1100, 1000);
+  EXPECT_EQ(at.steps, 1099u * 1000u);
+  EXPECT_TRUE(at.at_origin);
+  const double station[3] = {0.4, -0.2, 0.1};
+  EXPECT_FALSE(Sweep(station, 1100, 1000).at_origin);
+}
+
+}  // namespace
+}  // namespace pb
