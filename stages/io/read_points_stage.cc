@@ -3,13 +3,14 @@
 #include <array>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "base/units.h"
-#include "stages/geometry/io/scan_read.h"
 #include "stages/builtin.h"
+#include "stages/geometry/io/scan_read.h"
 #include "stages/params.h"
 #include "stages/points_io.h"
 
@@ -66,6 +67,104 @@ void ConvertToMeters(double meters, PointCloud* points) {
     for (double& c : station) c *= meters;
 }
 
+// `station` as a string: 'file', 'none' or "x,y,z" (decimal numbers).
+constexpr const char* kStationPattern =
+    "^(file|none|[-+]?[0-9.eE+-]+,[-+]?[0-9.eE+-]+,[-+]?[0-9.eE+-]+)$";
+
+// The `station` parameter: absent (the file's), none, or a position in the
+// file's coordinates and units.
+struct StationChoice {
+  enum class Kind { kFile, kNone, kDeclared } kind = Kind::kFile;
+  std::array<double, 3> position{};
+};
+
+Expected<StationChoice> ReadStation(const StageContext& ctx) {
+  StationChoice choice;
+  if (!ctx.params().contains("station")) return choice;
+  const nlohmann::json& value = ctx.params()["station"];
+  const Status bad = Status::Invalid(std::string(kId) +
+                                     ": parameter 'station' must be 'file', 'none', [x, y, z] or "
+                                     "\"x,y,z\" with finite numbers, got " +
+                                     value.dump());
+  std::array<double, 3> position{};
+  if (value.is_string()) {
+    const std::string text = value.get<std::string>();
+    if (text == "file") return choice;
+    if (text == "none") {
+      choice.kind = StationChoice::Kind::kNone;
+      return choice;
+    }
+    size_t start = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const size_t end = axis < 2 ? text.find(',', start) : text.size();
+      if (end == std::string::npos) return bad;
+      const std::string number = text.substr(start, end - start);
+      char* stop = nullptr;
+      position[axis] = std::strtod(number.c_str(), &stop);
+      if (number.empty() || stop != number.c_str() + number.size()) return bad;
+      start = end + 1;
+    }
+  } else if (value.is_array() && value.size() == 3) {
+    for (int axis = 0; axis < 3; ++axis) {
+      if (!value[axis].is_number()) return bad;
+      position[axis] = value[axis].get<double>();
+    }
+  } else {
+    return bad;
+  }
+  for (double c : position) {
+    if (!std::isfinite(c)) return bad;
+  }
+  choice.kind = StationChoice::Kind::kDeclared;
+  choice.position = position;
+  return choice;
+}
+
+// Applies `choice` to the cloud as read (file units); returns what the
+// stations came from, for the meta, and warns when a declared station
+// replaces the file's or lies far from the scan (a wrong frame or unit).
+std::string ApplyStation(const StationChoice& choice, const std::string& path, StageContext& ctx,
+                         PointCloud* points) {
+  switch (choice.kind) {
+    case StationChoice::Kind::kFile:
+      return points->has_stations() ? "file" : "none";
+    case StationChoice::Kind::kNone:
+      points->stations.clear();
+      points->station_ids.clear();
+      return "none";
+    case StationChoice::Kind::kDeclared:
+      break;
+  }
+  if (points->has_stations()) {
+    ctx.warning(path + ": the file's " + std::to_string(points->stations.size()) +
+                " station(s) replaced by the declared `station`");
+  }
+  points->stations = {choice.position};
+  points->station_ids.assign(points->size(), 0);
+  if (!points->empty()) {
+    // The scanner stands among what it scanned: farther from the scan's
+    // bounding box than its diagonal is a frame or unit mistake, most likely.
+    const Bounds bounds = AbsoluteBounds(*points);
+    double outside = 0, diagonal = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double c = choice.position[axis];
+      const double gap = std::max({bounds.min_m[axis] - c, c - bounds.max_m[axis], 0.0});
+      outside += gap * gap;
+      const double extent = bounds.max_m[axis] - bounds.min_m[axis];
+      diagonal += extent * extent;
+    }
+    if (std::sqrt(outside) > std::sqrt(diagonal)) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    ": the declared station lies %.3g from the scan's bounding box, farther than "
+                    "its diagonal (%.3g, file units): another frame or unit?",
+                    std::sqrt(outside), std::sqrt(diagonal));
+      ctx.warning(path + text);
+    }
+  }
+  return "declared";
+}
+
 std::string ParamsSchema() {
   nlohmann::json formats = nlohmann::json::array({"auto"});
   for (const ScanFormat& format : ScanFormats()) formats.push_back(std::string(format.name));
@@ -111,6 +210,22 @@ std::string ParamsSchema() {
               "XYZ/TXT/PTS only: column names in order, e.g. \"x y z r g b\" or "
               "\"x y z i r g b nx ny nz\"; \"_\" skips a column. Empty: the format's default "
               "(PTS: x y z i r g b) or detected from the first data line."}}},
+           {"station",
+            {{"anyOf",
+              {{{"type", "string"}, {"pattern", kStationPattern}},
+               {{"type", "array"},
+                {"items", {{"type", "number"}}},
+                {"minItems", 3},
+                {"maxItems", 3}}}},
+             {"default", "file"},
+             {"description",
+              "Where the scanner stood, which orients normals toward it (points.normals) and "
+              "gives mesh.decimate its lines of sight: 'file' takes the file's stations (poses, "
+              "VIEWPOINT, PTX positions, PLY station comments; an unposed E57 grid or organized "
+              "PCD swept from its origin has it there); 'none' drops them; [x, y, z] (or "
+              "\"x,y,z\", the form --set gives) declares one station for every point, in the "
+              "file's coordinates and `units`, replacing the file's: a one-station scan exported "
+              "without its pose (PTS, XYZ, PLY, LAS)."}}},
            {"uncolored",
             {{"type", "string"},
              {"enum", {"intensity", "grey", "none"}},
@@ -139,6 +254,7 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const std::string unit, StringParam(ctx, kId, "units"));
   const std::optional<double> meters = MetersPerUnit(unit);
   if (!meters) return Status::Invalid(std::string(kId) + ": unknown units '" + unit + "'");
+  PB_ASSIGN_OR_RETURN(const StationChoice station, ReadStation(ctx));
 
   ScanReadOptions options;
   options.drop_invalid_points = drop_invalid;
@@ -149,6 +265,7 @@ Status Run(StageContext& ctx) {
   ctx.end_phase("read");
   if (!read.ok()) return read.status();
   ScanReadResult& outcome = *read;
+  const std::string stations_from = ApplyStation(station, path, ctx, &outcome.points);
   ConvertToMeters(*meters, &outcome.points);
   const std::string colors_from = PaintUncolored(uncolored, &outcome.points);
   const PointCloud& points = outcome.points;
@@ -174,6 +291,7 @@ Status Run(StageContext& ctx) {
        {"colors_from", colors_from},
        {"file_units", unit},
        {"stations", points.stations.size()},
+       {"stations_from", stations_from},
        {"source_format", outcome.format.empty() ? std::string(format->name) : outcome.format}},
       "write"));
   ctx.counter("points", static_cast<double>(points.size()));
@@ -207,13 +325,18 @@ StageType ReadPointsStage() {
       "CRC-32C checked, bitPackCodec, float/scaled-integer/integer fields, cartesian or "
       "spherical, poses, several scans, color and intensity; a scan without a pose has its scanner "
       "at its frame's origin when it is spherical, or when its row/column grid was swept from "
-      "there: a station for normal orientation and lines of sight); LAS 1.0-1.4, point formats 0-10, "
+      "there: a station for normal orientation and lines of sight); LAS 1.0-1.4, point formats "
+      "0-10, "
       "and LAZ (LASzip-compressed LAS, COPC included: point formats 0-3 and 6-8, decoded in "
       "parallel over chunks; docs/laz.md).\n\n"
       "Double-precision (e.g. georeferenced) coordinates are stored as float32 offsets from an "
       "origin at the scan's bounding-box center rounded to 1 m, which keeps float32 precision "
       "(about 1e-7 of the scan's extent) for any location on Earth; the "
       "origin travels in the artifact.\n\n"
+      "Scanner stations come from the file (or, for an unposed structured E57 scan or "
+      "organized PCD frame, from its grid); `station` declares one where the file does not say "
+      "(a one-station PTS/XYZ/PLY/LAS export) or drops them; the meta's `stations_from` says "
+      "`file`, `declared` or `none`.\n\n"
       "A scan without colors is painted grey (`uncolored`: by intensity, else uniformly) so "
       "that every workflow runs on it, with a warning; the meta's `colors_from` says `file`, "
       "`intensity`, `uniform grey` or `none`.\n\n"

@@ -280,6 +280,78 @@ TEST_F(PointsStagesTest, ReadPointsConvertsTheFilesUnitsToMeters) {
   EXPECT_EQ(Run("io.read_points", bad).code(), Status::Code::kInvalid);
 }
 
+// `station`: one declared where the file says nothing (in the file's
+// coordinates and units), the file's dropped, or replaced with a warning.
+TEST_F(PointsStagesTest, ReadPointsDeclaresOrDropsTheStation) {
+  const std::string xyz = (dir_ / "scan.xyz").string();
+  std::ofstream(xyz) << "0 0 0\n1000 0 0\n0 1000 0\n0 0 1000\n";
+  const auto read_back = [](FakeContext& ctx) {
+    auto read = ReadPlyPoints(ctx.outputs_["points"]);
+    EXPECT_TRUE(read.ok()) << read.status().message();
+    return read.ok() ? std::move(read->points) : PointCloud();
+  };
+  {
+    FakeContext ctx(dir_ / "none", {{"path", xyz}, {"uncolored", "none"}});
+    ASSERT_TRUE(Run("io.read_points", ctx).ok());
+    EXPECT_FALSE(read_back(ctx).has_stations());
+    EXPECT_EQ(ctx.meta_["points"]["stations_from"], "none");
+  }
+  for (const nlohmann::json& station :
+       {nlohmann::json::array({500, 250, 1500}), nlohmann::json("500,2.5e2,+1500")}) {
+    SCOPED_TRACE(station.dump());
+    FakeContext ctx(dir_ / "declared",
+                    {{"path", xyz}, {"units", "mm"}, {"uncolored", "none"}, {"station", station}});
+    ASSERT_TRUE(Run("io.read_points", ctx).ok());
+    const PointCloud points = read_back(ctx);
+    ASSERT_EQ(points.stations.size(), 1u);
+    EXPECT_NEAR(points.stations[0][0], 0.5, 1e-12);  // millimeters to meters, as the points
+    EXPECT_NEAR(points.stations[0][1], 0.25, 1e-12);
+    EXPECT_NEAR(points.stations[0][2], 1.5, 1e-12);
+    EXPECT_EQ(points.station_ids, std::vector<uint16_t>(4, 0));
+    EXPECT_EQ(ctx.meta_["points"]["stations_from"], "declared");
+    EXPECT_TRUE(ctx.warnings_.empty());
+  }
+  // A station far off the scan: most likely another frame or unit.
+  FakeContext far(
+      dir_ / "far",
+      {{"path", xyz}, {"uncolored", "none"}, {"station", nlohmann::json::array({0, 0, 100000})}});
+  ASSERT_TRUE(Run("io.read_points", far).ok());
+  ASSERT_EQ(far.warnings_.size(), 1u);
+  EXPECT_THAT(far.warnings_[0], HasSubstr("the declared station lies 9.9e+04 from the scan's "
+                                          "bounding box, farther than its diagonal"));
+
+  // A file with its own station (a PCD VIEWPOINT): dropped, or replaced.
+  const std::string pcd = (dir_ / "posed.pcd").string();
+  std::ofstream(pcd) << "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\n"
+                        "WIDTH 2\nHEIGHT 1\nVIEWPOINT 5 0 0 1 0 0 0\nPOINTS 2\nDATA ascii\n"
+                        "1 0 0\n0 1 0\n";
+  FakeContext dropped(dir_ / "dropped",
+                      {{"path", pcd}, {"uncolored", "none"}, {"station", "none"}});
+  ASSERT_TRUE(Run("io.read_points", dropped).ok());
+  const PointCloud without = read_back(dropped);
+  EXPECT_TRUE(without.stations.empty());
+  EXPECT_TRUE(without.station_ids.empty());
+  FakeContext kept(dir_ / "kept", {{"path", pcd}, {"uncolored", "none"}});
+  ASSERT_TRUE(Run("io.read_points", kept).ok());
+  EXPECT_EQ(read_back(kept).stations, (std::vector<std::array<double, 3>>{{5, 0, 0}}));
+  EXPECT_EQ(kept.meta_["points"]["stations_from"], "file");
+  FakeContext replaced(dir_ / "replaced",
+                       {{"path", pcd}, {"uncolored", "none"}, {"station", "6,0,0"}});
+  ASSERT_TRUE(Run("io.read_points", replaced).ok());
+  EXPECT_EQ(read_back(replaced).stations, (std::vector<std::array<double, 3>>{{6, 0, 0}}));
+  EXPECT_THAT(replaced.warnings_,
+              ::testing::Contains(HasSubstr("the file's 1 station(s) replaced by the declared")));
+
+  for (const nlohmann::json& bad : {nlohmann::json("1,2"), nlohmann::json("1,2,x"),
+                                    nlohmann::json::array({1, 2}), nlohmann::json("here")}) {
+    FakeContext ctx(dir_ / "bad", {{"path", xyz}, {"station", bad}});
+    const Status status = Run("io.read_points", ctx);
+    EXPECT_EQ(status.code(), Status::Code::kInvalid) << bad.dump();
+    EXPECT_THAT(status.message(), HasSubstr("parameter 'station' must be")) << bad.dump();
+    EXPECT_TRUE(ctx.outputs_.empty());
+  }
+}
+
 // A reader's warnings reach the warning channel, each naming the file once.
 TEST_F(PointsStagesTest, ReadPointsPassesReaderWarningsOn) {
   const std::string data = SharedData();
