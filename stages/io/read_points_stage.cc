@@ -11,6 +11,7 @@
 #include "base/units.h"
 #include "stages/builtin.h"
 #include "stages/geometry/io/scan_read.h"
+#include "stages/geometry/points/knn.h"
 #include "stages/params.h"
 #include "stages/points_io.h"
 
@@ -55,6 +56,69 @@ std::string PaintUncolored(const std::string& mode, PointCloud* points) {
     for (int c = 0; c < 3; ++c) points->colors[3 * i + c] = grey;
   }
   return "intensity";
+}
+
+// Gives each point of `invalid` (ascending indices) the `width` values of
+// `values` of its nearest point not in `invalid`: the file marked its own
+// as no measurement (E57 isColorInvalid: a point no photo covered, whose
+// stored color is typically black). False when no point is valid.
+template <typename T>
+Expected<bool> FillFromNearest(const PointCloud& points, const std::vector<size_t>& invalid,
+                               int width, std::vector<T>* values) {
+  if (invalid.empty()) return true;
+  std::vector<float> valid_xyz;
+  std::vector<size_t> valid_index;
+  valid_xyz.reserve(3 * (points.size() - std::min(points.size(), invalid.size())));
+  size_t next = 0;
+  for (size_t i = 0; i < points.size(); ++i) {
+    if (next < invalid.size() && invalid[next] == i) {
+      ++next;
+      continue;
+    }
+    valid_xyz.insert(valid_xyz.end(), &points.positions[3 * i], &points.positions[3 * i] + 3);
+    valid_index.push_back(i);
+  }
+  if (valid_index.empty()) return false;
+  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(valid_xyz));
+  Neighbor nearest[1];
+  for (size_t i : invalid) {
+    index.Query(&points.positions[3 * i], 1, nearest);
+    const size_t from = valid_index[nearest[0].index];
+    std::copy_n(values->begin() + width * from, width, values->begin() + width * i);
+  }
+  return true;
+}
+
+// The colors and intensities the file marks as no measurement, from the
+// nearest valid ones (all invalid: the attribute is dropped), with a warning.
+Status FillUnmeasured(const ScanReadResult& outcome, const std::string& path, StageContext& ctx,
+                      PointCloud* points) {
+  const auto say = [&](size_t count, const char* what, const char* field, bool filled) {
+    char text[240];
+    if (filled) {
+      std::snprintf(text, sizeof text,
+                    ": %zu points (%.2f %%) have no valid %s in the file (E57 %s): each took "
+                    "its nearest valid point's",
+                    count, 100.0 * double(count) / double(points->size()), what, field);
+    } else {
+      std::snprintf(text, sizeof text, ": no point has a valid %s (E57 %s): %ss dropped", what,
+                    field, what);
+    }
+    ctx.warning(path + text);
+  };
+  if (points->has_colors() && !outcome.colorless_points.empty()) {
+    PB_ASSIGN_OR_RETURN(const bool filled,
+                        FillFromNearest(*points, outcome.colorless_points, 3, &points->colors));
+    if (!filled) points->colors.clear();
+    say(outcome.colorless_points.size(), "color", "isColorInvalid", filled);
+  }
+  if (points->has_intensities() && !outcome.intensityless_points.empty()) {
+    PB_ASSIGN_OR_RETURN(const bool filled, FillFromNearest(*points, outcome.intensityless_points, 1,
+                                                           &points->intensities));
+    if (!filled) points->intensities.clear();
+    say(outcome.intensityless_points.size(), "intensity", "isIntensityInvalid", filled);
+  }
+  return Status::Ok();
 }
 
 // `units`: the file's coordinates times `meters` (origin, offsets and
@@ -265,6 +329,7 @@ Status Run(StageContext& ctx) {
   ctx.end_phase("read");
   if (!read.ok()) return read.status();
   ScanReadResult& outcome = *read;
+  PB_RETURN_IF_ERROR(FillUnmeasured(outcome, path, ctx, &outcome.points));
   const std::string stations_from = ApplyStation(station, path, ctx, &outcome.points);
   ConvertToMeters(*meters, &outcome.points);
   const std::string colors_from = PaintUncolored(uncolored, &outcome.points);

@@ -1,6 +1,5 @@
 // Runs the io and points stages through a fake StageContext (no engine, no
 // child processes): files go to a temporary directory.
-#include "stages/geometry/testing/test_data.h"
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
@@ -14,9 +13,11 @@
 
 #include "stages/builtin.h"
 #include "stages/geometry/core/module.h"
-#include "stages/geometry/points/module_calls.h"
-#include "stages/geometry/io/ply.h"
 #include "stages/geometry/core/table.h"
+#include "stages/geometry/io/ply.h"
+#include "stages/geometry/points/module_calls.h"
+#include "stages/geometry/testing/e57_writer.h"
+#include "stages/geometry/testing/test_data.h"
 #include "stages/stage_test_util.h"
 
 namespace pb {
@@ -350,6 +351,47 @@ TEST_F(PointsStagesTest, ReadPointsDeclaresOrDropsTheStation) {
     EXPECT_THAT(status.message(), HasSubstr("parameter 'station' must be")) << bad.dump();
     EXPECT_TRUE(ctx.outputs_.empty());
   }
+}
+
+// Colors an E57 marks as no measurement (isColorInvalid: typically black
+// where no photo covered the point) take their nearest valid point's.
+TEST_F(PointsStagesTest, ReadPointsFillsColorsTheFileMarksInvalid) {
+  using pb::testing::Float64;
+  using pb::testing::Integer;
+  const auto write = [&](const std::string& name, std::vector<double> invalid) {
+    pb::testing::TestScan scan;
+    scan.fields = {Float64("cartesianX", {0, 0.4, 2, 2.9, 4}),
+                   Float64("cartesianY", {0, 0, 0, 0, 0}),
+                   Float64("cartesianZ", {0, 0, 0, 0, 0}),
+                   Integer("colorRed", 0, 255, {10, 0, 30, 0, 50}),
+                   Integer("colorGreen", 0, 255, {11, 0, 31, 0, 51}),
+                   Integer("colorBlue", 0, 255, {12, 0, 32, 0, 52}),
+                   Integer("isColorInvalid", 0, 1, std::move(invalid))};
+    const std::vector<uint8_t> bytes = pb::testing::BuildE57({scan});
+    const std::string path = (dir_ / name).string();
+    std::ofstream(path, std::ios::binary)
+        .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+    return path;
+  };
+  FakeContext ctx(dir_ / "filled", {{"path", write("some.e57", {0, 1, 0, 1, 0})}});
+  ASSERT_TRUE(Run("io.read_points", ctx).ok());
+  auto read = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  // Point 1 (x 0.4) is nearest to point 0, point 3 (x 2.9) to point 2.
+  EXPECT_EQ(read->points.colors,
+            (std::vector<uint8_t>{10, 11, 12, 10, 11, 12, 30, 31, 32, 30, 31, 32, 50, 51, 52}));
+  EXPECT_EQ(ctx.meta_["points"]["colors_from"], "file");
+  ASSERT_EQ(ctx.warnings_.size(), 1u);
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr("2 points (40.00 %) have no valid color in the file "
+                                          "(E57 isColorInvalid): each took its nearest valid "
+                                          "point's"));
+  // No valid color at all: the colors go, and the scan is painted grey.
+  FakeContext none(dir_ / "none", {{"path", write("none.e57", {1, 1, 1, 1, 1})}});
+  ASSERT_TRUE(Run("io.read_points", none).ok());
+  EXPECT_EQ(none.meta_["points"]["colors_from"], "uniform grey");
+  EXPECT_THAT(none.warnings_,
+              ::testing::Contains(
+                  HasSubstr("no point has a valid color (E57 isColorInvalid): colors dropped")));
 }
 
 // A reader's warnings reach the warning channel, each naming the file once.

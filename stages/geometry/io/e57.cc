@@ -42,6 +42,8 @@ enum Role : int {
   kSphericalInvalid,
   kRowIndex,
   kColumnIndex,
+  kColorInvalid,
+  kIntensityInvalid,
   kRoleCount
 };
 constexpr std::string_view kRoleNames[kRoleCount] = {"cartesianX",
@@ -57,7 +59,9 @@ constexpr std::string_view kRoleNames[kRoleCount] = {"cartesianX",
                                                      "cartesianInvalidState",
                                                      "sphericalInvalidState",
                                                      "rowIndex",
-                                                     "columnIndex"};
+                                                     "columnIndex",
+                                                     "isColorInvalid",
+                                                     "isIntensityInvalid"};
 
 struct Range {
   double min = 0.0;
@@ -505,6 +509,16 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
         min_[a] = std::min(min_[a], absolute[a]);
         max_[a] = std::max(max_[a], absolute[a]);
         cloud.positions.push_back(static_cast<float>(absolute[a] - provisional_origin_[a]));
+      }
+      // isColorInvalid / isIntensityInvalid != 0: the value is no
+      // measurement (a point no photo covered); io.read_points gives it
+      // its nearest valid neighbour's.
+      const size_t index = cloud.positions.size() / 3 - 1;
+      if (keep_colors && f[kColorInvalid] >= 0 && columns[f[kColorInvalid]][i] != 0.0) {
+        result_.colorless_points.push_back(index);
+      }
+      if (keep_intensity && f[kIntensityInvalid] >= 0 && columns[f[kIntensityInvalid]][i] != 0.0) {
+        result_.intensityless_points.push_back(index);
       }
       if (keep_colors) {
         for (int channel = 0; channel < 3; ++channel) {

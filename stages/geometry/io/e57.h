@@ -30,6 +30,9 @@
 //     field's minimum/maximum, else [0, 1] for Float fields); intensity ->
 //     [0, 1] using intensityLimits the same way. Colors / intensities are
 //     kept only if every scan has them (a warning says when they are not);
+//     points whose isColorInvalid / isIntensityInvalid is set are listed in
+//     colorless_points / intensityless_points (io.read_points gives them
+//     their nearest valid neighbour's value);
 //   - stations: one per scan, station_ids per point, when every scan's
 //     scanner is known: at its pose's translation (absolute meters); a scan
 //     without a pose (the identity) has its scanner at its frame's origin

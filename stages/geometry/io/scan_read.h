@@ -34,6 +34,12 @@ struct ScanReadResult {
   uint64_t dropped_points = 0;        // invalid points dropped
   std::vector<std::string> warnings;  // shown to the user, e.g. "3 scans merged"
   std::string format;                 // e.g. "pcd binary_compressed", "e57"
+  // Points (ascending indices) whose color / intensity the file marks as no
+  // measurement (E57 isColorInvalid / isIntensityInvalid); their values in
+  // `points` are whatever the file held. io.read_points fills them from
+  // their nearest valid neighbours.
+  std::vector<size_t> colorless_points;
+  std::vector<size_t> intensityless_points;
 };
 
 // One row of the dispatch table: a new scan format is a reader and a row.
