@@ -374,7 +374,8 @@ Status Run(StageContext& ctx) {
 StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
-  type.version = 5;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57 invalid colors filled
+  type.version = 5;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57
+                     // invalid colors filled
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters (a file in "
