@@ -594,7 +594,8 @@ Expected<ScanReadResult> E57Reader::Read() {
   // grid evenly spaced in angle seen from it was swept from it
   // (grid_station.h). Stations are kept when every scan has one.
   std::vector<size_t> first_point(scans.size() + 1, 0);
-  std::vector<std::string> unknown;  // why a scan's scanner is not known
+  std::vector<std::string> unknown;   // why a scan's scanner is not known
+  std::vector<std::string> inferred;  // how a poseless scan's scanner was found
   bool worth_saying = false;         // a scan's station is known, or a grid failed the test
   for (const ScanSpec& scan : scans) {
     const std::string name = "data3D scan " + std::to_string(scan.index);
@@ -609,15 +610,15 @@ Expected<ScanReadResult> E57Reader::Read() {
     }
     if (scan.spherical) {
       worth_saying = true;
-      result_.warnings.push_back(name +
-                                 " has no pose: its scanner taken at its frame's origin, from "
-                                 "which its spherical coordinates are measured");
+      inferred.push_back(name +
+                         " has no pose: its scanner taken at its frame's origin, from which its "
+                         "spherical coordinates are measured");
     } else if (!grid) {
       unknown.push_back(name + " has no pose and no row/column grid");
     } else if (const GridStationTest::Verdict verdict = test.Decide(); verdict.at_origin) {
       worth_saying = true;
-      result_.warnings.push_back(name + " has no pose: its scanner taken at its frame's origin (" +
-                                 verdict.Describe() + ")");
+      inferred.push_back(name + " has no pose: its scanner taken at its frame's origin (" +
+                         verdict.Describe() + ")");
     } else {
       worth_saying = true;
       unknown.push_back(name + " has no pose, and its frame's origin is not its scanner's (" +
@@ -625,6 +626,14 @@ Expected<ScanReadResult> E57Reader::Read() {
     }
   }
   first_point[scans.size()] = cloud.size();
+  // One line per scan up to three; a file of many scans says the first and
+  // how many more.
+  for (size_t i = 0; i < inferred.size() && i < 3; ++i) {
+    result_.warnings.push_back(inferred.size() > 3 && i == 2
+                                   ? inferred[i] + " (and " + std::to_string(inferred.size() - 3) +
+                                         " more scans alike)"
+                                   : inferred[i]);
+  }
   if (unknown.empty()) {
     cloud.station_ids.resize(cloud.size());
     for (const ScanSpec& scan : scans) {

@@ -342,6 +342,19 @@ TEST_F(E57Test, APoselessSphericalScanHasItsScannerAtItsOrigin) {
   ASSERT_TRUE(read.ok()) << read.status().message();
   EXPECT_EQ(read->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
   EXPECT_EQ(read->points.station_ids, (std::vector<uint16_t>{0, 0}));
+  EXPECT_THAT(read->warnings,
+              ::testing::ElementsAre("data3D scan 0 has no pose: its scanner taken at its "
+                                     "frame's origin, from which its spherical coordinates are "
+                                     "measured"));
+  // Five such scans: all at the origin; three lines say so, the third for the rest.
+  auto five = ReadE57(WriteScans({scan, scan, scan, scan, scan}), {});
+  ASSERT_TRUE(five.ok()) << five.status().message();
+  EXPECT_EQ(five->points.stations.size(), 5u);
+  EXPECT_EQ(five->points.station_ids, (std::vector<uint16_t>{0, 0, 1, 1, 2, 2, 3, 3, 4, 4}));
+  EXPECT_THAT(five->warnings,
+              ::testing::ElementsAre("5 scans merged", HasSubstr("data3D scan 0 has no pose"),
+                                     HasSubstr("data3D scan 1 has no pose"),
+                                     HasSubstr("measured (and 2 more scans alike)")));
 }
 
 TEST_F(E57Test, StationsNeedEveryScansScanner) {
