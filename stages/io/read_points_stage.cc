@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <optional>
 #include <string>
 #include <vector>
@@ -66,8 +67,12 @@ template <typename T>
 Expected<bool> FillFromNearest(const PointCloud& points, const std::vector<size_t>& invalid,
                                int width, std::vector<T>* values) {
   if (invalid.empty()) return true;
+  if (points.size() > std::numeric_limits<uint32_t>::max()) {
+    return Status::Unsupported(std::string(kId) +
+                               ": filling invalid colors needs under 2^32 points");
+  }
   std::vector<float> valid_xyz;
-  std::vector<size_t> valid_index;
+  std::vector<uint32_t> valid_index;  // KnnIndex holds under 2^32 points
   valid_xyz.reserve(3 * (points.size() - std::min(points.size(), invalid.size())));
   size_t next = 0;
   for (size_t i = 0; i < points.size(); ++i) {
@@ -76,7 +81,7 @@ Expected<bool> FillFromNearest(const PointCloud& points, const std::vector<size_
       continue;
     }
     valid_xyz.insert(valid_xyz.end(), &points.positions[3 * i], &points.positions[3 * i] + 3);
-    valid_index.push_back(i);
+    valid_index.push_back(static_cast<uint32_t>(i));
   }
   if (valid_index.empty()) return false;
   PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(valid_xyz));
