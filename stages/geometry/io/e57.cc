@@ -649,7 +649,8 @@ Expected<ScanReadResult> E57Reader::Read() {
     result_.warnings.push_back("no scanner stations: " + unknown.front() +
                                (unknown.size() > 1
                                     ? " (and " + std::to_string(unknown.size() - 1) + " more)"
-                                    : std::string()));
+                                    : std::string()) +
+                               "; io.read_points `station` can declare where one scanner stood");
   }
 
   // Re-center on the bounding-box center rounded to 1 m. Both origins are

@@ -370,7 +370,8 @@ TEST_F(E57Test, StationsNeedEveryScansScanner) {
   EXPECT_TRUE(read->points.station_ids.empty());
   EXPECT_THAT(read->warnings,
               ::testing::Contains("no scanner stations: data3D scan 1 has no pose and no "
-                                  "row/column grid"));
+                                  "row/column grid; io.read_points `station` can declare where "
+                                  "one scanner stood"));
   // A posed scan and a poseless one swept from its origin: both stations.
   auto both = ReadE57(WriteScans({a, GridScan(30, 25, {0, 0, 0})}), {});
   ASSERT_TRUE(both.ok()) << both.status().message();

@@ -515,7 +515,7 @@ class PcdReader {
         result_.warnings.push_back(
             "no sensor station: organized cloud with the identity VIEWPOINT, and the origin is "
             "not its sensor's (" +
-            verdict.Describe() + ")");
+            verdict.Describe() + "); io.read_points `station` can declare where it stood");
       }
     }
     if (!recenter_ || cloud.empty()) return;
