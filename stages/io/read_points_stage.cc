@@ -62,18 +62,19 @@ std::string PaintUncolored(const std::string& mode, PointCloud* points) {
 // Gives each point of `invalid` (ascending indices) the `width` values of
 // `values` of its nearest point not in `invalid`: the file marked its own
 // as no measurement (E57 isColorInvalid: a point no photo covered, whose
-// stored color is typically black). False when no point is valid.
+// stored color is typically black).
+enum class Filled { kFilled, kNoneValid, kTooMany };
 template <typename T>
-Expected<bool> FillFromNearest(const PointCloud& points, const std::vector<size_t>& invalid,
-                               int width, std::vector<T>* values) {
-  if (invalid.empty()) return true;
-  if (points.size() > std::numeric_limits<uint32_t>::max()) {
-    return Status::Unsupported(std::string(kId) +
-                               ": filling invalid colors needs under 2^32 points");
-  }
+Expected<Filled> FillFromNearest(const PointCloud& points, const std::vector<size_t>& invalid,
+                                 int width, std::vector<T>* values) {
+  if (invalid.empty()) return Filled::kFilled;
+  // The kd-tree holds under 2^32 points.
+  if (points.size() > std::numeric_limits<uint32_t>::max()) return Filled::kTooMany;
+  if (invalid.size() >= points.size()) return Filled::kNoneValid;
   std::vector<float> valid_xyz;
-  std::vector<uint32_t> valid_index;  // KnnIndex holds under 2^32 points
-  valid_xyz.reserve(3 * (points.size() - std::min(points.size(), invalid.size())));
+  std::vector<uint32_t> valid_index;
+  valid_xyz.reserve(3 * (points.size() - invalid.size()));
+  valid_index.reserve(points.size() - invalid.size());
   size_t next = 0;
   for (size_t i = 0; i < points.size(); ++i) {
     if (next < invalid.size() && invalid[next] == i) {
@@ -83,47 +84,53 @@ Expected<bool> FillFromNearest(const PointCloud& points, const std::vector<size_
     valid_xyz.insert(valid_xyz.end(), &points.positions[3 * i], &points.positions[3 * i] + 3);
     valid_index.push_back(static_cast<uint32_t>(i));
   }
-  if (valid_index.empty()) return false;
   PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(valid_xyz));
+  std::vector<float>().swap(valid_xyz);  // the index keeps its own copy
   Neighbor nearest[1];
   for (size_t i : invalid) {
     index.Query(&points.positions[3 * i], 1, nearest);
     const size_t from = valid_index[nearest[0].index];
     std::copy_n(values->begin() + width * from, width, values->begin() + width * i);
   }
-  return true;
+  return Filled::kFilled;
 }
 
 // The colors and intensities the file marks as no measurement, from the
-// nearest valid ones (all invalid: the attribute is dropped), with a warning.
+// nearest valid ones (none valid: the attribute is dropped), with a warning.
 Status FillUnmeasured(const ScanReadResult& outcome, const std::string& path, StageContext& ctx,
                       PointCloud* points) {
-  const auto say = [&](size_t count, const char* what, const char* field, bool filled) {
+  const auto fill = [&]<typename T>(const std::vector<size_t>& invalid, int width,
+                                    std::vector<T>* values, const char* what,
+                                    const char* field) -> Status {
+    if (values->empty() || invalid.empty()) return Status::Ok();
+    PB_ASSIGN_OR_RETURN(const Filled filled, FillFromNearest(*points, invalid, width, values));
     char text[240];
-    if (filled) {
-      std::snprintf(text, sizeof text,
-                    ": %zu points (%.2f %%) have no valid %s in the file (E57 %s): each took "
-                    "its nearest valid point's",
-                    count, 100.0 * double(count) / double(points->size()), what, field);
-    } else {
-      std::snprintf(text, sizeof text, ": no point has a valid %s (E57 %s): %ss dropped", what,
-                    field, what);
+    switch (filled) {
+      case Filled::kFilled:
+        std::snprintf(text, sizeof text,
+                      ": %zu points (%.2f %%) have no valid %s in the file (E57 %s): each took "
+                      "its nearest valid point's",
+                      invalid.size(), 100.0 * double(invalid.size()) / double(points->size()), what,
+                      field);
+        break;
+      case Filled::kNoneValid:
+        values->clear();
+        std::snprintf(text, sizeof text, ": no point has a valid %s (E57 %s): %ss dropped", what,
+                      field, what);
+        break;
+      case Filled::kTooMany:
+        std::snprintf(text, sizeof text,
+                      ": %zu points have no valid %s in the file (E57 %s), kept as stored: a "
+                      "cloud of 2^32 points or more is not filled",
+                      invalid.size(), what, field);
+        break;
     }
     ctx.warning(path + text);
+    return Status::Ok();
   };
-  if (points->has_colors() && !outcome.colorless_points.empty()) {
-    PB_ASSIGN_OR_RETURN(const bool filled,
-                        FillFromNearest(*points, outcome.colorless_points, 3, &points->colors));
-    if (!filled) points->colors.clear();
-    say(outcome.colorless_points.size(), "color", "isColorInvalid", filled);
-  }
-  if (points->has_intensities() && !outcome.intensityless_points.empty()) {
-    PB_ASSIGN_OR_RETURN(const bool filled, FillFromNearest(*points, outcome.intensityless_points, 1,
-                                                           &points->intensities));
-    if (!filled) points->intensities.clear();
-    say(outcome.intensityless_points.size(), "intensity", "isIntensityInvalid", filled);
-  }
-  return Status::Ok();
+  PB_RETURN_IF_ERROR(fill(outcome.colorless_points, 3, &points->colors, "color", "isColorInvalid"));
+  return fill(outcome.intensityless_points, 1, &points->intensities, "intensity",
+              "isIntensityInvalid");
 }
 
 // `units`: the file's coordinates times `meters` (origin, offsets and
@@ -141,7 +148,7 @@ constexpr const char* kStationPattern =
     "^(file|none|[-+]?[0-9.eE+-]+,[-+]?[0-9.eE+-]+,[-+]?[0-9.eE+-]+)$";
 
 // The `station` parameter: absent (the file's), none, or a position in the
-// file's coordinates and units.
+// frame of the points as read (after the file's own pose) and its units.
 struct StationChoice {
   enum class Kind { kFile, kNone, kDeclared } kind = Kind::kFile;
   std::array<double, 3> position{};
@@ -293,7 +300,8 @@ std::string ParamsSchema() {
               "VIEWPOINT, PTX positions, PLY station comments; an unposed E57 grid or organized "
               "PCD swept from its origin has it there); 'none' drops them; [x, y, z] (or "
               "\"x,y,z\", the form --set gives) declares one station for every point, in the "
-              "file's coordinates and `units`, replacing the file's: a one-station scan exported "
+              "coordinates of the points as the file gives them (after its own pose, e.g. a PCD "
+              "VIEWPOINT) and in `units`, replacing the file's: a one-station scan exported "
               "without its pose (PTS, XYZ, PLY, LAS)."}}},
            {"uncolored",
             {{"type", "string"},
@@ -388,8 +396,8 @@ StageType ReadPointsStage() {
       "and 8-bit sRGB colors, intensities and scanner stations when the file has them.\n\n"
       "Formats (chosen by extension, or `format:`): PLY (ascii, binary little and big endian; "
       "any scalar types; unknown elements and properties ignored); PCD v0.6/0.7 (ascii, binary, "
-      "binary_compressed; VIEWPOINT applied and kept as the station; an organized cloud with the "
-      "identity VIEWPOINT has its sensor at the origin when its pixel grid was swept from there); "
+      "binary_compressed; VIEWPOINT applied and kept as the station; an organized cloud without "
+      "a VIEWPOINT pose has its sensor at the origin when its pixel grid was swept from there); "
       "XYZ/TXT/CSV/PTS (columns "
       "declared with `columns:` or detected); PTX (several scans; each scan's 4x4 transform "
       "applied, its scanner position kept as a station, 0,0,0 points dropped); E57 (ASTM E2807: "

@@ -392,6 +392,25 @@ TEST_F(PointsStagesTest, ReadPointsFillsColorsTheFileMarksInvalid) {
   EXPECT_THAT(none.warnings_,
               ::testing::Contains(
                   HasSubstr("no point has a valid color (E57 isColorInvalid): colors dropped")));
+  // Intensities alike (a scan without colors, painted grey by them).
+  pb::testing::TestScan grey;
+  grey.fields = {Float64("cartesianX", {0, 0.4, 2, 2.9, 4}), Float64("cartesianY", {0, 0, 0, 0, 0}),
+                 Float64("cartesianZ", {0, 0, 0, 0, 0}),
+                 Float64("intensity", {0.1, 0.9, 0.5, 0.0, 0.8}),
+                 Integer("isIntensityInvalid", 0, 1, {0, 1, 0, 1, 0})};
+  const std::vector<uint8_t> bytes = pb::testing::BuildE57({grey});
+  const std::string grey_path = (dir_ / "grey.e57").string();
+  std::ofstream(grey_path, std::ios::binary)
+      .write(reinterpret_cast<const char*>(bytes.data()), std::streamsize(bytes.size()));
+  FakeContext painted(dir_ / "painted", {{"path", grey_path}});
+  ASSERT_TRUE(Run("io.read_points", painted).ok());
+  read = ReadPlyPoints(painted.outputs_["points"]);
+  ASSERT_TRUE(read.ok());
+  EXPECT_EQ(read->points.intensities, (std::vector<float>{0.1f, 0.1f, 0.5f, 0.5f, 0.8f}));
+  EXPECT_EQ(painted.meta_["points"]["colors_from"], "intensity");
+  EXPECT_THAT(painted.warnings_,
+              ::testing::Contains(HasSubstr("2 points (40.00 %) have no valid intensity in the "
+                                            "file (E57 isIntensityInvalid)")));
 }
 
 // A reader's warnings reach the warning channel, each naming the file once.

@@ -464,7 +464,6 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
     for (size_t i = 0; i < count; ++i, ++record) {
       if (invalid_field >= 0 && columns[invalid_field][i] != 0.0) {
         ++result_.dropped_points;
-        if (grid != nullptr) grid->Break();
         continue;
       }
       double local[3];
@@ -487,7 +486,6 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
           !std::isfinite(absolute[2])) {
         if (options_.drop_invalid_points) {
           ++result_.dropped_points;
-          if (grid != nullptr) grid->Break();
           continue;
         }
         return Status::Invalid(path_ + ": data3D scan " + std::to_string(scan.index) + " point " +
@@ -495,8 +493,7 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
                                " has a NaN or infinite coordinate (drop_invalid_points skips it)");
       }
       if (grid != nullptr) {
-        grid->Add(static_cast<int64_t>(columns[f[kRowIndex]][i]),
-                  static_cast<int64_t>(columns[f[kColumnIndex]][i]), local);
+        grid->Add(columns[f[kRowIndex]][i], columns[f[kColumnIndex]][i], local);
       }
       if (!have_origin_) {
         for (int a = 0; a < 3; ++a) {
@@ -619,22 +616,28 @@ Expected<ScanReadResult> E57Reader::Read() {
       worth_saying = true;
       inferred.push_back(name + " has no pose: its scanner taken at its frame's origin (" +
                          verdict.Describe() + ")");
-    } else {
+    } else if (verdict.decided) {
       worth_saying = true;
       unknown.push_back(name + " has no pose, and its frame's origin is not its scanner's (" +
+                        verdict.Describe() + ")");
+    } else {
+      worth_saying = true;
+      unknown.push_back(name +
+                        " has no pose, and its grid cannot tell whether its frame's origin "
+                        "is its scanner's (" +
                         verdict.Describe() + ")");
     }
   }
   first_point[scans.size()] = cloud.size();
-  // One line per scan up to three; a file of many scans says the first and
-  // how many more.
-  for (size_t i = 0; i < inferred.size() && i < 3; ++i) {
-    result_.warnings.push_back(inferred.size() > 3 && i == 2
-                                   ? inferred[i] + " (and " + std::to_string(inferred.size() - 3) +
-                                         " more scans alike)"
-                                   : inferred[i]);
-  }
   if (unknown.empty()) {
+    // How the poseless scans' scanners were found: one line per scan, the
+    // third for the rest of a file of many.
+    for (size_t i = 0; i < inferred.size() && i < 3; ++i) {
+      result_.warnings.push_back(
+          inferred.size() > 3 && i == 2
+              ? inferred[i] + " (and " + std::to_string(inferred.size() - 3) + " more scans alike)"
+              : inferred[i]);
+    }
     cloud.station_ids.resize(cloud.size());
     for (const ScanSpec& scan : scans) {
       cloud.stations.push_back(scan.translation);  // {0, 0, 0} without a pose
@@ -645,7 +648,8 @@ Expected<ScanReadResult> E57Reader::Read() {
   } else if (worth_saying) {
     // Some scanners known, or a grid that was not swept from its origin:
     // say why there are no stations (normals are then oriented without
-    // them). Clouds without any pose or grid (merged, converted) say nothing.
+    // them): one scan without its scanner costs every scan its station.
+    // Clouds without any pose or grid (merged, converted) say nothing.
     result_.warnings.push_back("no scanner stations: " + unknown.front() +
                                (unknown.size() > 1
                                     ? " (and " + std::to_string(unknown.size() - 1) + " more)"

@@ -98,7 +98,7 @@ TEST_F(E57Test, PumpMatchesDecodedPly) {
   ASSERT_EQ(read->warnings.size(), 1u);
   EXPECT_THAT(read->warnings[0],
               HasSubstr("data3D scan 0 has no pose: its scanner taken at its frame's origin "
-                        "(seen from there, 100.0 % of the 154190 steps"));
+                        "(seen from there, 99.9 % of the 303204 steps"));
   EXPECT_GE(progress_calls, 1);
   EXPECT_TRUE(Validate(cloud).ok());
   for (float intensity : cloud.intensities) {
@@ -316,6 +316,17 @@ TEST_F(E57Test, APoselessGridScanHasItsScannerAtItsOrigin) {
   EXPECT_THAT(read->warnings,
               ::testing::Contains(HasSubstr("data3D scan 0 has no pose: its scanner taken at "
                                             "its frame's origin (seen from there, 100.0 %")));
+  // Every 7th record invalid (no return): left out, its neighbours two cells
+  // apart, the same verdict.
+  TestScan holed = GridScan(30, 25, {0, 0, 0});
+  std::vector<double> state(750, 0);
+  for (size_t i = 3; i < state.size(); i += 7) state[i] = 2;
+  holed.fields.push_back(Integer("cartesianInvalidState", 0, 2, state));
+  auto with_holes = ReadE57(WriteScans({holed}), {});
+  ASSERT_TRUE(with_holes.ok()) << with_holes.status().message();
+  EXPECT_EQ(with_holes->dropped_points, 107u);
+  EXPECT_EQ(with_holes->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+  EXPECT_EQ(with_holes->points.station_ids.size(), 750u - 107u);
 }
 
 TEST_F(E57Test, APoselessGridScanSweptFromElsewhereHasNoStation) {
@@ -331,7 +342,9 @@ TEST_F(E57Test, APoselessGridScanSweptFromElsewhereHasNoStation) {
   auto small = ReadE57(WriteScans({GridScan(10, 10, {0, 0, 0})}), {});
   ASSERT_TRUE(small.ok()) << small.status().message();
   EXPECT_FALSE(small->points.has_stations());
-  EXPECT_THAT(small->warnings, ::testing::Contains(HasSubstr("too few to tell")));
+  EXPECT_THAT(small->warnings,
+              ::testing::Contains(HasSubstr("data3D scan 0 has no pose, and its grid cannot tell "
+                                            "whether its frame's origin is its scanner's (")));
 }
 
 TEST_F(E57Test, APoselessSphericalScanHasItsScannerAtItsOrigin) {
@@ -372,6 +385,14 @@ TEST_F(E57Test, StationsNeedEveryScansScanner) {
               ::testing::Contains("no scanner stations: data3D scan 1 has no pose and no "
                                   "row/column grid; io.read_points `station` can declare where "
                                   "one scanner stood"));
+  // A poseless scan swept from its origin beside one without pose or grid:
+  // no stations, and no line saying the first one's scanner was found.
+  auto mixed = ReadE57(WriteScans({GridScan(30, 25, {0, 0, 0}), XyzScan({0}, {0}, {1})}), {});
+  ASSERT_TRUE(mixed.ok()) << mixed.status().message();
+  EXPECT_TRUE(mixed->points.stations.empty());
+  EXPECT_THAT(mixed->warnings, ::testing::ElementsAre(
+                                   "2 scans merged", HasSubstr("no scanner stations: data3D scan "
+                                                               "1 has no pose and no row/column")));
   // A posed scan and a poseless one swept from its origin: both stations.
   auto both = ReadE57(WriteScans({a, GridScan(30, 25, {0, 0, 0})}), {});
   ASSERT_TRUE(both.ok()) << both.status().message();

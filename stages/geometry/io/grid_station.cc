@@ -7,63 +7,58 @@
 
 namespace pb {
 
-void GridStationTest::Keep(Steps& steps, double step) {
-  if (steps.seen++ % steps.stride != 0) return;
-  steps.kept.push_back(static_cast<float>(step));
-  if (steps.kept.size() < kKeep) return;
-  // Every other kept step, and half the sampling from now on: the kept
-  // steps stay an even sample of the scan, in bounded memory.
-  size_t out = 0;
-  for (size_t i = 0; i < steps.kept.size(); i += 2) steps.kept[out++] = steps.kept[i];
-  steps.kept.resize(out);
-  steps.stride *= 2;
-}
-
-void GridStationTest::Add(int64_t row, int64_t column, const double position[3]) {
-  const double range =
-      std::sqrt(position[0] * position[0] + position[1] * position[1] + position[2] * position[2]);
-  if (!(range > 0) || !std::isfinite(range)) {
-    Break();
+void GridStationTest::Step(std::unordered_map<int64_t, Last>& lines, int64_t line, int64_t cell,
+                           const float direction[3], Count& count) {
+  auto found = lines.find(line);
+  if (found == lines.end()) {
+    if (lines.size() >= kMaxLines) return;
+    found = lines.emplace(line, Last{}).first;
+    found->second.cell = cell;
+    std::copy(direction, direction + 3, found->second.direction);
     return;
   }
-  const double direction[3] = {position[0] / range, position[1] / range, position[2] / range};
-  if (have_previous_) {
-    const int64_t rows = row - previous_row_, columns = column - previous_column_;
-    const int64_t cells = std::abs(rows) + std::abs(columns);
-    if ((rows == 0 || columns == 0) && cells >= 1 && cells <= 4) {
-      const double* a = previous_direction_;
-      const double cross[3] = {a[1] * direction[2] - a[2] * direction[1],
-                               a[2] * direction[0] - a[0] * direction[2],
-                               a[0] * direction[1] - a[1] * direction[0]};
-      const double sine =
-          std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
-      const double cosine = a[0] * direction[0] + a[1] * direction[1] + a[2] * direction[2];
-      Keep(steps_[rows != 0 ? 0 : 1], std::atan2(sine, cosine) / double(cells));
+  Last& last = found->second;
+  const int64_t cells = std::abs(cell - last.cell);
+  float step = 0;
+  if (cells >= 1 && cells <= 4) {
+    const float* a = last.direction;
+    const double cross[3] = {double(a[1]) * direction[2] - double(a[2]) * direction[1],
+                             double(a[2]) * direction[0] - double(a[0]) * direction[2],
+                             double(a[0]) * direction[1] - double(a[1]) * direction[0]};
+    const double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+    const double cosine =
+        double(a[0]) * direction[0] + double(a[1]) * direction[1] + double(a[2]) * direction[2];
+    step = static_cast<float>(std::atan2(sine, cosine) / double(cells));
+    if (last.step > 0) {
+      ++count.steps;
+      count.regular += step >= last.step / kFactor && step <= last.step * kFactor;
     }
   }
-  have_previous_ = true;
-  previous_row_ = row;
-  previous_column_ = column;
-  std::copy(direction, direction + 3, previous_direction_);
+  last.cell = cell;
+  last.step = step;  // 0 after a jump of more than four cells: the next step starts afresh
+  std::copy(direction, direction + 3, last.direction);
+}
+
+void GridStationTest::Add(double row, double column, const double position[3]) {
+  constexpr double kLimit = 9007199254740992.0;  // 2^53: exact in a double and an int64
+  if (!(std::abs(row) < kLimit) || !(std::abs(column) < kLimit)) return;
+  const double range =
+      std::sqrt(position[0] * position[0] + position[1] * position[1] + position[2] * position[2]);
+  if (!(range > 0) || !std::isfinite(range)) return;
+  const float direction[3] = {float(position[0] / range), float(position[1] / range),
+                              float(position[2] / range)};
+  const auto r = static_cast<int64_t>(row), c = static_cast<int64_t>(column);
+  Step(last_in_column_, c, r, direction, counts_[0]);  // down its column
+  Step(last_in_row_, r, c, direction, counts_[1]);     // along its row
 }
 
 GridStationTest::Verdict GridStationTest::Decide() const {
   Verdict verdict;
   verdict.regular = 1;
-  for (const Steps& steps : steps_) {
-    verdict.steps += steps.seen;
-    if (steps.seen < kMinSteps) continue;
-    std::vector<float> sorted = steps.kept;
-    const size_t middle = sorted.size() / 2;
-    std::nth_element(sorted.begin(), sorted.begin() + middle, sorted.end());
-    const double median = sorted[middle];
-    size_t regular = 0;
-    if (median > 0) {
-      for (float step : steps.kept) {
-        regular += step >= median / kFactor && step <= median * kFactor;
-      }
-    }
-    verdict.regular = std::min(verdict.regular, double(regular) / double(steps.kept.size()));
+  for (const Count& count : counts_) {
+    verdict.steps += count.steps;
+    if (count.steps < kMinSteps) continue;
+    verdict.regular = std::min(verdict.regular, double(count.regular) / double(count.steps));
     verdict.decided = true;
   }
   if (!verdict.decided) verdict.regular = 0;
@@ -72,14 +67,15 @@ GridStationTest::Verdict GridStationTest::Decide() const {
 }
 
 std::string GridStationTest::Verdict::Describe() const {
-  char text[200];
+  char text[220];
   if (!decided) {
     std::snprintf(text, sizeof text,
-                  "%zu steps between neighbours of its row/column grid, too few to tell", steps);
+                  "%zu successive steps between neighbours of its row/column grid, too few to tell",
+                  steps);
   } else {
     std::snprintf(text, sizeof text,
                   "seen from there, %.1f %% of the %zu steps between neighbours of its row/column "
-                  "grid are within %.1fx of their median angle; %.0f %% needed",
+                  "grid are within %.1fx of the step before them; %.0f %% needed",
                   100 * regular, steps, kFactor, 100 * kRegularFraction);
   }
   return text;

@@ -20,25 +20,21 @@ double Range(int64_t row, int64_t column) {
 // A terrestrial scanner's sweep from `station`: column-major records (a
 // vertical line per azimuth step), 0.01 rad down a column, 0.02 rad along a
 // row; positions relative to the frame's origin. `skip` > 0 leaves every
-// skip-th record out of the file (no return, not recorded: the next record
-// is two cells on), `invalid` > 0 breaks the run at every invalid-th.
-GridStationTest::Verdict Sweep(const double station[3], int64_t rows, int64_t columns, int skip = 0,
-                               int invalid = 0) {
+// skip-th record out (not recorded, or invalid and not added: its
+// neighbours are then two cells apart).
+GridStationTest::Verdict Sweep(const double station[3], int64_t rows, int64_t columns,
+                               int skip = 0) {
   GridStationTest test;
   int64_t record = 0;
   for (int64_t column = 0; column < columns; ++column) {
     for (int64_t row = 0; row < rows; ++row, ++record) {
       if (skip > 0 && record % skip == 0) continue;
-      if (invalid > 0 && record % invalid == 0) {
-        test.Break();
-        continue;
-      }
       const double elevation = 0.4 - 0.01 * double(row), azimuth = 0.02 * double(column);
       const double r = Range(row, column);
       const double p[3] = {station[0] + r * std::cos(elevation) * std::cos(azimuth),
                            station[1] + r * std::cos(elevation) * std::sin(azimuth),
                            station[2] + r * std::sin(elevation)};
-      test.Add(row, column, p);
+      test.Add(double(row), double(column), p);
     }
   }
   return test.Decide();
@@ -50,8 +46,9 @@ TEST(GridStationTest, AGridSweptFromTheOriginPasses) {
   EXPECT_TRUE(verdict.decided);
   EXPECT_TRUE(verdict.at_origin);
   EXPECT_GT(verdict.regular, 0.999);
-  EXPECT_EQ(verdict.steps, 79u * 120u);  // down each column; the jump to the next is no step
-  EXPECT_THAT(verdict.Describe(), HasSubstr("100.0 % of the 9480 steps"));
+  // Each step down a column and along a row against the one before it.
+  EXPECT_EQ(verdict.steps, 78u * 120u + 80u * 118u);
+  EXPECT_THAT(verdict.Describe(), HasSubstr("100.0 % of the 18800 steps"));
 }
 
 TEST(GridStationTest, AGridSweptFromElsewhereFails) {
@@ -68,16 +65,34 @@ TEST(GridStationTest, AGridSweptFromElsewhereFails) {
   EXPECT_FALSE(Sweep(far, 80, 120).at_origin);
 }
 
-TEST(GridStationTest, MissingRecordsCountAsSeveralCellsAndInvalidOnesBreakTheRun) {
+TEST(GridStationTest, MissingRecordsMakeLongerSteps) {
   const double origin[3] = {0, 0, 0};
-  // Every 5th record not in the file: the next one is 2 cells on, a double step.
+  // Every 5th record not there: its neighbours are 2 cells apart, a double
+  // step, as regular as the others once divided.
   const GridStationTest::Verdict skipped = Sweep(origin, 80, 120, /*skip=*/5);
   EXPECT_TRUE(skipped.at_origin);
   EXPECT_GT(skipped.regular, 0.999);
-  // Every 7th record invalid: no step across it.
-  const GridStationTest::Verdict broken = Sweep(origin, 80, 120, 0, /*invalid=*/7);
-  EXPECT_TRUE(broken.at_origin);
-  EXPECT_LT(broken.steps, 80u * 120u * 6u / 7u);
+  // Steps of one and six cells' angle in turn, each called one cell: not a grid
+  // seen from the origin.
+  GridStationTest test;
+  for (int64_t row = 0; row < 1000; ++row) {
+    const double elevation = 0.01 * double(row / 2 * 7 + row % 2);
+    const double p[3] = {std::cos(elevation), 0, std::sin(elevation)};
+    test.Add(double(row), 0, p);
+  }
+  EXPECT_TRUE(test.Decide().decided);
+  EXPECT_FALSE(test.Decide().at_origin);
+}
+
+TEST(GridStationTest, BadCellIndicesAreIgnored) {
+  // NaN, infinite or beyond 2^53: no step (and no undefined conversion).
+  GridStationTest test;
+  const double p[3] = {1, 0, 0};
+  for (double bad : {std::nan(""), double(INFINITY), 1e300, -1e19}) {
+    test.Add(bad, 0, p);
+    test.Add(0, bad, p);
+  }
+  EXPECT_EQ(test.Decide().steps, 0u);
 }
 
 TEST(GridStationTest, ACamerasPixelGridPasses) {
@@ -90,7 +105,7 @@ TEST(GridStationTest, ACamerasPixelGridPasses) {
       const double x = (double(column) - 79.5) / focal, y = (double(row) - 59.5) / focal;
       const double depth = Range(row, column);
       const double p[3] = {x * depth, y * depth, -depth};
-      test.Add(row, column, p);
+      test.Add(double(row), double(column), p);
     }
   }
   const GridStationTest::Verdict verdict = test.Decide();
@@ -102,21 +117,22 @@ TEST(GridStationTest, TooFewStepsDecideNothing) {
   const GridStationTest::Verdict verdict = Sweep(origin, 20, 20);
   EXPECT_FALSE(verdict.decided);
   EXPECT_FALSE(verdict.at_origin);
-  EXPECT_THAT(verdict.Describe(), HasSubstr("380 steps between neighbours"));
+  EXPECT_THAT(verdict.Describe(), HasSubstr("720 successive steps between neighbours"));
   EXPECT_THAT(verdict.Describe(), HasSubstr("too few to tell"));
-  // A point at the origin itself has no direction: it breaks the run.
+  // A point at the origin itself has no direction: it is ignored.
   GridStationTest test;
   const double zero[3] = {0, 0, 0};
-  for (int64_t row = 0; row < 2000; ++row) test.Add(row, 0, zero);
+  for (int64_t row = 0; row < 2000; ++row) test.Add(double(row), 0, zero);
   EXPECT_EQ(test.Decide().steps, 0u);
 }
 
-TEST(GridStationTest, AScanOfMillionsKeepsAnEvenSample) {
-  // More steps than a direction keeps (2^20): the kept ones are thinned
-  // evenly and the verdict still holds; every step is counted.
+TEST(GridStationTest, AScanOfMillionsIsCountedWhole) {
+  // Only counts and one record per row and column are kept. Its rows wrap
+  // past the zenith: along a row the step shrinks with the cosine of the
+  // elevation, the same for every step of that row.
   const double origin[3] = {0, 0, 0};
   const GridStationTest::Verdict at = Sweep(origin, 1100, 1000);
-  EXPECT_EQ(at.steps, 1099u * 1000u);
+  EXPECT_EQ(at.steps, 1098u * 1000u + 1100u * 998u);
   EXPECT_TRUE(at.at_origin);
   const double station[3] = {0.4, -0.2, 0.1};
   EXPECT_FALSE(Sweep(station, 1100, 1000).at_origin);

@@ -390,8 +390,9 @@ class PcdReader {
     coordinates_f4_ = true;
     for (Role role : {kX, kY, kZ}) coordinates_f4_ &= header_.fields[of[role]].size == 4;
     recenter_ = !coordinates_f4_ || translate_;
-    // An organized cloud in its sensor's frame (identity VIEWPOINT): the
-    // sensor stands at the origin if the image grid was swept from there.
+    // An organized cloud in its sensor's frame (no VIEWPOINT, or the
+    // identity): the sensor stands at the origin if the image grid was
+    // swept from there.
     if (organized_ && !rotate_ && !translate_) grid_.emplace();
 
     // Reserve, but never more than the bytes left in the file could hold, so a
@@ -449,15 +450,14 @@ class PcdReader {
                              "); drop such points with drop_invalid_points");
     }
     ++result_.dropped_points;
-    if (grid_) grid_->Break();
     return Status::Ok();
   }
 
   // Point `index` of an organized cloud, as read (sensor frame), to the
   // grid test: WIDTH points per row.
   void AddToGrid(uint64_t index, const double* p) {
-    grid_->Add(static_cast<int64_t>(index / header_.width),
-               static_cast<int64_t>(index % header_.width), p);
+    grid_->Add(static_cast<double>(index / header_.width),
+               static_cast<double>(index % header_.width), p);
   }
 
   // Non-finite (also after narrowing to float) intensities carry no signal.
@@ -502,19 +502,19 @@ class PcdReader {
       cloud.stations = {{header_.viewpoint[0], header_.viewpoint[1], header_.viewpoint[2]}};
       cloud.station_ids.assign(cloud.size(), 0);
     } else if (grid_) {
-      // An organized cloud with the identity VIEWPOINT: its sensor at the
+      // An organized cloud without a VIEWPOINT pose: its sensor at the
       // origin when the image grid was swept from there (grid_station.h).
       const GridStationTest::Verdict verdict = grid_->Decide();
       if (verdict.at_origin) {
         cloud.stations = {{0.0, 0.0, 0.0}};
         cloud.station_ids.assign(cloud.size(), 0);
         result_.warnings.push_back(
-            "organized cloud with the identity VIEWPOINT: its sensor taken at the origin (" +
+            "organized cloud without a VIEWPOINT pose: its sensor taken at the origin (" +
             verdict.Describe() + ")");
       } else {
         result_.warnings.push_back(
-            "no sensor station: organized cloud with the identity VIEWPOINT, and the origin is "
-            "not its sensor's (" +
+            "no sensor station: organized cloud without a VIEWPOINT pose, and its grid does not "
+            "show the origin as its sensor's (" +
             verdict.Describe() + "); io.read_points `station` can declare where it stood");
       }
     }
@@ -993,7 +993,7 @@ class PcdReader {
   // value (plus the translation when there is no rotation) rounded to 1 m.
   std::array<bool, 3> have_stream_origin_{};
   std::array<double, 3> stream_origin_{};
-  std::optional<GridStationTest> grid_;  // organized, identity VIEWPOINT
+  std::optional<GridStationTest> grid_;  // organized, no VIEWPOINT pose
   ScanReadResult result_;
 };
 

@@ -35,11 +35,12 @@
 // only station (every point has station id 0). The identity pose (tx ty tz
 // zero, qx qy qz zero) makes no station: PCL writes `VIEWPOINT 0 0 0 1 0 0 0`
 // into every file by default, fused clouds included, and a station at the
-// origin would orient normals wrongly. An organized cloud (HEIGHT > 1) with
-// the identity pose is the exception when its image grid was swept from the
-// origin (grid_station.h: a camera in its own frame, as a grabber writes
-// it): its station is the origin, with a warning saying so (or why not).
-// Without VIEWPOINT there is no station.
+// origin would orient normals wrongly. Without VIEWPOINT there is no
+// station either. An organized cloud (HEIGHT > 1) without a VIEWPOINT pose
+// (the identity, or none) is the exception when its image grid was swept
+// from the origin (grid_station.h: a camera in its own frame, as a grabber
+// writes it): its station is the origin, with a warning saying so (or why
+// not).
 // The origin stays (0, 0, 0) when x y z are F4 and tx ty tz are zero (the
 // floats are kept bit for bit); otherwise points are re-centered on their
 // bounding-box center rounded to 1 m, as the PLY reader does for doubles.

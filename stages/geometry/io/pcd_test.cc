@@ -563,8 +563,10 @@ TEST_F(PcdTest, OfficeKinectBinaryCompressed) {
 
 // An organized depth frame, 40 x 30 pixels of a pinhole 60 degrees across
 // looking down -z, over two depths, moved by `shift`; NaN (no return) at
-// every 9th pixel. x y z as F4 in DATA `data`, identity VIEWPOINT.
-std::string OrganizedFrame(const std::string& data, const std::array<float, 3>& shift) {
+// every 9th pixel. x y z as F4 (F8 with `doubles`) in DATA `data`, with the
+// identity VIEWPOINT (or none, `viewpoint` false).
+std::string OrganizedFrame(const std::string& data, const std::array<float, 3>& shift,
+                           bool doubles = false, bool viewpoint = true) {
   const int width = 40, height = 30;
   const double focal = 20.0 / std::tan(M_PI / 6);
   std::vector<std::array<float, 3>> points;
@@ -586,39 +588,48 @@ std::string OrganizedFrame(const std::string& data, const std::array<float, 3>& 
     }
   } else if (data == "binary") {
     for (const auto& p : points)
-      for (float v : p) Append(&body, v);
+      for (float v : p) doubles ? Append(&body, double(v)) : Append(&body, v);
   } else {
     std::string soa;
     for (int axis = 0; axis < 3; ++axis)
-      for (const auto& p : points) Append(&soa, p[axis]);
+      for (const auto& p : points) doubles ? Append(&soa, double(p[axis])) : Append(&soa, p[axis]);
     body = CompressedBody(soa);
   }
-  return "VERSION 0.7\nFIELDS x y z\nSIZE 4 4 4\nTYPE F F F\nCOUNT 1 1 1\nWIDTH 40\n"
-         "HEIGHT 30\nVIEWPOINT 0 0 0 1 0 0 0\nPOINTS 1200\nDATA " +
-         data + "\n" + body;
+  return std::string("VERSION 0.7\nFIELDS x y z\n") + (doubles ? "SIZE 8 8 8\n" : "SIZE 4 4 4\n") +
+         "TYPE F F F\nCOUNT 1 1 1\nWIDTH 40\n" + "HEIGHT 30\n" +
+         (viewpoint ? "VIEWPOINT 0 0 0 1 0 0 0\n" : "") + "POINTS 1200\nDATA " + data + "\n" + body;
 }
 
 TEST_F(PcdTest, AnOrganizedFrameInItsSensorsFrameHasItsSensorAtTheOrigin) {
   // The identity VIEWPOINT makes no station by itself (a fused cloud has it
   // too); an image grid swept from the origin does (grid_station.h).
-  for (const std::string data : {"ascii", "binary", "binary_compressed"}) {
-    SCOPED_TRACE(data);
-    const auto read = ReadPcd(Write(OrganizedFrame(data, {0, 0, 0})), {});
+  struct Case {
+    std::string data;
+    bool doubles = false, viewpoint = true;
+  };
+  // F8 coordinates are streamed relative to a per-axis origin (1 m away
+  // here) and must reach the test as read; a v0.6-style file has no VIEWPOINT.
+  for (const Case& c : {Case{"ascii"}, Case{"binary"}, Case{"binary_compressed"},
+                        Case{"binary_compressed", true}, Case{"binary", false, false}}) {
+    SCOPED_TRACE(c.data + (c.doubles ? " F8" : "") + (c.viewpoint ? "" : " no VIEWPOINT"));
+    const std::string data = c.data;
+    const auto read = ReadPcd(Write(OrganizedFrame(data, {0, 0, 0}, c.doubles, c.viewpoint)), {});
     ASSERT_TRUE(read.ok()) << read.status().message();
     EXPECT_EQ(read->dropped_points, 133u);
     EXPECT_EQ(read->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
     EXPECT_EQ(read->points.station_ids, std::vector<uint16_t>(1200 - 133, 0));
-    EXPECT_THAT(read->warnings,
-                ::testing::Contains(HasSubstr("organized cloud with the identity VIEWPOINT: its "
-                                              "sensor taken at the origin (seen from there")));
+    EXPECT_THAT(read->warnings, ::testing::Contains(HasSubstr(
+                                    "organized cloud without a VIEWPOINT pose: its sensor "
+                                    "taken at the origin (seen from there")));
     // The same frame moved 25 cm: the origin is not the sensor's.
-    const auto moved = ReadPcd(Write(OrganizedFrame(data, {0.25f, 0, 0}), "moved.pcd"), {});
+    const auto moved = ReadPcd(
+        Write(OrganizedFrame(data, {0.25f, 0, 0}, c.doubles, c.viewpoint), "moved.pcd"), {});
     ASSERT_TRUE(moved.ok()) << moved.status().message();
     EXPECT_TRUE(moved->points.stations.empty());
     EXPECT_TRUE(moved->points.station_ids.empty());
     EXPECT_THAT(moved->warnings,
-                ::testing::Contains(HasSubstr("no sensor station: organized cloud with the "
-                                              "identity VIEWPOINT, and the origin is not")));
+                ::testing::Contains(HasSubstr("no sensor station: organized cloud without a "
+                                              "VIEWPOINT pose, and its grid does not show")));
   }
 }
 
