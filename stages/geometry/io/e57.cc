@@ -588,8 +588,8 @@ Expected<ScanReadResult> E57Reader::Read() {
   // Each scan's scanner: at its pose's translation; without a pose (the
   // identity) at the origin of its frame when that is known to be the
   // scanner's: spherical coordinates are measured from it, and a row/column
-  // grid evenly spaced in angle seen from it was swept from it
-  // (grid_station.h). Stations are kept when every scan has one.
+  // grid whose steps seen from it are steady along every row and column was
+  // swept from it (grid_station.h). Stations are kept when every scan has one.
   std::vector<size_t> first_point(scans.size() + 1, 0);
   std::vector<std::string> unknown;   // why a scan's scanner is not known
   std::vector<std::string> inferred;  // how a poseless scan's scanner was found

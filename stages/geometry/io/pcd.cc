@@ -845,7 +845,7 @@ class PcdReader {
         continue;
       }
       if (grid_) {
-        // Identity VIEWPOINT: the values as read are the streamed ones.
+        // No VIEWPOINT pose: the values as read are the streamed ones.
         double p[3];
         for (int axis = 0; axis < 3; ++axis) {
           p[axis] = (coordinates_f4_ ? 0.0 : stream_origin_[axis]) + f[axis];
