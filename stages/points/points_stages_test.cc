@@ -16,7 +16,7 @@
 #include "stages/geometry/core/table.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/points/module_calls.h"
-#include "stages/geometry/testing/e57_writer.h"
+#include "stages/geometry/io/e57_test_writer.h"
 #include "stages/geometry/testing/test_data.h"
 #include "stages/stage_test_util.h"
 

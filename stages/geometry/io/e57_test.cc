@@ -19,7 +19,7 @@
 #include "stages/geometry/io/e57_binary.h"
 #include "stages/geometry/io/e57_xml.h"
 #include "stages/geometry/io/ply.h"
-#include "stages/geometry/testing/e57_writer.h"
+#include "stages/geometry/io/e57_test_writer.h"
 #include "stages/geometry/testing/test_data.h"
 
 namespace pb {

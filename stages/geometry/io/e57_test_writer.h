@@ -1,5 +1,5 @@
-// A minimal E57 writer for hand-made test files (test-only: no production
-// code includes stages/geometry/testing/): header, one CompressedVector
+// E57 test support, for tests only (no production code includes it): a
+// minimal writer for hand-made test files: header, one CompressedVector
 // section per scan (bitPackCodec, streams split across small packets so
 // values straddle packet boundaries), XML, CRC-checked pages. Used by the
 // reader's tests (io/e57_test.cc) and by stage tests that need an E57.
