@@ -209,10 +209,14 @@ Status Run(StageContext& ctx) {
   std::vector<float> radius, spacing;
   size_t capped = 0, strays = 0;
   PointCloud kept;  // the cloud without its stray points, when it has some
+  // The whole cloud's index, kept for the surfels when no point is a stray
+  // (they index the same positions then; with strays they index `kept`),
+  // and freed before the frames are drawn.
+  Expected<KnnIndex> index = Status::Internal("not run");
+  const auto free_index = [&] { index = Status::Internal("freed"); };
   {
     PB_PHASE(ctx, "spacing");
     const std::string where = std::string(kId) + ": input 'points' (" + input.path + ")";
-    Expected<KnnIndex> index = Status::Internal("not run");
     Expected<SpacingAndStrays> local = Status::Internal("not run");
     arena.execute([&] {
       index = KnnIndex::Build(input.cloud.positions);
@@ -230,7 +234,10 @@ Status Run(StageContext& ctx) {
       spacing.push_back(local->spacing[i]);
     }
     strays = local->stray.size() - keep.size();
-    if (strays > 0) kept = SelectPoints(input.cloud, keep);
+    if (strays > 0) {
+      kept = SelectPoints(input.cloud, keep);
+      free_index();
+    }
     if (keep.empty())
       return Status::Invalid(where + ": every point is a stray (clusters of fewer than " +
                              std::to_string(options.stray_cluster_points) +
@@ -256,11 +263,15 @@ Status Run(StageContext& ctx) {
   if (options.orient || project) {
     PB_PHASE(ctx, "surfels");
     Expected<Surfels> estimated = Status::Internal("not run");
-    arena.execute([&] { estimated = EstimateSurfels(cloud, {.k = options.surfel_k, .project = project}); });
+    const KnnIndex* same_points = strays == 0 ? &*index : nullptr;
+    arena.execute([&] {
+      estimated = EstimateSurfels(cloud, {.k = options.surfel_k, .project = project}, same_points);
+    });
     if (!estimated.ok())
       return estimated.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
     surfels = std::move(*estimated);
   }
+  free_index();
   if (project) {
     double total = 0;
     for (size_t i = 0; i < cloud.size(); ++i) {

@@ -46,7 +46,7 @@ bool SolveSymmetric6(double m[36], double r[6]) {
 
 }  // namespace
 
-Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& options) {
+Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& options, const KnnIndex* given) {
   PB_RETURN_IF_ERROR(Validate(cloud));
   if (options.k < 3 || options.k > 64)
     return Status::Invalid("surfels: k must be in [3, 64], got " + std::to_string(options.k));
@@ -56,7 +56,14 @@ Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& 
   if (n <= size_t(options.k))
     return Status::Invalid("surfels: needs more than k = " + std::to_string(options.k) + " points, the cloud has " +
                            std::to_string(n));
-  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
+  if (given && given->size() != n)
+    return Status::Invalid("surfels: the given index holds " + std::to_string(given->size()) +
+                           " points, the cloud " + std::to_string(n));
+  KnnIndex built;
+  if (!given) {
+    PB_ASSIGN_OR_RETURN(built, KnnIndex::Build(cloud.positions));
+  }
+  const KnnIndex& index = given ? *given : built;
   Surfels surfels;
   surfels.normal.assign(n * 3, 0.0f);
   surfels.outward.assign(n * 3, 0.0f);

@@ -48,6 +48,7 @@
 
 #include "base/status.h"
 #include "stages/geometry/core/point_cloud.h"
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 
@@ -66,7 +67,11 @@ struct Surfels {
 };
 
 // Status::Invalid if an option is out of range, the cloud has at most k
-// points or a non-finite coordinate.
-Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& options = {});
+// points or a non-finite coordinate. `index`, when given, must have been
+// built from exactly `cloud.positions` (a caller that already has it, as
+// render.splats does, saves building it again: the same surfels); null
+// builds one.
+Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& options = {},
+                                  const KnnIndex* index = nullptr);
 
 }  // namespace pb

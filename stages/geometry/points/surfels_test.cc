@@ -5,6 +5,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <string>
 
 namespace pb {
 namespace {
@@ -123,6 +124,27 @@ TEST(SurfelsTest, ProjectionOntoTheLocalSurface) {
                           (std::hypot(p[0], p[1], p[2]) * std::hypot(q[0], q[1], q[2]));
     EXPECT_GT(cosine, 0.9999) << i;
   }
+}
+
+// An index the caller already built from the same positions gives the same
+// surfels as the one built inside; one of another cloud is refused.
+TEST(SurfelsTest, AGivenIndexOfTheSamePointsGivesTheSameSurfels) {
+  const PointCloud noisy = Sphere(0.002);
+  Expected<KnnIndex> index = KnnIndex::Build(noisy.positions);
+  ASSERT_TRUE(index.ok());
+  Expected<Surfels> own = EstimateSurfels(noisy, {.project = true});
+  Expected<Surfels> given = EstimateSurfels(noisy, {.project = true}, &*index);
+  ASSERT_TRUE(own.ok() && given.ok());
+  EXPECT_EQ(own->normal, given->normal);
+  EXPECT_EQ(own->outward, given->outward);
+  EXPECT_EQ(own->variation, given->variation);
+  EXPECT_EQ(own->on_surface, given->on_surface);
+  EXPECT_EQ(own->border_points, given->border_points);
+
+  const PointCloud grid = TiltedGrid();
+  Expected<Surfels> wrong = EstimateSurfels(grid, {}, &*index);
+  ASSERT_FALSE(wrong.ok());
+  EXPECT_NE(wrong.status().message().find("index holds"), std::string::npos) << wrong.status().message();
 }
 
 TEST(SurfelsTest, RejectsBadInput) {
