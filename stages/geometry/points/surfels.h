@@ -70,7 +70,7 @@ struct Surfels {
 // points or a non-finite coordinate. `index`, when given, must have been
 // built from exactly `cloud.positions` (a caller that already has it, as
 // render.splats does, saves building it again: the same surfels); null
-// builds one.
+// builds one; Status::Invalid when it holds another number of points.
 Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& options = {},
                                   const KnnIndex* index = nullptr);
 
