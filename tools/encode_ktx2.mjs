@@ -3,6 +3,12 @@
 // WebAssembly; pinned in tools/package-lock.json), with a full mip chain.
 // Called by the export.gltf stage (stages/export/ktx2_encode.cc).
 //
+// Two encoders: ktx2-encoder 0.6.0 (Basis Universal 2.5's WebAssembly) for
+// images of at most 12 Mpix, which is its limit (it refuses a 4096² map), and
+// above that ktx2-encoder 0.5.4 (the previous generation's WebAssembly,
+// installed as ktx2-encoder-legacy), which encodes 4096² maps (docs/export.md,
+// "Maps above 12 Mpix"). The same options; each is deterministic.
+//
 // Usage: node encode_ktx2.mjs etc1s|uastc srgb|linear WIDTH HEIGHT IN.rgba OUT.ktx2
 //   etc1s: BasisLZ/ETC1S, quality level 255, effort 1 (for color maps)
 //   uastc: UASTC 4x4, effort 0, Zstandard supercompression and the
@@ -12,7 +18,10 @@
 // Exit status 0 on success; 2 on bad arguments; 1 when encoding fails, with
 // the reason on stderr.
 import { readFileSync, writeFileSync, renameSync } from "node:fs";
-import { encodeToKTX2 } from "ktx2-encoder";
+
+// The largest image (texels) the current encoder takes; also in
+// stages/export/ktx2_encode.cc (kKtx2CurrentEncoderMaxTexels).
+const CURRENT_ENCODER_MAX_TEXELS = 12 * 1024 * 1024;
 
 const [codec, transfer, widthText, heightText, input, output] = process.argv.slice(2);
 const width = Number(widthText), height = Number(heightText);
@@ -26,6 +35,8 @@ if (rgba.length !== width * height * 4) {
   console.error(`${input}: ${rgba.length} bytes, expected ${width}x${height}x4 = ${width * height * 4}`);
   process.exit(2);
 }
+const legacy = width * height > CURRENT_ENCODER_MAX_TEXELS;
+const { encodeToKTX2 } = await import(legacy ? "ktx2-encoder-legacy" : "ktx2-encoder");
 const srgb = transfer === "srgb";
 const options = {
   isUASTC: codec === "uastc",
@@ -48,6 +59,7 @@ try {
   writeFileSync(output + ".tmp", ktx2);
   renameSync(output + ".tmp", output);
 } catch (error) {
-  console.error(`encoding ${input} (${width}x${height}, ${codec}): ${error.message ?? error}`);
+  console.error(`encoding ${input} (${width}x${height}, ${codec}, ` +
+                `${legacy ? "ktx2-encoder-legacy" : "ktx2-encoder"}): ${error.message ?? error}`);
   process.exit(1);
 }

@@ -12,6 +12,7 @@
 #include <iterator>
 #include <set>
 #include <string>
+#include <vector>
 
 #include "stages/builtin.h"
 #include "stages/export/export_io.h"
@@ -67,12 +68,13 @@ class ExportStagesTest : public StageTest {
     return path;
   }
 
-  std::string WriteImage(const std::string& name, Image::PixelType type) {
-    Image image = Image::Make(32, 16, 3, type);
-    for (int y = 0; y < 16; ++y) {
-      for (int x = 0; x < 32; ++x) {
+  std::string WriteImage(const std::string& name, Image::PixelType type, int width = 32,
+                         int height = 16) {
+    Image image = Image::Make(width, height, 3, type);
+    for (int y = 0; y < height; ++y) {
+      for (int x = 0; x < width; ++x) {
         for (int c = 0; c < 3; ++c) {
-          const double value = c == 2 ? 1.0 : (c == 0 ? x / 31.0 : y / 15.0);
+          const double value = c == 2 ? 1.0 : (c == 0 ? x / (width - 1.0) : y / (height - 1.0));
           if (type == Image::PixelType::kU8) image.at_u8(x, y, c) = uint8_t(std::lround(value * 255));
           if (type == Image::PixelType::kU16) image.at_u16(x, y, c) = uint16_t(std::lround(value * 65535));
           if (type == Image::PixelType::kF32) image.at_f32(x, y, c) = float(2 * value - 1);
@@ -202,6 +204,46 @@ TEST_F(ExportStagesTest, GltfKtx2EmbedsBasisUniversalMapsAndDefaultIsUnchanged) 
     std::filesystem::copy_file(ktx2.outputs_["model"], out,
                                std::filesystem::copy_options::overwrite_existing);
   }
+}
+
+// A map above ktx2-encoder 0.6.0's 12 Mpix (it refuses a 4096² map; the
+// scaling benchmark's 4096² maps failed) goes to ktx2-encoder-legacy, with
+// the same settings, deterministically; the meta names each map's encoder.
+TEST_F(ExportStagesTest, GltfKtx2EncodesAMapAboveTwelveMegapixels) {
+  if (!Ktx2EncoderInstalled()) GTEST_SKIP() << "npm ci --prefix tools";
+  const int64_t above = kKtx2CurrentEncoderMaxTexels + 1;
+  ASSERT_FALSE(Ktx2EncoderVersion(above).empty()) << "tools/node_modules/ktx2-encoder-legacy";
+  ASSERT_NE(Ktx2EncoderVersion(above), Ktx2EncoderVersion());
+  const int side = 3600;  // 12.96 Mpix
+  ASSERT_GT(int64_t{side} * side, kKtx2CurrentEncoderMaxTexels);
+  const std::string mesh = WriteMesh(true);
+  const std::string color = WriteImage("color.png", Image::PixelType::kU8);
+  const std::string normal = WriteImage("normal.png", Image::PixelType::kU8, side, side);
+  std::vector<std::string> glb;  // the two runs' model files
+  for (const char* run : {"first", "again"}) {
+    FakeContext ctx(dir_ / run, {{"textures", "ktx2"}});
+    ctx.AddInput("mesh", "mesh", mesh);
+    ctx.AddInput("color", "image", color);
+    ctx.AddInput("normal", "image", normal);
+    const Status status = Run("export.gltf", ctx);
+    ASSERT_TRUE(status.ok()) << status.message();
+    EXPECT_EQ(ctx.meta_["model"]["ktx2_encoder"].get<std::string>(),
+              Ktx2EncoderVersion() + " (color), " + Ktx2EncoderVersion(above) + " (normal)");
+    glb.push_back(ctx.outputs_["model"]);
+  }
+  EXPECT_EQ(FileBytes(glb[0]), FileBytes(glb[1]));  // deterministic: the cache's early cutoff holds
+  auto model = ReadGlb(glb[0]);
+  ASSERT_TRUE(model.ok()) << model.status().message();
+  auto normal_info = ReadKtx2Info(model->normal_ktx2, "normal");
+  ASSERT_TRUE(normal_info.ok()) << normal_info.status().message();
+  EXPECT_EQ(normal_info->codec, Ktx2Codec::kUastc);
+  EXPECT_FALSE(normal_info->srgb);
+  EXPECT_EQ(normal_info->width, side);
+  EXPECT_EQ(normal_info->height, side);
+  EXPECT_EQ(normal_info->levels, 12);  // 3600 .. 1
+  auto color_info = ReadKtx2Info(model->base_color_ktx2, "color");
+  ASSERT_TRUE(color_info.ok()) << color_info.status().message();
+  EXPECT_EQ(color_info->codec, Ktx2Codec::kEtc1s);
 }
 
 TEST_F(ExportStagesTest, GltfKtx2WithoutEncoderNamesWhatToInstall) {

@@ -2,6 +2,7 @@
 // (stages/geometry/io/gltf.h).
 #include <string>
 #include <utility>
+#include <vector>
 
 #include "engine/stage.h"
 #include "stages/builtin.h"
@@ -45,18 +46,29 @@ constexpr const char* kSchema = R"({
 })";
 
 // The maps of `inputs` as KTX2 into `options` (ETC1S color, UASTC normal).
-Status EncodeMaps(StageContext& ctx, ExportInputs& inputs, GltfWriteOptions& options) {
+// `encoders`: the encoder's name and version (ktx2_encode.h: it depends on
+// the map's size), each map's when they differ; "" without maps.
+Status EncodeMaps(StageContext& ctx, ExportInputs& inputs, GltfWriteOptions& options,
+                  std::string& encoders) {
   PB_PHASE(ctx, "encode");
+  std::vector<std::pair<std::string, std::string>> used;  // (encoder, map)
   if (!inputs.color_png.empty()) {
     PB_ASSIGN_OR_RETURN(const Image color, TextureImage8(ctx, kId, "color", false));
     PB_ASSIGN_OR_RETURN(options.base_color_ktx2,
                         EncodeKtx2(color, Ktx2Mode::kEtc1sSrgb, std::string(kId) + ": the color map"));
+    used.emplace_back(Ktx2EncoderVersion(int64_t{color.width} * color.height), "color");
     ctx.progress(0.6);
   }
   if (!inputs.normal_png.empty()) {
     PB_ASSIGN_OR_RETURN(const Image normal, TextureImage8(ctx, kId, "normal", true));
     PB_ASSIGN_OR_RETURN(options.normal_ktx2,
                         EncodeKtx2(normal, Ktx2Mode::kUastcLinear, std::string(kId) + ": the normal map"));
+    used.emplace_back(Ktx2EncoderVersion(int64_t{normal.width} * normal.height), "normal");
+  }
+  if (used.size() == 2 && used[0].first != used[1].first) {
+    encoders = used[0].first + " (color), " + used[1].first + " (normal)";
+  } else if (!used.empty()) {
+    encoders = used[0].first;
   }
   inputs.color_png.clear();
   inputs.normal_png.clear();
@@ -71,7 +83,8 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const std::string textures, StringParam(ctx, kId, "textures"));
   PB_ASSIGN_OR_RETURN(const std::string vertex_order, StringParam(ctx, kId, "vertex_order"));
   PB_ASSIGN_OR_RETURN(ExportInputs inputs, ReadExportInputs(ctx, kId));
-  if (textures == "ktx2") PB_RETURN_IF_ERROR(EncodeMaps(ctx, inputs, options));
+  std::string encoders;
+  if (textures == "ktx2") PB_RETURN_IF_ERROR(EncodeMaps(ctx, inputs, options, encoders));
   options.base_color_png = std::move(inputs.color_png);
   options.normal_png = std::move(inputs.normal_png);
   Mesh& mesh = inputs.mesh;
@@ -107,7 +120,7 @@ Status Run(StageContext& ctx) {
   // Only the options' own keys, so the default output's meta is unchanged.
   if (textures == "ktx2") {
     changes["textures"] = "ktx2";
-    changes["ktx2_encoder"] = Ktx2EncoderVersion();
+    changes["ktx2_encoder"] = encoders.empty() ? Ktx2EncoderVersion() : encoders;
   }
   if (vertex_order == "optimized") changes["vertex_order"] = vertex_order_meta;
   nlohmann::json meta = ExportMetaWith(ctx, mesh, "glb", report.bytes, changes);

@@ -54,10 +54,16 @@ struct ScratchDir {
   }
 };
 
+// The npm package (folder in tools/node_modules) that encodes `texels`.
+std::string EncoderPackage(int64_t texels) {
+  return texels > kKtx2CurrentEncoderMaxTexels ? "ktx2-encoder-legacy" : "ktx2-encoder";
+}
+
 }  // namespace
 
-std::string Ktx2EncoderVersion() {
-  const std::string text = ReadAll(std::filesystem::path(ToolsDir()) / "node_modules/ktx2-encoder/package.json");
+std::string Ktx2EncoderVersion(int64_t texels) {
+  const std::string text =
+      ReadAll(std::filesystem::path(ToolsDir()) / "node_modules" / EncoderPackage(texels) / "package.json");
   const nlohmann::json package = nlohmann::json::parse(text, nullptr, false);
   if (!package.is_object() || !package.contains("version")) return "";
   return "ktx2-encoder " + package["version"].get<std::string>();
@@ -71,10 +77,11 @@ Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, con
   }
   const std::filesystem::path tools = ToolsDir();
   const std::filesystem::path script = tools / "encode_ktx2.mjs";
-  if (!std::filesystem::exists(script) || !std::filesystem::exists(tools / "node_modules/ktx2-encoder")) {
-    return Status::NotFound(context + " needs " + script.string() + " and its npm packages in " +
-                            (tools / "node_modules").string() + " (npm ci --prefix tools; or set "
-                            "POINTBAKE_TOOLS_DIR)");
+  const std::string package = EncoderPackage(int64_t{image.width} * image.height);
+  if (!std::filesystem::exists(script) || !std::filesystem::exists(tools / "node_modules" / package)) {
+    return Status::NotFound(context + " needs " + script.string() + " and its npm packages (" +
+                            package + ") in " + (tools / "node_modules").string() +
+                            " (npm ci --prefix tools; or set POINTBAKE_TOOLS_DIR)");
   }
   ScratchDir scratch;
   {
