@@ -59,7 +59,13 @@ try {
   writeFileSync(output + ".tmp", ktx2);
   renameSync(output + ".tmp", output);
 } catch (error) {
+  // Above 4096² the older encoder may run out of its WebAssembly heap and
+  // abort without a reason (an 8192² ETC1S color map does; UASTC encodes).
+  const hint = legacy && width * height > 4096 * 4096
+    ? " (a map above 4096² can exhaust the WebAssembly encoder's heap: an 8192² color map " +
+      "does; bake the maps at 4096² or less for KTX2)"
+    : "";
   console.error(`encoding ${input} (${width}x${height}, ${codec}, ` +
-                `${legacy ? "ktx2-encoder-legacy" : "ktx2-encoder"}): ${error.message ?? error}`);
+                `${legacy ? "ktx2-encoder-legacy" : "ktx2-encoder"}): ${error.message ?? error}${hint}`);
   process.exit(1);
 }
