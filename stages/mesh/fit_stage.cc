@@ -164,8 +164,6 @@ Status Run(StageContext& ctx) {
   ctx.counter("max_move_m", report.max_move_m);
   ctx.counter("mean_move_m", report.mean_move_m);
   ctx.counter("border_vertices_moved", static_cast<double>(report.border_vertices_moved));
-  ctx.counter("nearest_searches", static_cast<double>(report.nearest_searches));
-  ctx.counter("nearest_reused", static_cast<double>(report.nearest_reused));
   nlohmann::json changes = {{"fit",
                              {{"points", report.points},
                               {"supported_before", report.supported_before},
@@ -231,9 +229,7 @@ StageType FitStage() {
       "`mean_signed_distance_before_m`, `mean_signed_distance_after_m` (positive: points "
       "outside), `outside_fraction_before`, `outside_fraction_after` (share of those points "
       "outside the surface), `vertices_moved`, `max_move_m`, `mean_move_m`, "
-      "`border_vertices_moved` (by the border pass), `nearest_searches` and `nearest_reused` "
-      "(point assignments that searched for the nearest face, and that kept the last one "
-      "because it is provably still the nearest: the same result, found faster). Phases: `io`, "
+      "`border_vertices_moved` (by the border pass). Phases: `io`, "
       "`compute`.";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to fit (mesh.ply), e.g. the decimated low mesh.", false},

@@ -213,25 +213,7 @@ TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point) const {
 }
 
 TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point, uint32_t hint_face) const {
-  return Nearest(point, hint_face, 0.0, nullptr);
-}
-
-TriangleBvh::Hit TriangleBvh::Closest(const Vec3& point, uint32_t face) const {
   Hit hit;
-  if (face >= slots_.size()) return hit;
-  const Vec3 p = Sub(point, origin_);
-  const auto& tri = triangles_[slots_[face]];
-  const Vec3 q = ClosestPointOnTriangle(p, tri[0], tri[1], tri[2]);
-  hit.face = face;
-  hit.closest = {q[0] + origin_[0], q[1] + origin_[1], q[2] + origin_[2]};
-  hit.squared_distance_m2 = Norm2(Sub(p, q));
-  return hit;
-}
-
-TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point, uint32_t hint_face, double slack_m,
-                                      double* others_m) const {
-  Hit hit;
-  if (others_m) *others_m = std::numeric_limits<double>::infinity();
   if (triangles_.empty()) return hit;
   const Vec3 p = Sub(point, origin_);
   double best2 = std::numeric_limits<double>::infinity();
@@ -245,37 +227,21 @@ TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point, uint32_t hint_face, dou
     best2 = Norm2(Sub(p, best_q));
     hit.face = hint_face;
   }
-  // With a slack, the search reaches (best + slack)^2 instead of best^2:
-  // never less than best2, so the answer is the same, and every face it
-  // leaves out is farther than best + slack. `second2`: the nearest of the
-  // faces it looked at other than the answer.
-  const auto reach2 = [&] {
-    if (!(slack_m > 0)) return best2;
-    const double r = std::sqrt(best2) + slack_m;
-    return std::max(best2, r * r);
-  };
-  double bound2 = reach2();
-  double second2 = std::numeric_limits<double>::infinity();
   uint32_t stack[64];
   int top = 0;
   stack[top++] = 0;
   while (top > 0) {
     const Node& node = nodes_[stack[--top]];
-    if (BoxDistance2(p, node.min, node.max) > bound2) continue;  // ties may still win
+    if (BoxDistance2(p, node.min, node.max) > best2) continue;  // ties may still win
     if (node.count > 0) {
       for (uint32_t t = node.first; t < node.first + node.count; ++t) {
-        if (faces_[t] == hit.face) continue;  // the hint, measured above
         const auto& tri = triangles_[t];
         const Vec3 q = ClosestPointOnTriangle(p, tri[0], tri[1], tri[2]);
         const double d2 = Norm2(Sub(p, q));
         if (d2 < best2 || (d2 == best2 && faces_[t] < hit.face)) {
-          if (hit.face != UINT32_MAX) second2 = std::min(second2, best2);
           best2 = d2;
           best_q = q;
           hit.face = faces_[t];
-          bound2 = reach2();
-        } else {
-          second2 = std::min(second2, d2);
         }
       }
       continue;
@@ -285,16 +251,15 @@ TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point, uint32_t hint_face, dou
     const double dl = BoxDistance2(p, left.min, left.max);
     const double dr = BoxDistance2(p, right.min, right.max);
     if (dl < dr) {
-      if (dr <= bound2) stack[top++] = node.first + 1;
-      if (dl <= bound2) stack[top++] = node.first;
+      if (dr <= best2) stack[top++] = node.first + 1;
+      if (dl <= best2) stack[top++] = node.first;
     } else {
-      if (dl <= bound2) stack[top++] = node.first;
-      if (dr <= bound2) stack[top++] = node.first + 1;
+      if (dl <= best2) stack[top++] = node.first;
+      if (dr <= best2) stack[top++] = node.first + 1;
     }
   }
   hit.closest = {best_q[0] + origin_[0], best_q[1] + origin_[1], best_q[2] + origin_[2]};
   hit.squared_distance_m2 = best2;
-  if (others_m) *others_m = std::min(std::sqrt(second2), std::sqrt(best2) + std::max(slack_m, 0.0));
   return hit;
 }
 

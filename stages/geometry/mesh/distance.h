@@ -56,14 +56,6 @@ class TriangleBvh {
   // search from the start. Any hint, or UINT32_MAX for none, gives the same
   // hit as Nearest(point).
   Hit Nearest(const Vec3& point, uint32_t hint_face) const;
-  // The same answer, and in `others_m` a lower bound on the distance from
-  // `point` to every other face: the second-nearest face's distance, or the
-  // nearest's plus `slack_m` if that is less (the search goes on that much
-  // farther than it needs for the answer alone). An empty mesh: +infinity.
-  Hit Nearest(const Vec3& point, uint32_t hint_face, double slack_m, double* others_m) const;
-  // Face `face`'s closest point to `point` and its squared distance, computed
-  // exactly as Nearest computes them (the same bits when it is the nearest).
-  Hit Closest(const Vec3& point, uint32_t face) const;
 
  private:
   struct Node {

@@ -12,7 +12,6 @@
 
 #include <algorithm>
 #include <array>
-#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -97,46 +96,6 @@ struct Assignment {
   double d = 0;  // signed distance along the face normal, meters
 };
 
-// Every point's nearest face from one assignment to the next, and what lets
-// the next one skip the search (Assign). The mesh's faces stay; only its
-// vertices move, and a triangle whose corners each moved by at most m is
-// within m of where it was (its points are the same blends of corners that
-// moved by at most m), so its distance to any point changed by at most m.
-// When a point's face f is now nearer than `others_m` (a lower bound, at the
-// search, on every other face's distance) minus all the moves since, f is
-// still its strictly nearest face: the search would answer f, and its
-// closest point is computed the same way (TriangleBvh::Closest). The answer
-// is therefore the search's, bit for bit; only the time differs.
-struct NearestFaces {
-  explicit NearestFaces(size_t points, bool reuse)
-      : face(points, UINT32_MAX), reuse(reuse) {
-    if (reuse) {
-      others_m.assign(points, 0.0f);
-      searched_at.assign(points, 0);
-    }
-  }
-  std::vector<uint32_t> face;        // the last assignment's nearest face (a hint otherwise)
-  bool reuse;                        // FitOptions::reuse_nearest
-  std::vector<float> others_m;       // per point, rounded down
-  std::vector<uint16_t> searched_at; // per point, the assignment of its last search
-  std::vector<double> moved_m;       // per assignment: every vertex's moves bounded, summed
-  std::vector<float> positions;      // the vertices at the last assignment
-  uint64_t searches = 0, reused = 0;
-};
-
-// The search's slack in mean edge lengths: with more, a search costs more
-// and fewer are needed. On the synthetic room (10^6 points, the low and the
-// high fit; docs/bench-scaling.md) 0.05, 0.1 and 0.25 were within the
-// noise of each other, 1 and 2 slower; 0.1 it is.
-constexpr double kNearestSlackEdges = 0.1;
-
-// A float not above `x` (a lower bound stays one when stored as a float).
-float FloatBelow(double x) {
-  float f = static_cast<float>(x);
-  if (static_cast<double>(f) > x) f = std::nextafter(f, -std::numeric_limits<float>::infinity());
-  return f;
-}
-
 // Assigns every point (mesh frame, `local`) to its nearest face of the mesh
 // with `positions` (whose face cross products are `crosses`); unsupported
 // points get face UINT32_MAX. With `nearest_signed_m`, also every point's
@@ -145,7 +104,7 @@ std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& posit
                                const std::vector<V3>& crosses, const std::vector<V3>& local,
                                const std::vector<float>& spacing, const PointCloud& points,
                                const FitOptions& options, double edge_floor_m,
-                               NearestFaces& nearest,
+                               std::vector<uint32_t>& nearest_face,
                                std::vector<double>* nearest_signed_m = nullptr) {
   Mesh work;
   work.positions = positions;
@@ -153,58 +112,12 @@ std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& posit
   const TriangleBvh bvh(work);
   std::vector<Assignment> out(local.size());
   if (nearest_signed_m) nearest_signed_m->assign(local.size(), 0.0);
-  // How far any vertex moved since the last assignment (bounded above: a
-  // little more than the largest move, for the rounding of the bounds).
-  bool reuse = nearest.reuse && nearest.moved_m.size() < UINT16_MAX;
-  double slack_m = 0;
-  if (reuse) {
-    double moved2 = 0;
-    if (!nearest.positions.empty()) {
-      for (size_t v = 0; v < positions.size() / 3; ++v) {
-        double d2 = 0;
-        for (int c = 0; c < 3; ++c) {
-          const double d = double{positions[3 * v + c]} - double{nearest.positions[3 * v + c]};
-          d2 += d * d;
-        }
-        moved2 = std::max(moved2, d2);
-      }
-    }
-    const double last = nearest.moved_m.empty() ? 0.0 : nearest.moved_m.back();
-    nearest.moved_m.push_back(last + std::sqrt(moved2) * (1 + 1e-9) + 1e-9);
-    nearest.positions = positions;
-    // How much farther than the nearest face the search looks, so that the
-    // bound it leaves survives the next rounds' moves (kNearestSlackEdges).
-    slack_m = kNearestSlackEdges * MeanEdgeLength(work);
-  }
-  const uint16_t now = reuse ? static_cast<uint16_t>(nearest.moved_m.size() - 1) : 0;
-  std::atomic<uint64_t> searches{0}, reused{0};
-  std::vector<uint32_t>& nearest_face = nearest.face;
   ParallelRanges(local.size(), [&](size_t begin, size_t end) {
-    uint64_t searched_here = 0, reused_here = 0;
     for (size_t i = begin; i < end; ++i) {
-      TriangleBvh::Hit hit;
-      bool found = false;
-      if (reuse && nearest_face[i] != UINT32_MAX) {
-        const double since = nearest.moved_m[now] - nearest.moved_m[nearest.searched_at[i]];
-        hit = bvh.Closest(local[i], nearest_face[i]);
-        // 1e-9 m: far above the rounding of these distances.
-        found = std::sqrt(hit.squared_distance_m2) + 1e-9 < double{nearest.others_m[i]} - since;
-      }
-      if (found) {
-        ++reused_here;
-      } else if (reuse) {
-        // Last round's nearest face as the hint: the mesh moved by a fraction
-        // of an edge, so it is at or next to this round's (same answer, found
-        // with less search: TriangleBvh::Nearest).
-        double others = 0;
-        hit = bvh.Nearest(local[i], nearest_face[i], slack_m, &others);
-        nearest.others_m[i] = FloatBelow(others);
-        nearest.searched_at[i] = now;
-        ++searched_here;
-      } else {
-        hit = bvh.Nearest(local[i], nearest_face[i]);
-        ++searched_here;
-      }
+      // Last round's nearest face as the hint: the mesh moved by a fraction
+      // of an edge, so it is at or next to this round's (same answer, found
+      // with less search: TriangleBvh::Nearest).
+      const TriangleBvh::Hit hit = bvh.Nearest(local[i], nearest_face[i]);
       if (hit.face == UINT32_MAX) continue;
       nearest_face[i] = hit.face;
       if (nearest_signed_m) {
@@ -227,11 +140,7 @@ std::vector<Assignment> Assign(const Mesh& mesh, const std::vector<float>& posit
       for (int k = 0; k < 3; ++k) a.b[k] = static_cast<float>(b[k]);
       a.d = Dot(Sub(local[i], hit.closest), n);
     }
-    searches += searched_here;
-    reused += reused_here;
   });
-  nearest.searches += searches;
-  nearest.reused += reused;
   return out;
 }
 
@@ -282,7 +191,7 @@ void GuardFaceTurns(const Mesh& mesh, const std::vector<V3>& before,
 uint64_t ExtendBorders(const Mesh& mesh, std::vector<float>& positions,
                        const std::vector<V3>& local, const std::vector<float>& spacing,
                        const PointCloud& points, const FitOptions& options, double edge_floor_m,
-                       NearestFaces& nearest_face, const std::vector<double>& input_edge,
+                       std::vector<uint32_t>& nearest_face, const std::vector<double>& input_edge,
                        double cos_turn, const std::vector<V3>& input_crosses,
                        FitReport& report) {
   const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
@@ -586,7 +495,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
   const std::vector<V3> input_crosses = FaceCrosses(mesh, mesh.positions);
   std::vector<float> positions = mesh.positions;
   std::vector<uint8_t> supported_before(points.size(), 0);
-  NearestFaces nearest_face(points.size(), options.reuse_nearest);  // hints for the next round
+  std::vector<uint32_t> nearest_face(points.size(), UINT32_MAX);  // hints for the next round
 
   for (int round = 0; round < options.iterations; ++round) {
     const std::vector<V3> crosses = FaceCrosses(mesh, positions);
@@ -744,8 +653,6 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
     total_move += move;
   }
   report.mean_move_m = nv > 0 ? total_move / static_cast<double>(nv) : 0;
-  report.nearest_searches = nearest_face.searches;
-  report.nearest_reused = nearest_face.reused;
   if (out.has_normals()) {
     // The input's normals (a Poisson surface's, smoother than the decimated
     // faces) turned by the rotation that takes each vertex's geometric

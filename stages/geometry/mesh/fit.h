@@ -82,14 +82,6 @@
 // smoother surface's); uvs are not touched: it runs before unwrapping. Deterministic
 // for any thread count: every point's assignment is independent, and the
 // sums run in point order.
-// Time: the 15 assignments (12 rounds, two border passes, the figures after)
-// are most of it, a nearest-face search per point each. A search also
-// leaves a lower bound on every other face's distance, and the vertices'
-// moves since bound how much any face came nearer, so a later assignment
-// keeps a point's face without searching when that face is still nearer
-// than the bound allows any other to be: the same answer, bit for bit
-// (fit.cc, NearestFaces). On the synthetic room at 10^6 points about 70 %
-// of the low fit's assignments and 40 % of the high fit's skip the search.
 #pragma once
 
 #include <cstddef>
@@ -117,10 +109,6 @@ struct FitOptions {
   double border_reach_edges = 0.5;  // farthest a border vertex moves outward, in its mean edges; 0: off
   double border_margin_spacings = 0.5;  // border this many local spacings past the outermost points, >= 0
   int threads = 0;                  // 0: TBB's default (all cores)
-  // Skip a point's nearest-face search when its last face is provably still
-  // the nearest (fit.cc, NearestFaces): the same output, bit for bit, in less
-  // time. Off only to test that.
-  bool reuse_nearest = true;
 };
 
 struct FitReport {
@@ -140,8 +128,6 @@ struct FitReport {
   uint64_t border_vertices_moved = 0;  // border vertices moved outward by the border pass
   double mean_edge_m = 0;
   double median_spacing_m = 0;      // of the points' local spacings
-  uint64_t nearest_searches = 0;    // nearest-face searches over all assignments
-  uint64_t nearest_reused = 0;      // assignments that kept the last face without a search
 };
 
 // The fitted mesh. The mesh and the points may have different origins.

@@ -117,36 +117,6 @@ TEST(FitTest, SameBytesForAnyThreadCount) {
   EXPECT_EQ(a->positions, b->positions);
 }
 
-// Skipping the nearest-face search where the last face is provably still
-// the nearest (reuse_nearest, fit.cc NearestFaces) gives the same bytes as
-// searching every point every time, and skips most searches.
-TEST(FitTest, ReusingNearestFacesGivesTheSameBytes) {
-  const Mesh mesh = InscribedCylinder(0.1, 0.3, 16, 9);
-  PointCloud points = CylinderPoints(0.1, 0.3, 0.003);
-  uint64_t state = 99;
-  for (float& x : points.positions) {  // +-1 mm of noise, as a scanner's
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    x += static_cast<float>((static_cast<double>(state >> 11) * 0x1.0p-53 - 0.5) * 0.002);
-  }
-  FitOptions search, reuse;
-  search.reuse_nearest = false;
-  FitReport searched, reused;
-  Expected<Mesh> a = FitMeshToPoints(mesh, points, search, &searched);
-  Expected<Mesh> b = FitMeshToPoints(mesh, points, reuse, &reused);
-  ASSERT_TRUE(a.ok() && b.ok());
-  EXPECT_EQ(a->positions, b->positions);
-  EXPECT_EQ(a->normals, b->normals);
-  EXPECT_EQ(searched.mean_abs_distance_after_m, reused.mean_abs_distance_after_m);
-  EXPECT_EQ(searched.supported_after, reused.supported_after);
-  EXPECT_EQ(searched.border_vertices_moved, reused.border_vertices_moved);
-  EXPECT_GT(reused.border_vertices_moved, 0u);  // the border pass ran on both rims
-  // 12 rounds, two border passes and the figures after: 15 assignments.
-  EXPECT_EQ(searched.nearest_reused, 0u);
-  EXPECT_EQ(searched.nearest_searches, 15 * points.size());
-  EXPECT_EQ(reused.nearest_searches + reused.nearest_reused, 15 * points.size());
-  EXPECT_GT(reused.nearest_reused, reused.nearest_searches);
-}
-
 // An n x n grid of 10 cm squares (two triangles each) in the plane z = `z`,
 // facing +z.
 Mesh FlatGrid(int n, float z) {
