@@ -3,13 +3,15 @@
 // WebAssembly; pinned in tools/package-lock.json), with a full mip chain.
 // Called by the export.gltf stage (stages/export/ktx2_encode.cc).
 //
-// Two encoders: ktx2-encoder 0.6.0 (Basis Universal 2.5's WebAssembly) for
-// images of at most 12 Mpix, which is its limit (it refuses a 4096² map), and
-// above that ktx2-encoder 0.5.4 (the previous generation's WebAssembly,
-// installed as ktx2-encoder-legacy), which encodes 4096² maps (docs/export.md,
-// "Maps above 12 Mpix"). The same options; each is deterministic.
+// Two encoders: ktx2-encoder 0.6.0 (Basis Universal 2.5's WebAssembly), whose
+// limit is 12 Mpix (it refuses a 4096² map), and ktx2-encoder 0.5.4 (the
+// previous generation's WebAssembly, installed as ktx2-encoder-legacy), which
+// encodes 4096² maps (docs/export.md, "Maps above 12 Mpix"). The caller
+// chooses (stages/export/ktx2_encode.cc, by the image's size). The same
+// options; each is deterministic.
 //
-// Usage: node encode_ktx2.mjs etc1s|uastc srgb|linear WIDTH HEIGHT IN.rgba OUT.ktx2
+// Usage: node encode_ktx2.mjs etc1s|uastc srgb|linear WIDTH HEIGHT IN.rgba OUT.ktx2 [PACKAGE]
+//   PACKAGE: ktx2-encoder (the default) or ktx2-encoder-legacy
 //   etc1s: BasisLZ/ETC1S, quality level 255, effort 1 (for color maps)
 //   uastc: UASTC 4x4, effort 0, Zstandard supercompression and the
 //          encoder's normal-map tuning (for normal maps)
@@ -19,15 +21,14 @@
 // the reason on stderr.
 import { readFileSync, writeFileSync, renameSync } from "node:fs";
 
-// The largest image (texels) the current encoder takes; also in
-// stages/export/ktx2_encode.cc (kKtx2CurrentEncoderMaxTexels).
-const CURRENT_ENCODER_MAX_TEXELS = 12 * 1024 * 1024;
-
-const [codec, transfer, widthText, heightText, input, output] = process.argv.slice(2);
+const [codec, transfer, widthText, heightText, input, output, pkg = "ktx2-encoder"] =
+  process.argv.slice(2);
 const width = Number(widthText), height = Number(heightText);
 if (!["etc1s", "uastc"].includes(codec) || !["srgb", "linear"].includes(transfer) ||
-    !(width > 0) || !(height > 0) || !input || !output) {
-  console.error("usage: node encode_ktx2.mjs etc1s|uastc srgb|linear WIDTH HEIGHT IN.rgba OUT.ktx2");
+    !(width > 0) || !(height > 0) || !input || !output ||
+    !["ktx2-encoder", "ktx2-encoder-legacy"].includes(pkg)) {
+  console.error("usage: node encode_ktx2.mjs etc1s|uastc srgb|linear WIDTH HEIGHT IN.rgba OUT.ktx2 " +
+                "[ktx2-encoder|ktx2-encoder-legacy]");
   process.exit(2);
 }
 const rgba = readFileSync(input);
@@ -35,8 +36,7 @@ if (rgba.length !== width * height * 4) {
   console.error(`${input}: ${rgba.length} bytes, expected ${width}x${height}x4 = ${width * height * 4}`);
   process.exit(2);
 }
-const legacy = width * height > CURRENT_ENCODER_MAX_TEXELS;
-const { encodeToKTX2 } = await import(legacy ? "ktx2-encoder-legacy" : "ktx2-encoder");
+const { encodeToKTX2 } = await import(pkg);
 const srgb = transfer === "srgb";
 const options = {
   isUASTC: codec === "uastc",
@@ -61,11 +61,10 @@ try {
 } catch (error) {
   // Above 4096² the older encoder may run out of its WebAssembly heap and
   // abort without a reason (an 8192² ETC1S color map does; UASTC encodes).
-  const hint = legacy && width * height > 4096 * 4096
+  const hint = pkg === "ktx2-encoder-legacy" && width * height > 4096 * 4096
     ? " (a map above 4096² can exhaust the WebAssembly encoder's heap: an 8192² color map " +
       "does; bake the maps at 4096² or less for KTX2)"
     : "";
-  console.error(`encoding ${input} (${width}x${height}, ${codec}, ` +
-                `${legacy ? "ktx2-encoder-legacy" : "ktx2-encoder"}): ${error.message ?? error}${hint}`);
+  console.error(`encoding ${input} (${width}x${height}, ${codec}, ${pkg}): ${error.message ?? error}${hint}`);
   process.exit(1);
 }

@@ -54,16 +54,18 @@ Status EncodeMaps(StageContext& ctx, ExportInputs& inputs, GltfWriteOptions& opt
   std::vector<std::pair<std::string, std::string>> used;  // (encoder, map)
   if (!inputs.color_png.empty()) {
     PB_ASSIGN_OR_RETURN(const Image color, TextureImage8(ctx, kId, "color", false));
-    PB_ASSIGN_OR_RETURN(options.base_color_ktx2,
-                        EncodeKtx2(color, Ktx2Mode::kEtc1sSrgb, std::string(kId) + ": the color map"));
-    used.emplace_back(Ktx2EncoderVersion(int64_t{color.width} * color.height), "color");
+    std::string encoder;
+    PB_ASSIGN_OR_RETURN(options.base_color_ktx2, EncodeKtx2(color, Ktx2Mode::kEtc1sSrgb,
+                                                            std::string(kId) + ": the color map", &encoder));
+    used.emplace_back(encoder, "color");
     ctx.progress(0.6);
   }
   if (!inputs.normal_png.empty()) {
     PB_ASSIGN_OR_RETURN(const Image normal, TextureImage8(ctx, kId, "normal", true));
-    PB_ASSIGN_OR_RETURN(options.normal_ktx2,
-                        EncodeKtx2(normal, Ktx2Mode::kUastcLinear, std::string(kId) + ": the normal map"));
-    used.emplace_back(Ktx2EncoderVersion(int64_t{normal.width} * normal.height), "normal");
+    std::string encoder;
+    PB_ASSIGN_OR_RETURN(options.normal_ktx2, EncodeKtx2(normal, Ktx2Mode::kUastcLinear,
+                                                        std::string(kId) + ": the normal map", &encoder));
+    used.emplace_back(encoder, "normal");
   }
   if (used.size() == 2 && used[0].first != used[1].first) {
     encoders = used[0].first + " (color), " + used[1].first + " (normal)";

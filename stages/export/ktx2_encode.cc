@@ -69,7 +69,8 @@ std::string Ktx2EncoderVersion(int64_t texels) {
   return "ktx2-encoder " + package["version"].get<std::string>();
 }
 
-Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, const std::string& what) {
+Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, const std::string& what,
+                                          std::string* encoder) {
   const std::string context = what + ": KTX2 encoding";
   if (image.type != Image::PixelType::kU8 || image.channels < 1 || image.channels > 4 ||
       image.width <= 0 || image.height <= 0) {
@@ -77,7 +78,8 @@ Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, con
   }
   const std::filesystem::path tools = ToolsDir();
   const std::filesystem::path script = tools / "encode_ktx2.mjs";
-  const std::string package = EncoderPackage(int64_t{image.width} * image.height);
+  const int64_t texels = int64_t{image.width} * image.height;
+  const std::string package = EncoderPackage(texels);
   if (!std::filesystem::exists(script) || !std::filesystem::exists(tools / "node_modules" / package)) {
     return Status::NotFound(context + " needs " + script.string() + " and its npm packages (" +
                             package + ") in " + (tools / "node_modules").string() +
@@ -104,7 +106,8 @@ Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, con
                                    std::to_string(image.width),
                                    std::to_string(image.height),
                                    input.string(),
-                                   output.string()};
+                                   output.string(),
+                                   package};
   std::vector<char*> argv;
   for (std::string& arg : args) argv.push_back(arg.data());
   argv.push_back(nullptr);
@@ -132,6 +135,7 @@ Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, con
                                                     : "killed by signal " + std::to_string(WTERMSIG(wait_status))) +
                             "): " + message);
   }
+  if (encoder) *encoder = Ktx2EncoderVersion(texels);
   const std::string bytes = ReadAll(output);
   return std::vector<uint8_t>(bytes.begin(), bytes.end());
 }

@@ -25,8 +25,8 @@
 
 namespace pb {
 
-// The most texels ktx2-encoder 0.6.0 encodes (12 Mi; tools/encode_ktx2.mjs
-// has the same constant); larger images go to ktx2-encoder-legacy.
+// The most texels ktx2-encoder 0.6.0 encodes (12 Mi); larger images go to
+// ktx2-encoder-legacy (EncodeKtx2 chooses, and tells tools/encode_ktx2.mjs).
 inline constexpr int64_t kKtx2CurrentEncoderMaxTexels = int64_t{12} * 1024 * 1024;
 
 enum class Ktx2Mode {
@@ -38,8 +38,10 @@ enum class Ktx2Mode {
 // A KTX2 file with a full mip chain for `image` (8-bit, 1 to 4 channels: gray
 // is repeated into RGB, a missing alpha is opaque; rows top first, as our
 // PNGs). Status naming `what` and the encoder's message when Node.js, the
-// script or its packages are missing or the encoding fails.
-Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, const std::string& what);
+// script or its packages are missing or the encoding fails. `encoder`, when
+// given, gets the encoder's "ktx2-encoder <version>" (Ktx2EncoderVersion).
+Expected<std::vector<uint8_t>> EncodeKtx2(const Image& image, Ktx2Mode mode, const std::string& what,
+                                          std::string* encoder = nullptr);
 
 // "ktx2-encoder <version>" of the encoder that takes an image of `texels`
 // texels (from its package.json), for the exported model's meta; "" when it
