@@ -4,6 +4,7 @@
 // "Shape distributions", ACM TOG 21(4), 2002, section 4.2.
 #include "stages/geometry/mesh/distance.h"
 
+#include <embree3/rtcore.h>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
@@ -52,6 +53,58 @@ double BoxDistance2(const Vec3& p, const std::array<double, 3>& lo,
     d2 += d * d;
   }
   return d2;
+}
+
+// The float at or above x.
+float Up(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
+// One point query of TriangleBvh's Embree engine: the point, relative to
+// the mesh's origin, and the best face so far.
+struct EmbreeQuery {
+  const std::array<Vec3, 3>* triangles;  // in face order
+  const std::array<float, 6>* boxes;     // each triangle's bounds (min xyz, max xyz)
+  Vec3 p;
+  double slack;  // added to the search radius (see SearchRadius)
+  double best2;
+  Vec3 best_q;
+  uint32_t face;
+};
+
+// The radius Embree searches: the best distance plus a slack far above the
+// float rounding of the query point and of Embree's boxes, rounded up to a
+// float, so no candidate that could be nearer or tied is culled.
+float SearchRadius(double best2, double slack) { return Up(std::sqrt(best2) + slack); }
+
+// Called by rtcPointQuery for each triangle in a leaf within the radius.
+// Returns true when it shrinks the radius.
+bool OnEmbreeCandidate(RTCPointQueryFunctionArguments* args) {
+  EmbreeQuery& q = *static_cast<EmbreeQuery*>(args->userPtr);
+  const uint32_t f = args->primID;
+  if (f == q.face) return false;  // the hint, measured already
+  // Embree calls for every triangle of a leaf the sphere reaches; the
+  // triangle's own box (float bounds of float corners: exact) culls most
+  // before the exact distance, by the same radius and slack.
+  const std::array<float, 6>& box = q.boxes[f];
+  double box2 = 0;
+  for (int a = 0; a < 3; ++a) {
+    const double lo = box[a], hi = box[3 + a];
+    const double d = q.p[a] < lo ? lo - q.p[a] : (q.p[a] > hi ? q.p[a] - hi : 0);
+    box2 += d * d;
+  }
+  const double radius = args->query->radius;
+  if (box2 > radius * radius) return false;
+  const auto& tri = q.triangles[f];
+  const Vec3 c = ClosestPointOnTriangle(q.p, tri[0], tri[1], tri[2]);
+  const double d2 = Norm2(Sub(q.p, c));
+  if (!(d2 < q.best2 || (d2 == q.best2 && f < q.face))) return false;
+  q.best2 = d2;
+  q.best_q = c;
+  q.face = f;
+  args->query->radius = SearchRadius(d2, q.slack);
+  return true;
 }
 
 // Distances for `points` by `distance`, in parallel, in chunks so progress
@@ -120,20 +173,83 @@ Vec3 ClosestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
   return {a[0] + ab[0] * v + ac[0] * w, a[1] + ab[1] * v + ac[1] * w, a[2] + ab[2] * v + ac[2] * w};
 }
 
-TriangleBvh::TriangleBvh(const Mesh& mesh) : origin_(mesh.origin) {
+// An Embree device with one scene of the mesh's triangles (its own copy of
+// the float positions and of the indices).
+struct TriangleBvh::EmbreeScene {
+  RTCDevice device = nullptr;
+  RTCScene scene = nullptr;
+  double magnitude = 0;  // largest |coordinate| of the vertices, for the slack
+  std::vector<std::array<float, 6>> boxes;  // per face: min xyz, max xyz
+  ~EmbreeScene() {
+    if (scene != nullptr) rtcReleaseScene(scene);
+    if (device != nullptr) rtcReleaseDevice(device);
+  }
+};
+
+// The mesh's faces as an Embree scene, built with TBB in the caller's arena;
+// null if Embree fails (no device, out of memory), the caller then uses the
+// built-in tree.
+std::unique_ptr<TriangleBvh::EmbreeScene> TriangleBvh::NewEmbreeScene(const Mesh& mesh) {
+  auto out = std::make_unique<TriangleBvh::EmbreeScene>();
+  out->device = rtcNewDevice(nullptr);
+  if (out->device == nullptr) return nullptr;
+  out->scene = rtcNewScene(out->device);
+  RTCGeometry geometry =
+      out->scene != nullptr ? rtcNewGeometry(out->device, RTC_GEOMETRY_TYPE_TRIANGLE) : nullptr;
+  if (geometry == nullptr) return nullptr;
+  // Embree's own buffers: they pad the end for its 16-byte vector loads.
+  auto* vertices = static_cast<float*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_VERTEX, 0, RTC_FORMAT_FLOAT3, 3 * sizeof(float),
+      mesh.vertex_count()));
+  auto* indices = static_cast<uint32_t*>(rtcSetNewGeometryBuffer(
+      geometry, RTC_BUFFER_TYPE_INDEX, 0, RTC_FORMAT_UINT3, 3 * sizeof(uint32_t),
+      mesh.face_count()));
+  if (vertices == nullptr || indices == nullptr) {
+    rtcReleaseGeometry(geometry);
+    return nullptr;
+  }
+  std::copy(mesh.positions.begin(), mesh.positions.end(), vertices);
+  std::copy(mesh.indices.begin(), mesh.indices.end(), indices);
+  for (float x : mesh.positions) out->magnitude = std::max(out->magnitude, std::abs(double{x}));
+  out->boxes.resize(mesh.face_count());
+  for (size_t f = 0; f < mesh.face_count(); ++f) {
+    const uint32_t* t = &mesh.indices[3 * f];
+    for (int a = 0; a < 3; ++a) {
+      const float x0 = mesh.positions[3 * size_t{t[0]} + a];
+      const float x1 = mesh.positions[3 * size_t{t[1]} + a];
+      const float x2 = mesh.positions[3 * size_t{t[2]} + a];
+      out->boxes[f][a] = std::min({x0, x1, x2});
+      out->boxes[f][3 + a] = std::max({x0, x1, x2});
+    }
+  }
+  rtcCommitGeometry(geometry);
+  rtcAttachGeometry(out->scene, geometry);
+  rtcReleaseGeometry(geometry);  // the scene holds it
+  rtcCommitScene(out->scene);
+  if (rtcGetDeviceError(out->device) != RTC_ERROR_NONE) return nullptr;
+  return out;
+}
+
+TriangleBvh::TriangleBvh(const Mesh& mesh, Engine engine) : origin_(mesh.origin) {
   triangles_.resize(mesh.face_count());
-  faces_.resize(mesh.face_count());
   const std::array<double, 3> zero{};
   for (size_t f = 0; f < triangles_.size(); ++f) {
     for (int k = 0; k < 3; ++k) triangles_[f][k] = Corner(mesh, mesh.indices[3 * f + k], zero);
-    faces_[f] = static_cast<uint32_t>(f);
   }
   if (triangles_.empty()) return;
+  if (engine == Engine::kEmbree) {
+    embree_ = NewEmbreeScene(mesh);
+    if (embree_) return;
+  }
+  faces_.resize(triangles_.size());
+  for (size_t f = 0; f < faces_.size(); ++f) faces_[f] = static_cast<uint32_t>(f);
   nodes_.reserve(2 * triangles_.size() / 4 + 2);
   Build();
   slots_.resize(faces_.size());
   for (size_t t = 0; t < faces_.size(); ++t) slots_[faces_[t]] = static_cast<uint32_t>(t);
 }
+
+TriangleBvh::~TriangleBvh() = default;
 
 // Top-down median split on the longest axis of the centroid bounds; the two
 // children of a node are adjacent in nodes_.
@@ -213,9 +329,50 @@ TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point) const {
 }
 
 TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point, uint32_t hint_face) const {
-  Hit hit;
-  if (triangles_.empty()) return hit;
+  if (triangles_.empty()) return Hit{};
   const Vec3 p = Sub(point, origin_);
+  Hit hit = embree_ ? NearestEmbree(p, hint_face) : NearestBuiltin(p, hint_face);
+  hit.closest = {hit.closest[0] + origin_[0], hit.closest[1] + origin_[1],
+                 hit.closest[2] + origin_[2]};
+  return hit;
+}
+
+// Both engines take p relative to origin_ and return the closest point so.
+TriangleBvh::Hit TriangleBvh::NearestEmbree(const Vec3& p, uint32_t hint_face) const {
+  EmbreeQuery q;
+  q.triangles = triangles_.data();
+  q.boxes = embree_->boxes.data();
+  q.p = p;
+  // 1e-6 of the coordinates' magnitude: float rounding is 6e-8 of it.
+  q.slack = 1e-6 * (1 + std::max({embree_->magnitude, std::abs(p[0]), std::abs(p[1]),
+                                   std::abs(p[2])}));
+  q.best2 = std::numeric_limits<double>::infinity();
+  q.best_q = {};
+  q.face = UINT32_MAX;
+  if (hint_face < triangles_.size()) {
+    const auto& tri = triangles_[hint_face];
+    q.best_q = ClosestPointOnTriangle(p, tri[0], tri[1], tri[2]);
+    q.best2 = Norm2(Sub(p, q.best_q));
+    q.face = hint_face;
+  }
+  RTCPointQuery query;
+  query.x = static_cast<float>(p[0]);
+  query.y = static_cast<float>(p[1]);
+  query.z = static_cast<float>(p[2]);
+  query.time = 0;
+  query.radius = SearchRadius(q.best2, q.slack);  // infinite without a hint
+  RTCPointQueryContext context;
+  rtcInitPointQueryContext(&context);
+  rtcPointQuery(embree_->scene, &query, &context, &OnEmbreeCandidate, &q);
+  Hit hit;
+  hit.face = q.face;
+  hit.closest = q.best_q;
+  hit.squared_distance_m2 = q.best2;
+  return hit;
+}
+
+TriangleBvh::Hit TriangleBvh::NearestBuiltin(const Vec3& p, uint32_t hint_face) const {
+  Hit hit;
   double best2 = std::numeric_limits<double>::infinity();
   Vec3 best_q{};
   // The hint's distance prunes from the start. The answer cannot change: a
@@ -258,7 +415,7 @@ TriangleBvh::Hit TriangleBvh::Nearest(const Vec3& point, uint32_t hint_face) con
       if (dr <= best2) stack[top++] = node.first + 1;
     }
   }
-  hit.closest = {best_q[0] + origin_[0], best_q[1] + origin_[1], best_q[2] + origin_[2]};
+  hit.closest = best_q;
   hit.squared_distance_m2 = best2;
   return hit;
 }

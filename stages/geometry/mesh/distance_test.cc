@@ -70,7 +70,11 @@ TEST(MeshDistanceTest, ClosestPointMatchesBruteForce) {
   EXPECT_NEAR(Dist({0, 0, 3}, ClosestPointOnTriangle({0, 0, 3}, a, a, a)), 3, 1e-12);
 }
 
-TEST(MeshDistanceTest, BvhMatchesBruteForceOverAllTriangles) {
+// Both engines of TriangleBvh (distance.h) against brute force, and against
+// each other bit for bit.
+class TriangleBvhEngineTest : public ::testing::TestWithParam<TriangleBvh::Engine> {};
+
+TEST_P(TriangleBvhEngineTest, MatchesBruteForceOverAllTriangles) {
   std::mt19937_64 rng(3);
   std::uniform_real_distribution<double> u(-5, 5), small(-0.3, 0.3);
   Mesh soup;
@@ -83,7 +87,11 @@ TEST(MeshDistanceTest, BvhMatchesBruteForceOverAllTriangles) {
       soup.indices.push_back(static_cast<uint32_t>(soup.indices.size()));
     }
   }
-  const TriangleBvh bvh(soup);
+  const TriangleBvh bvh(soup, GetParam());
+  ASSERT_EQ(bvh.engine(), GetParam());
+  const TriangleBvh other(soup, GetParam() == TriangleBvh::Engine::kEmbree
+                                    ? TriangleBvh::Engine::kBuiltin
+                                    : TriangleBvh::Engine::kEmbree);
   for (int i = 0; i < 300; ++i) {
     const Vec3 local = {1.3 * u(rng), 1.3 * u(rng), 1.3 * u(rng)};
     double best = 1e300;
@@ -115,10 +123,14 @@ TEST(MeshDistanceTest, BvhMatchesBruteForceOverAllTriangles) {
       ASSERT_EQ(hinted.face, hit.face) << "query " << i << ", hint " << hint;
       ASSERT_EQ(hinted.squared_distance_m2, hit.squared_distance_m2);
       ASSERT_EQ(hinted.closest, hit.closest);
+      const TriangleBvh::Hit theirs = other.Nearest(absolute, hint);
+      ASSERT_EQ(theirs.face, hit.face) << "query " << i << ", hint " << hint;
+      ASSERT_EQ(theirs.squared_distance_m2, hit.squared_distance_m2);
+      ASSERT_EQ(theirs.closest, hit.closest);
     }
   }
-  EXPECT_EQ(TriangleBvh(Mesh{}).Nearest({0, 0, 0}).face, UINT32_MAX);
-  EXPECT_EQ(TriangleBvh(Mesh{}).Nearest({0, 0, 0}, 0).face, UINT32_MAX);
+  EXPECT_EQ(TriangleBvh(Mesh{}, GetParam()).Nearest({0, 0, 0}).face, UINT32_MAX);
+  EXPECT_EQ(TriangleBvh(Mesh{}, GetParam()).Nearest({0, 0, 0}, 0).face, UINT32_MAX);
 }
 
 // Ties go to the lowest face index: two copies of one triangle.
@@ -135,6 +147,62 @@ TEST(MeshDistanceTest, NearestBreaksTiesByFaceIndex) {
   EXPECT_EQ(bvh.Nearest({0.2, 0.2, 1}, 5).face, 0u);
   EXPECT_EQ(bvh.Nearest({-3, 5, -1}, 3).face, 0u);
 }
+
+// Ties go to the lowest face index: two copies of one triangle.
+TEST_P(TriangleBvhEngineTest, NearestBreaksTiesByFaceIndex) {
+  Mesh mesh;
+  for (int copy = 0; copy < 6; ++copy) {
+    mesh.positions.insert(mesh.positions.end(), {0, 0, 0, 1, 0, 0, 0, 1, 0});
+    for (int k = 0; k < 3; ++k) mesh.indices.push_back(static_cast<uint32_t>(3 * copy + k));
+  }
+  const TriangleBvh bvh(mesh, GetParam());
+  EXPECT_EQ(bvh.Nearest({0.2, 0.2, 1}).face, 0u);
+  EXPECT_EQ(bvh.Nearest({-3, 5, -1}).face, 0u);
+  // A hint at an equally near copy still gives the lowest.
+  EXPECT_EQ(bvh.Nearest({0.2, 0.2, 1}, 5).face, 0u);
+  EXPECT_EQ(bvh.Nearest({-3, 5, -1}, 3).face, 0u);
+}
+
+// Queries far from the mesh, the mesh far from its origin, a triangle
+// without area: the same answers from both engines.
+TEST(MeshDistanceTest, EnginesAgreeFarAwayAndOnDegenerateTriangles) {
+  Mesh mesh = Sphere(2, 2);
+  mesh.origin = {-3e5, 4e6, 120};
+  const uint32_t base = static_cast<uint32_t>(mesh.vertex_count());
+  mesh.positions.insert(mesh.positions.end(), {3, 0, 0, 4, 0, 0, 5, 0, 0});  // a segment
+  mesh.indices.insert(mesh.indices.end(), {base, base + 1, base + 2});
+  const TriangleBvh embree(mesh, TriangleBvh::Engine::kEmbree);
+  const TriangleBvh builtin(mesh, TriangleBvh::Engine::kBuiltin);
+  ASSERT_EQ(embree.engine(), TriangleBvh::Engine::kEmbree);
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int i = 0; i < 500; ++i) {
+    const double scale = i % 5 == 0 ? 1e4 : (i % 5 == 1 ? 0.01 : 6);
+    const Vec3 p = {mesh.origin[0] + scale * u(rng), mesh.origin[1] + scale * u(rng),
+                    mesh.origin[2] + scale * u(rng)};
+    const uint32_t hint = static_cast<uint32_t>(rng() % mesh.face_count());
+    for (const uint32_t h : {UINT32_MAX, hint}) {
+      const TriangleBvh::Hit a = embree.Nearest(p, h);
+      const TriangleBvh::Hit b = builtin.Nearest(p, h);
+      ASSERT_EQ(a.face, b.face) << "query " << i;
+      ASSERT_EQ(a.squared_distance_m2, b.squared_distance_m2) << "query " << i;
+      ASSERT_EQ(a.closest, b.closest) << "query " << i;
+    }
+  }
+  // The segment's nearest point from beyond its end.
+  const TriangleBvh::Hit hit =
+      embree.Nearest({mesh.origin[0] + 7, mesh.origin[1], mesh.origin[2] + 0.5});
+  EXPECT_EQ(hit.face, mesh.face_count() - 1);
+  EXPECT_NEAR(hit.squared_distance_m2, 4 + 0.25, 1e-9);
+}
+
+INSTANTIATE_TEST_SUITE_P(Engines, TriangleBvhEngineTest,
+                         ::testing::Values(TriangleBvh::Engine::kEmbree,
+                                           TriangleBvh::Engine::kBuiltin),
+                         [](const ::testing::TestParamInfo<TriangleBvh::Engine>& info) {
+                           return info.param == TriangleBvh::Engine::kEmbree ? std::string("Embree")
+                                                                             : std::string("Builtin");
+                         });
 
 TEST(MeshDistanceTest, SamplingIsDeterministicAndOnTheSurface) {
   Mesh sphere = Sphere(1, 3);
