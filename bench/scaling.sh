@@ -22,24 +22,12 @@ mkdir -p "$work/scenes"
 [ -n "${PB_BENCH_DIR:-}" ] || trap 'rm -rf "$work"' EXIT
 doc=${PB_SCALING_DOC:-docs/bench-scaling.md}
 root=$(pwd)
+# shellcheck source=bench/room_scene.sh
+source bench/room_scene.sh
 
 scene_list=""
 for n in "${sizes[@]}"; do
-  low=$(( n / 120 > 8000 ? n / 120 : 8000 ))
-  high=$(( n * 2 / 13 ))
-  depth_high=$(( n > 3000000 ? 10 : 9 ))
-  cat > "$work/scenes/room-$n.yaml" <<YAML
-name: room-$n
-description: synthetic room, $n points (bench/scaling.sh)
-units: m
-truth: true
-source:
-  uses: synth.scan
-  with: { preset: room, points: $n, stations: 3, noise_mm: 2 }
-viewpoints:
-  - { name: door, eye: [-1.2, -1.9, 1.6], target: [1.5, 1.5, 1.2], fov_deg: 75 }
-params: { depth_high: $depth_high, faces_high: $high, depth_low: 8, faces_low: $low, texture: 4096, frame_size: 512 }
-YAML
+  write_room_scene "$n" "$work/scenes/room-$n.yaml"
   scene_list+="  - scenes/room-$n.yaml"$'\n'
 done
 cat > "$work/scaling.yaml" <<YAML

@@ -41,8 +41,9 @@ Vec3 ClosestPointOnTriangle(const Vec3& p, const Vec3& a, const Vec3& b, const V
 //  * kEmbree (the default): Embree's point queries (rtcPointQuery) over its
 //    SIMD BVH of the triangles in float, searching a sphere a little wider
 //    than the best distance so far (the float rounding of the query point
-//    and of Embree's boxes can cost no candidate). 1.5-1.7x faster than
-//    the built-in tree on mesh.fit's queries (docs/bench-fit.md).
+//    and of Embree's boxes can cost no candidate). 1.2-1.6x faster than
+//    the built-in tree on mesh.fit's hinted queries; without a hint even,
+//    or 0.8x on a 1.5e6-face mesh (docs/bench-fit.md).
 //  * kBuiltin: a binary tree of double boxes (median split), used when
 //    Embree cannot be set up (the constructor then falls back to it) and by
 //    the tests to check one engine against the other.
