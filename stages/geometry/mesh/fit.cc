@@ -102,13 +102,11 @@ struct Assignment {
 // signed distance along the nearest face's normal, supported or not. Writes
 // `out` (one per point), reusing its memory from the round before: a fresh
 // vector each round spent 6 % of the fit in page faults at 3e6 points.
-void Assign(const Mesh& mesh, const std::vector<float>& positions,
-                               const std::vector<V3>& crosses, const std::vector<V3>& local,
-                               const std::vector<float>& spacing, const PointCloud& points,
-                               const FitOptions& options, double edge_floor_m,
-                               std::vector<uint32_t>& nearest_face,
-                               std::vector<Assignment>& out,
-                               std::vector<double>* nearest_signed_m = nullptr) {
+void Assign(const Mesh& mesh, const std::vector<float>& positions, const std::vector<V3>& crosses,
+            const std::vector<V3>& local, const std::vector<float>& spacing,
+            const PointCloud& points, const FitOptions& options, double edge_floor_m,
+            std::vector<uint32_t>& nearest_face, std::vector<Assignment>& out,
+            std::vector<double>* nearest_signed_m = nullptr) {
   Mesh work;
   work.positions = positions;
   work.indices = mesh.indices;
