@@ -7,7 +7,7 @@
 // mesh and the points it is fitted to), fits with the stage's defaults on
 // THREADS threads and prints one line: wall and CPU seconds of the fit alone
 // (reading excluded), peak RSS, the point and face counts, the report's mean
-// |distance| before and after, and an FNV-1a hash of the output positions'
+// |distance| before and after, and an XXH3-128 digest of the output positions'
 // bytes. With EXPECTED (the same fit's output from another build), also
 // whether every output coordinate is bit-identical to it: a speed-up of the
 // fit that changes no output says so here.
@@ -24,7 +24,9 @@
 #include <cstdlib>
 #include <cstring>
 #include <string>
+#include <string_view>
 
+#include "base/hash.h"
 #include "bench/bench_clock.h"
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
@@ -40,13 +42,6 @@ namespace {
 int Fail(const std::string& what, const pb::Status& status) {
   std::fprintf(stderr, "fit_bench: %s: %s\n", what.c_str(), status.message().c_str());
   return 1;
-}
-
-uint64_t Fnv1a(const void* data, size_t bytes) {
-  uint64_t h = 1469598103934665603ull;
-  const auto* p = static_cast<const unsigned char*>(data);
-  for (size_t i = 0; i < bytes; ++i) h = (h ^ p[i]) * 1099511628211ull;
-  return h;
 }
 
 // Seconds to find every point's nearest face of `bvh` (hints may be empty).
@@ -133,11 +128,14 @@ int main(int argc, char** argv) {
   const std::vector<float>& out = fitted->positions;
   bool ok = true;
   std::printf("fit: %.2f s wall, %.2f s CPU, peak RSS %.0f MB; %llu points, %zu faces; "
-              "mean |d| %.6f -> %.6f m; positions fnv1a %016llx",
+              "mean |d| %.6f -> %.6f m; positions xxh3 %s",
               wall, cpu, bench::StatusBytes("VmHWM:") / 1e6,
               static_cast<unsigned long long>(report.points), mesh->mesh.face_count(),
               report.mean_abs_distance_before_m, report.mean_abs_distance_after_m,
-              static_cast<unsigned long long>(Fnv1a(out.data(), out.size() * sizeof(float))));
+              HashBytes(std::string_view(reinterpret_cast<const char*>(out.data()),
+                                     out.size() * sizeof(float)))
+                  .Hex()
+                  .c_str());
   if (argc > 4) {
     auto expected = ReadPlyMesh(argv[4]);
     if (!expected.ok()) return Fail(argv[4], expected.status());
