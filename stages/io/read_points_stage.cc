@@ -133,16 +133,6 @@ Status FillUnmeasured(const ScanReadResult& outcome, const std::string& path, St
               "isIntensityInvalid");
 }
 
-// `units`: the file's coordinates times `meters` (origin, offsets and
-// stations; normals are directions and stay).
-void ConvertToMeters(double meters, PointCloud* points) {
-  if (meters == 1.0) return;
-  for (double& c : points->origin) c *= meters;
-  for (float& c : points->positions) c = static_cast<float>(c * meters);
-  for (std::array<double, 3>& station : points->stations)
-    for (double& c : station) c *= meters;
-}
-
 // `station` as a string: 'file', 'none' or "x,y,z" (decimal numbers).
 constexpr const char* kStationPattern =
     "^(file|none|[-+]?[0-9.eE+-]+,[-+]?[0-9.eE+-]+,[-+]?[0-9.eE+-]+)$";

@@ -44,6 +44,14 @@ Bounds AbsoluteBounds(const PointCloud& cloud) {
   return bounds;
 }
 
+void ConvertToMeters(double meters_per_unit, PointCloud* cloud) {
+  if (meters_per_unit == 1.0) return;
+  for (double& c : cloud->origin) c *= meters_per_unit;
+  for (float& c : cloud->positions) c = static_cast<float>(c * meters_per_unit);
+  for (std::array<double, 3>& station : cloud->stations)
+    for (double& c : station) c *= meters_per_unit;
+}
+
 Status CheckFinitePositions(const PointCloud& cloud, std::string_view what) {
   for (size_t i = 0; i < cloud.positions.size(); ++i) {
     if (!std::isfinite(cloud.positions[i])) {

@@ -59,6 +59,11 @@ Bounds BoundsOf(std::span<const float> positions_xyz);
 Bounds LocalBounds(const PointCloud& cloud);
 Bounds AbsoluteBounds(const PointCloud& cloud);
 
+// A cloud read in another length unit, in meters: origin, positions and
+// stations times `meters_per_unit` (base/units.h); normals are directions
+// and stay.
+void ConvertToMeters(double meters_per_unit, PointCloud* cloud);
+
 // Checks that attribute arrays agree with the point count; Status::Invalid
 // naming the attribute otherwise.
 Status Validate(const PointCloud& cloud);
