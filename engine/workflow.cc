@@ -185,8 +185,15 @@ void SubstituteScene(json& value, const std::string& pointer, const YamlDocument
       std::vector<std::string> keys;
       if (scene.scene->is_object())
         for (auto& [k, v] : scene.scene->items()) keys.push_back(k);
-      errors.Add(doc.PositionOf(doc_pointer), "scene " + scene.file + " has no key '" +
-                                                  ref.substr(6) + "'" + Suggest(ref.substr(6), keys));
+      // A scene written by hand for a scan often lacks what only the shipped
+      // workflows need: say how to get it.
+      const std::string key = ref.substr(6);
+      const bool surveyable = key == "viewpoints" || key.rfind("params.", 0) == 0 || key == "spacing_m";
+      errors.Add(doc.PositionOf(doc_pointer),
+                 "scene " + scene.file + " has no key '" + key + "'" + Suggest(key, keys) +
+                     (surveyable ? " (`pointbake scene SCAN -o FILE` writes a scene with viewpoints and "
+                                   "parameters read off the scan)"
+                                 : ""));
       return;
     }
     if (start == 0 && end == text.size() - 1) {

@@ -112,6 +112,22 @@ TEST_F(WorkflowTest, RejectsNonFiniteNumbersBadUtf8AndEscapingOutputNames) {
       << escape.status().message();
 }
 
+TEST_F(WorkflowTest, ASceneWithoutViewpointsOrParamsSaysHowToGetThem) {
+  dir_.Write("scene.yaml", "name: s\nparams: { depth_high: 9 }\n");
+  for (const char* ref : {"viewpoints", "params.faces_low"}) {
+    auto wf = Load(std::string("name: demo\nscene: scene.yaml\nstages:\n  src: { uses: t.text, with: { text: \"${scene.") +
+                   ref + "}\" } }\n");
+    ASSERT_FALSE(wf.ok()) << ref;
+    EXPECT_NE(wf.status().message().find(std::string("has no key '") + ref + "'"), std::string::npos)
+        << wf.status().message();
+    EXPECT_NE(wf.status().message().find("`pointbake scene SCAN -o FILE`"), std::string::npos)
+        << wf.status().message();
+  }
+  auto other = Load("name: demo\nscene: scene.yaml\nstages:\n  src: { uses: t.text, with: { text: \"${scene.nokey}\" } }\n");
+  ASSERT_FALSE(other.ok());
+  EXPECT_EQ(other.status().message().find("pointbake scene"), std::string::npos) << other.status().message();
+}
+
 TEST_F(WorkflowTest, SceneReferencesNeverCrashOnOddIndices) {
   dir_.Write("scene.yaml", "name: s\nviewpoints: [{ eye: [0, 0, 0], target: [1, 0, 0] }]\n");
   auto wf = Load(R"(name: demo

@@ -1,0 +1,213 @@
+#include "cli/scene_command.h"
+
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "base/env.h"
+#include "base/units.h"
+#include "cli/command_args.h"
+#include "engine/workflow.h"
+#include "stages/geometry/io/scan_read.h"
+#include "stages/geometry/points/scene_survey.h"
+
+namespace pb {
+namespace {
+
+namespace fs = std::filesystem;
+
+constexpr const char* kDescription =
+    "Write a scene file for a scan: its units, median spacing, the meshing and texture\n"
+    "parameters of the shipped workflows in the shipped scenes' proportions, and\n"
+    "viewpoints (from its scanner stations, or around it without stations), each with\n"
+    "a comment saying where it came from. Then:\n"
+    "  pointbake run configs/workflows/point_transfer.yaml --scene FILE --until scan_render\n"
+    "draws the scan from those viewpoints (out/point_transfer/scan_render/) to check them;\n"
+    "without --until, the workflow builds and evaluates its model.";
+
+std::string Number(double v) {
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%.10g", v);
+  return buf;
+}
+
+// A position in the scene's units, to a micrometre (2.9e-16 prints as 0).
+std::string Vector(const std::array<double, 3>& v, double unit_m) {
+  std::string out = "[";
+  for (int k = 0; k < 3; ++k) {
+    const double micrometres = std::round(v[k] * 1e6);
+    out += (k ? ", " : "") + Number(micrometres == 0 ? 0.0 : micrometres / 1e6 / unit_m);
+  }
+  return out + "]";
+}
+
+// "4.7 mm", "1.25 m": a length for a comment.
+std::string Length(double meters) {
+  char buf[64];
+  if (meters < 1.0)
+    std::snprintf(buf, sizeof buf, "%.3g mm", meters * 1000);
+  else
+    std::snprintf(buf, sizeof buf, "%.3g m", meters);
+  return buf;
+}
+
+std::string WithThousands(uint64_t v) {
+  std::string digits = std::to_string(v), out;
+  for (size_t i = 0; i < digits.size(); ++i) {
+    if (i > 0 && (digits.size() - i) % 3 == 0) out += ',';
+    out += digits[i];
+  }
+  return out;
+}
+
+// Parses "x,y,z" into `out`.
+bool ParseVector(const std::string& text, std::array<double, 3>* out) {
+  double v[3];
+  char tail;
+  if (std::sscanf(text.c_str(), "%lf,%lf,%lf%c", &v[0], &v[1], &v[2], &tail) != 3) return false;
+  for (int k = 0; k < 3; ++k) {
+    if (!std::isfinite(v[k])) return false;
+    (*out)[k] = v[k];
+  }
+  return true;
+}
+
+std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
+                      const std::string& scan_path, const std::string& units, double unit_m,
+                      const ScanReadResult& read, const SceneSurvey& survey) {
+  const std::array<double, 3> extent = survey.robust_bounds.extent_m();
+  std::string y;
+  y += "# Written by `pointbake scene` from " + scan_path + " (" + read.format + "):\n";
+  y += "# " + WithThousands(survey.points) + " points";
+  if (read.dropped_points > 0)
+    y += " (" + WithThousands(read.dropped_points) + " invalid or without a return, dropped)";
+  y += ", " + std::to_string(survey.stations) + " scanner station" +
+       (survey.stations == 1 ? "" : "s") + ", median spacing " + Length(survey.spacing_m) + ",\n";
+  y += "# robust extent " + Length(extent[0]) + " x " + Length(extent[1]) + " x " +
+       Length(extent[2]) + " (1st to 99th percentile per axis).\n";
+  y += "# The parameters follow the shipped scenes' proportions and the viewpoints are a\n";
+  y += "# guess (stages/geometry/points/scene_survey.h): check them by drawing the scan,\n";
+  y += "#   pointbake run configs/workflows/point_transfer.yaml --scene THIS_FILE --until "
+       "scan_render\n";
+  y += "# and edit what you know better (docs/real-scans.md, \"Your own scan\").\n";
+  y += "name: " + name + "\n";
+  y += "description: \"" + name + ": " + WithThousands(survey.points) + " points read from " +
+       fs::path(scan_path).filename().string() + "\"\n";
+  y += "units: " + units + "\n";
+  y += "spacing_m: " + Number(survey.spacing_m) + "  # median nearest-neighbour distance, meters\n";
+  y += "truth: false  # a real scan: the workflows are compared with the scan itself\n";
+  y += "source:\n";
+  y += "  uses: io.read_points\n";
+  y += "  with: { path: \"" + scan_in_file + "\" }\n";
+  y += "viewpoints:  # in " + units + ", like the scan\n";
+  for (const SurveyViewpoint& view : survey.viewpoints) {
+    y += "  # " + view.why + "\n";
+    y += "  - { name: " + view.name + ", eye: " + Vector(view.eye, unit_m) +
+         ", target: " + Vector(view.target, unit_m) + ", up: " + Vector(view.up, 1.0) +
+         ", fov_deg: " + Number(view.fov_deg) + " }\n";
+  }
+  y += "params:\n";
+  y += "  depth_high: " + std::to_string(survey.depth_high) +
+       "  # screened Poisson depth of the HPM: cells about a spacing over the longest side\n";
+  y += "  faces_high: " + std::to_string(survey.faces_high) + "  # one face per 2.5 points, in [" +
+       std::to_string(kMinFacesHigh) + ", " + std::to_string(kMaxFacesHigh) + "]\n";
+  y += "  depth_low: " + std::to_string(survey.depth_low) +
+       "  # depth_high - 1, or - 2 from depth 10; at least 7\n";
+  y += "  faces_low: " + std::to_string(survey.faces_low) + "  # a tenth of faces_high, at most " +
+       std::to_string(kMaxFacesLow) + " (a headset's 60 FPS budget)\n";
+  y += "  texture: " + std::to_string(survey.texture) + "  # about 256 texels per low face\n";
+  y += "  frame_size: " + std::to_string(survey.frame_size) +
+       "  # pixels of the evaluation frames\n";
+  return y;
+}
+
+int RunScene(const std::vector<std::string>& args) {
+  CLI::App app{kDescription, "pointbake scene"};
+  std::string scan_path, out_path, units = "m", up_text = "0,0,1", name, format = "auto";
+  bool force = false;
+  app.add_option("SCAN", scan_path, "The scan file (PLY, PCD, XYZ/TXT/CSV/PTS, PTX, E57, LAS, LAZ)")
+      ->required();
+  app.add_option("-o,--out", out_path,
+                 "Write the scene here (else to stdout, with the scan's absolute path)");
+  std::vector<std::string> unit_names;
+  for (const auto& [unit, meters] : kLengthUnits) unit_names.emplace_back(unit);
+  app.add_option("--units", units, "The scan's length unit")
+      ->check(CLI::IsMember(unit_names))
+      ->capture_default_str();
+  app.add_option("--up", up_text, "The scan's vertical direction, x,y,z in its frame")
+      ->capture_default_str();
+  app.add_option("--name", name, "The scene's name (default: the scan file's stem)");
+  app.add_option("--format", format, "The scan's format, as io.read_points' `format`")
+      ->capture_default_str();
+  app.add_flag("--force", force, "Replace an existing -o file");
+  if (const std::optional<int> exit = ParseCommandArgs(app, args)) return *exit;
+
+  auto fail = [](const std::string& message) {
+    std::fprintf(stderr, "pointbake scene: %s\n", message.c_str());
+    return 2;
+  };
+  SceneSurveyOptions options;
+  if (!ParseVector(up_text, &options.up))
+    return fail("--up " + up_text + ": expected three numbers x,y,z");
+  if (!out_path.empty() && !force && fs::exists(out_path))
+    return fail(out_path + " exists; give --force to replace it, or another -o");
+  Env* env = Env::Default();
+  if (!env->Exists(scan_path)) return fail(scan_path + ": file not found");
+  if (name.empty()) name = DefaultWorkflowName(scan_path);
+  if (name.empty() || !std::isalnum(static_cast<unsigned char>(name[0]))) name = "scan_" + name;
+
+  std::fprintf(stderr, "pointbake scene: reading %s\n", scan_path.c_str());
+  ScanReadOptions read_options;
+  read_options.drop_invalid_points = true;
+  Expected<ScanReadResult> read = ReadScan(scan_path, format, read_options);
+  if (!read.ok()) return fail(read.status().message());
+  for (const std::string& warning : read->warnings)
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  const double unit_m = *MetersPerUnit(units);
+  ConvertToMeters(unit_m, &read->points);
+  std::fprintf(stderr, "pointbake scene: surveying %s points\n",
+               WithThousands(read->points.size()).c_str());
+  Expected<SceneSurvey> survey = SurveyScene(read->points, options);
+  if (!survey.ok()) return fail(scan_path + ": " + survey.status().message());
+  for (const std::string& warning : survey->warnings)
+    std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  if (units == "m" && survey->spacing_m > 0.2)
+    std::fprintf(stderr,
+                 "warning: the median spacing is %s, more than a scanner leaves: if the file is in "
+                 "millimetres (or cm, ft, in), give --units mm\n",
+                 Length(survey->spacing_m).c_str());
+
+  std::string scan_in_file = fs::absolute(scan_path).lexically_normal().string();
+  if (!out_path.empty()) {
+    const fs::path folder = fs::absolute(out_path).parent_path();
+    scan_in_file = fs::absolute(scan_path).lexically_normal().lexically_relative(folder).string();
+  }
+  const std::string yaml = SceneYaml(name, scan_in_file, scan_path, units, unit_m, *read, *survey);
+  if (out_path.empty()) {
+    std::fputs(yaml.c_str(), stdout);
+    return 0;
+  }
+  const std::string folder = fs::absolute(out_path).parent_path().string();
+  if (Status st = env->CreateDirs(folder); !st.ok()) return fail(st.message());
+  if (Status st = env->WriteFileAtomic(out_path, yaml); !st.ok())
+    return fail(out_path + ": " + st.message());
+  // The file must load as the workflows will load it.
+  Expected<nlohmann::json> loaded = LoadScene(out_path);
+  if (!loaded.ok())
+    return fail("the written scene does not load (a bug): " + loaded.status().message());
+  std::fprintf(
+      stderr, "pointbake scene: wrote %s (%zu viewpoints; depth %d / %d, %lld / %lld faces)\n",
+      out_path.c_str(), survey->viewpoints.size(), survey->depth_high, survey->depth_low,
+      static_cast<long long>(survey->faces_high), static_cast<long long>(survey->faces_low));
+  return 0;
+}
+
+}  // namespace
+
+CliCommand SceneCommand() {
+  return {"scene", "Write a scene file (viewpoints, parameters) for your own scan", &RunScene};
+}
+
+}  // namespace pb

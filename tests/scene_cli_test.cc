@@ -1,0 +1,110 @@
+// End-to-end tests of `pointbake scene`: the real binary on scan files.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <string>
+
+#include "tests/cli_test_util.h"
+
+namespace pbtest {
+namespace {
+
+class SceneCli : public CliTest {
+ protected:
+  // An ASCII PLY: a sphere of radius 500 mm around (1000, 2000, 300) mm,
+  // 4,000 points without colors, normals or stations.
+  std::string WriteSphereMm() {
+    const int n = 4000;
+    std::string ply = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n) +
+                      "\nproperty float x\nproperty float y\nproperty float z\nend_header\n";
+    for (int i = 0; i < n; ++i) {
+      const double z = 1.0 - 2.0 * (i + 0.5) / n, r = std::sqrt(1.0 - z * z);
+      const double phi = i * M_PI * (3.0 - std::sqrt(5.0));
+      ply += std::to_string(1000 + 500 * r * std::cos(phi)) + " " +
+             std::to_string(2000 + 500 * r * std::sin(phi)) + " " + std::to_string(300 + 500 * z) +
+             "\n";
+    }
+    const std::string path = P("sphere_mm.ply");
+    WriteFile(path, ply);
+    return path;
+  }
+};
+
+TEST_F(SceneCli, WritesASceneTheWorkflowsLoad) {
+  const std::string scan = WriteSphereMm();
+  const RunResult r = pbtest::Run({"scene", scan, "-o", P("scenes/sphere.yaml"), "--units", "mm"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const std::string yaml = ReadFile(P("scenes/sphere.yaml"));
+  EXPECT_NE(yaml.find("name: sphere_mm\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("units: mm\n"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("path: \"../sphere_mm.ply\""), std::string::npos)
+      << yaml;  // relative to the scene
+  EXPECT_NE(yaml.find("name: front"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("name: right"), std::string::npos) << yaml;
+  // In mm, like the scan: the robust box's center, within its percentiles' step.
+  EXPECT_NE(yaml.find("target: [1000."), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find(", 2000."), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("faces_high: 40000"), std::string::npos) << yaml;
+  // Each shipped workflow takes it (a dry run resolves every ${scene...}).
+  for (const char* workflow : {"hpm", "lpm", "remeshing", "point_transfer"}) {
+    const RunResult check =
+        pbtest::Run({"run", SourceDir() + "/configs/workflows/" + workflow + ".yaml", "--scene",
+                     P("scenes/sphere.yaml"), "-n", "--cache", P("cache")});
+    EXPECT_EQ(check.exit_code, 0) << check.Describe();
+  }
+}
+
+TEST_F(SceneCli, KeepsAnExistingFileUnlessForced) {
+  const std::string scan = WriteSphereMm();
+  WriteFile(P("mine.yaml"), "name: mine\n");
+  const RunResult kept = pbtest::Run({"scene", scan, "-o", P("mine.yaml"), "--units", "mm"});
+  EXPECT_EQ(kept.exit_code, 2) << kept.Describe();
+  EXPECT_NE(kept.err.find("--force"), std::string::npos) << kept.err;
+  EXPECT_EQ(ReadFile(P("mine.yaml")), "name: mine\n");
+  const RunResult forced =
+      pbtest::Run({"scene", scan, "-o", P("mine.yaml"), "--units", "mm", "--force"});
+  EXPECT_EQ(forced.exit_code, 0) << forced.Describe();
+  EXPECT_NE(ReadFile(P("mine.yaml")).find("viewpoints:"), std::string::npos);
+}
+
+TEST_F(SceneCli, ToStdoutWithTheAbsolutePathAndAUnitsHint) {
+  const std::string scan = WriteSphereMm();
+  const RunResult r = pbtest::Run({"scene", scan});  // meters: a 4 mm-spaced sphere read as 4 m
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_NE(r.out.find("path: \"" + scan + "\""), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("--units mm"), std::string::npos) << r.err;
+}
+
+TEST_F(SceneCli, BadInputSaysWhat) {
+  const RunResult missing = pbtest::Run({"scene", P("nowhere.e57")});
+  EXPECT_EQ(missing.exit_code, 2);
+  EXPECT_NE(missing.err.find("nowhere.e57: file not found"), std::string::npos) << missing.err;
+  const std::string scan = WriteSphereMm();
+  const RunResult up = pbtest::Run({"scene", scan, "--up", "0,0"});
+  EXPECT_EQ(up.exit_code, 2);
+  EXPECT_NE(up.err.find("--up 0,0"), std::string::npos) << up.err;
+  WriteFile(P("truncated.ply"), "ply\nformat ascii 1.0\nelement vertex 10\nproperty float x\n");
+  const RunResult truncated = pbtest::Run({"scene", P("truncated.ply")});
+  EXPECT_EQ(truncated.exit_code, 2);
+  EXPECT_NE(truncated.err.find("truncated.ply"), std::string::npos) << truncated.err;
+}
+
+// The pump scan of the shared samples: its station gives the view the
+// hand-written configs/scenes/pump.yaml has (eye [0, 0, 0.2], target
+// [-0.64, -2.57, -1.0]), and the same depths.
+TEST_F(SceneCli, ThePumpScanAsItsHandWrittenScene) {
+  const std::string scan = SourceDir() + "/../shared/data/pump_e57/pumpAVisualReferenceImage.e57";
+  if (!Exists(scan)) GTEST_SKIP() << scan << " is not there";
+  const RunResult r = pbtest::Run({"scene", scan, "-o", P("pump.yaml")});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const std::string yaml = ReadFile(P("pump.yaml"));
+  EXPECT_NE(yaml.find("1 scanner station"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("name: station1, eye: [0, 0, 0.15"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("depth_high: 10"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("depth_low: 8"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("name: oblique"), std::string::npos) << yaml;
+}
+
+}  // namespace
+}  // namespace pbtest
