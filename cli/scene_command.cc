@@ -21,10 +21,10 @@ namespace fs = std::filesystem;
 constexpr const char* kDescription =
     "Write a scene file for a scan: its units, median spacing, the meshing and texture\n"
     "parameters of the shipped workflows in the shipped scenes' proportions, and\n"
-    "viewpoints (from its scanner stations, or around it without stations), each with\n"
-    "a comment saying where it came from. Then:\n"
+    "viewpoints (from its scanner stations, or face-on to it without stations), each\n"
+    "with a comment saying where it came from. Then:\n"
     "  pointbake run configs/workflows/point_transfer.yaml --scene FILE --until scan_render\n"
-    "draws the scan from those viewpoints (out/point_transfer/scan_render/) to check them;\n"
+    "draws the scan from those viewpoints (out/point_transfer/scan_frames/) to check them;\n"
     "without --until, the workflow builds and evaluates its model.";
 
 std::string Number(double v) {
