@@ -53,6 +53,16 @@ std::string Length(double meters) {
   return buf;
 }
 
+// A YAML double-quoted scalar: file names may hold quotes or backslashes.
+std::string Quoted(const std::string& text) {
+  std::string out = "\"";
+  for (char c : text) {
+    if (c == '"' || c == '\\') out += '\\';
+    out += c;
+  }
+  return out + "\"";
+}
+
 std::string WithThousands(uint64_t v) {
   std::string digits = std::to_string(v), out;
   for (size_t i = 0; i < digits.size(); ++i) {
@@ -93,14 +103,16 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
        "scan_render\n";
   y += "# and edit what you know better (docs/real-scans.md, \"Your own scan\").\n";
   y += "name: " + name + "\n";
-  y += "description: \"" + name + ": " + WithThousands(survey.points) + " points read from " +
-       fs::path(scan_path).filename().string() + "\"\n";
+  y += "description: " +
+       Quoted(name + ": " + WithThousands(survey.points) + " points read from " +
+              fs::path(scan_path).filename().string()) +
+       "\n";
   y += "units: " + units + "\n";
   y += "spacing_m: " + Number(survey.spacing_m) + "  # median nearest-neighbour distance, meters\n";
   y += "truth: false  # a real scan: the workflows are compared with the scan itself\n";
   y += "source:\n";
   y += "  uses: io.read_points\n";
-  y += "  with: { path: \"" + scan_in_file + "\" }\n";
+  y += "  with: { path: " + Quoted(scan_in_file) + " }\n";
   y += "viewpoints:  # in " + units + ", like the scan\n";
   for (const SurveyViewpoint& view : survey.viewpoints) {
     y += "  # " + view.why + "\n";
@@ -191,12 +203,20 @@ int RunScene(const std::vector<std::string>& args) {
   }
   const std::string folder = fs::absolute(out_path).parent_path().string();
   if (Status st = env->CreateDirs(folder); !st.ok()) return fail(st.message());
-  if (Status st = env->WriteFileAtomic(out_path, yaml); !st.ok())
+  // Loaded as the workflows will load it (beside its final name, for the
+  // relative path) before it replaces anything.
+  const std::string checked = TempNameFor(out_path);
+  if (Status st = env->WriteFileAtomic(checked, yaml); !st.ok())
     return fail(out_path + ": " + st.message());
-  // The file must load as the workflows will load it.
-  Expected<nlohmann::json> loaded = LoadScene(out_path);
-  if (!loaded.ok())
-    return fail("the written scene does not load (a bug): " + loaded.status().message());
+  Expected<nlohmann::json> loaded = LoadScene(checked);
+  if (!loaded.ok()) {
+    (void)env->RemoveAll(checked);
+    return fail("the scene does not load (a bug; nothing written): " + loaded.status().message());
+  }
+  if (Status st = env->Rename(checked, out_path); !st.ok()) {
+    (void)env->RemoveAll(checked);
+    return fail(out_path + ": " + st.message());
+  }
   std::fprintf(
       stderr, "pointbake scene: wrote %s (%zu viewpoints; depth %d / %d, %lld / %lld faces)\n",
       out_path.c_str(), survey->viewpoints.size(), survey->depth_high, survey->depth_low,

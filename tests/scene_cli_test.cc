@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <string>
 
@@ -66,6 +67,17 @@ TEST_F(SceneCli, KeepsAnExistingFileUnlessForced) {
       pbtest::Run({"scene", scan, "-o", P("mine.yaml"), "--units", "mm", "--force"});
   EXPECT_EQ(forced.exit_code, 0) << forced.Describe();
   EXPECT_NE(ReadFile(P("mine.yaml")).find("viewpoints:"), std::string::npos);
+}
+
+TEST_F(SceneCli, AFileNameWithQuotesAndBackslashes) {
+  const std::string scan = WriteSphereMm();
+  const std::string odd = P("my \"scan\" \\ 2.ply");
+  ASSERT_EQ(std::rename(scan.c_str(), odd.c_str()), 0);
+  const RunResult r = pbtest::Run({"scene", odd, "-o", P("odd.yaml"), "--units", "mm"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  const RunResult dry = pbtest::Run({"run", SourceDir() + "/configs/workflows/lpm.yaml", "--scene",
+                                     P("odd.yaml"), "-n", "--cache", P("cache")});
+  EXPECT_EQ(dry.exit_code, 0) << dry.Describe();
 }
 
 TEST_F(SceneCli, ToStdoutWithTheAbsolutePathAndAUnitsHint) {
