@@ -91,8 +91,10 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
   std::string y;
   y += "# Written by `pointbake scene` from " + scan_path + " (" + read.format + "):\n";
   y += "# " + WithThousands(survey.points) + " points";
+  if (read.no_return_points > 0)
+    y += " (and " + WithThousands(read.no_return_points) + " grid cells without a return)";
   if (read.dropped_points > 0)
-    y += " (" + WithThousands(read.dropped_points) + " invalid or without a return, dropped)";
+    y += " (" + WithThousands(read.dropped_points) + " with NaN or infinite coordinates, dropped)";
   y += ", " + std::to_string(survey.stations) + " scanner station" +
        (survey.stations == 1 ? "" : "s") + ", median spacing " + Length(survey.spacing_m) + ",\n";
   y += "# robust extent " + Length(extent[0]) + " x " + Length(extent[1]) + " x " +

@@ -268,7 +268,8 @@ std::string ParamsSchema() {
              {"description",
               "Drop points with NaN or infinite coordinates (counted as dropped_points) "
               "instead of failing on the first one. (PTX 0,0,0 points, NaN points of "
-              "organized PCD clouds and E57 invalid states are always dropped and counted.)"}}},
+              "organized PCD clouds and E57 invalid states are grid cells without a return: "
+              "always left out, counted as no_return_points, no warning.)"}}},
            {"columns",
             {{"type", "string"},
              {"default", ""},
@@ -341,7 +342,8 @@ Status Run(StageContext& ctx) {
   for (const std::string& warning : outcome.warnings)
     ctx.warning(warning.rfind(path, 0) == 0 ? warning : path + ": " + warning);
   if (outcome.dropped_points > 0)
-    ctx.warning(path + ": dropped " + std::to_string(outcome.dropped_points) + " invalid points");
+    ctx.warning(path + ": dropped " + std::to_string(outcome.dropped_points) +
+                " points with NaN or infinite coordinates (drop_invalid)");
   if (colors_from == "intensity" || colors_from == "uniform grey") {
     ctx.warning(path + ": the scan has no colors: its points are painted " +
                 (colors_from == "intensity" ? std::string("grey by their intensities")
@@ -364,6 +366,7 @@ Status Run(StageContext& ctx) {
       "write"));
   ctx.counter("points", static_cast<double>(points.size()));
   ctx.counter("dropped_points", static_cast<double>(outcome.dropped_points));
+  ctx.counter("no_return_points", static_cast<double>(outcome.no_return_points));
   ctx.counter("warnings", static_cast<double>(outcome.warnings.size()));
   const bool painted = colors_from == "intensity" || colors_from == "uniform grey";
   ctx.counter("painted_points", painted ? static_cast<double>(points.size()) : 0.0);
@@ -410,7 +413,8 @@ StageType ReadPointsStage() {
       "that every workflow runs on it, with a warning; the meta's `colors_from` says `file`, "
       "`intensity`, `uniform grey` or `none`.\n\n"
       "Counters: `points` (points kept), `dropped_points` (non-finite coordinates, with "
-      "drop_invalid), `painted_points` (points painted grey by `uncolored`), `uniform_grey` "
+      "drop_invalid), `no_return_points` (grid cells the file marks as measuring nothing: "
+      "PTX 0 0 0, organized PCD NaN, E57 invalid states), `painted_points` (points painted grey by `uncolored`), `uniform_grey` "
       "(1 when they all got the same grey: the scan's texture comparisons then say nothing).";
   type.params_schema = ParamsSchema();
   type.outputs = {{"points", "points", "The scan's points (binary PLY with origin).", false}};

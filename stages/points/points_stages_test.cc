@@ -153,6 +153,20 @@ TEST_F(PointsStagesTest, ReadPointsBunny) {
   EXPECT_EQ(read->report.pointbake_kind, "points");
 }
 
+// A grid cell without a return (PTX 0 0 0) is the format's normal way to say
+// "nothing measured here": counted, not warned about.
+TEST_F(PointsStagesTest, ReadPointsCountsCellsWithoutAReturnQuietly) {
+  const std::string path = (dir_ / "grid.ptx").string();
+  std::ofstream(path) << "2\n1\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n1 0 0 0\n0 1 0 0\n0 0 1 0\n0 0 0 1\n"
+                         "1 2 3 0.5\n0 0 0 0.5\n";
+  FakeContext ctx(dir_ / "c", {{"path", path}, {"uncolored", "none"}});
+  ASSERT_TRUE(Run("io.read_points", ctx).ok());
+  EXPECT_EQ(ctx.counters_["points"], 1);
+  EXPECT_EQ(ctx.counters_["no_return_points"], 1);
+  EXPECT_EQ(ctx.counters_["dropped_points"], 0);
+  EXPECT_TRUE(ctx.warnings_.empty()) << ctx.warnings_.front();
+}
+
 TEST_F(PointsStagesTest, ReadPointsDropsInvalid) {
   const std::string path = (dir_ / "scan.PLY").string();
   std::ofstream(path) << "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\n"
@@ -167,7 +181,8 @@ TEST_F(PointsStagesTest, ReadPointsDropsInvalid) {
   EXPECT_EQ(lenient.counters_["points"], 2);
   EXPECT_EQ(lenient.counters_["dropped_points"], 1);
   // Said through the warning channel (run.json, progress line), naming the file.
-  EXPECT_EQ(lenient.warnings_, std::vector<std::string>{path + ": dropped 1 invalid points"});
+  EXPECT_EQ(lenient.warnings_, std::vector<std::string>{
+                                   path + ": dropped 1 points with NaN or infinite coordinates (drop_invalid)"});
   EXPECT_TRUE(strict.warnings_.empty());
 }
 

@@ -463,7 +463,7 @@ Status E57Reader::DecodeScan(const ScanSpec& scan, bool keep_colors, bool keep_i
     const std::vector<double>& c2 = columns[coordinate_fields[2]];
     for (size_t i = 0; i < count; ++i, ++record) {
       if (invalid_field >= 0 && columns[invalid_field][i] != 0.0) {
-        ++result_.dropped_points;
+        ++result_.no_return_points;
         continue;
       }
       double local[3];

@@ -23,7 +23,7 @@
 //     (radians) converted with x = r cos(el) cos(az), y = r cos(el) sin(az),
 //     z = r sin(el); then the scan pose is applied (rotate, then translate);
 //   - cartesianInvalidState / sphericalInvalidState != 0 (1 = direction only,
-//     2 = no return): the point is dropped and counted in dropped_points;
+//     2 = no return): the point is left out and counted in no_return_points;
 //   - NaN/Inf coordinates: an error naming the scan and record, or dropped and
 //     counted with options.drop_invalid_points;
 //   - colorRed/Green/Blue -> 0..255 using colorLimits (else the prototype

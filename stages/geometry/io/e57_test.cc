@@ -244,7 +244,8 @@ TEST_F(E57Test, InvalidStatesAreDroppedAndCounted) {
   scan.fields.push_back(Integer("rowIndex", 0, 2047, {5, 6, 7, 8}));  // alone: no grid
   auto read = ReadE57(WriteScans({scan}), {});
   ASSERT_TRUE(read.ok()) << read.status().message();
-  EXPECT_EQ(read->dropped_points, 2u);
+  EXPECT_EQ(read->no_return_points, 2u);
+  EXPECT_EQ(read->dropped_points, 0u);
   ASSERT_EQ(read->points.size(), 2u);
   EXPECT_EQ(read->points.origin, (std::array<double, 3>{2, 2, 2}));
   EXPECT_EQ(read->points.positions, (std::vector<float>{-1, -1, -1, 1, 1, 1}));
@@ -324,7 +325,8 @@ TEST_F(E57Test, APoselessGridScanHasItsScannerAtItsOrigin) {
   holed.fields.push_back(Integer("cartesianInvalidState", 0, 2, state));
   auto with_holes = ReadE57(WriteScans({holed}), {});
   ASSERT_TRUE(with_holes.ok()) << with_holes.status().message();
-  EXPECT_EQ(with_holes->dropped_points, 107u);
+  EXPECT_EQ(with_holes->no_return_points, 107u);
+  EXPECT_EQ(with_holes->dropped_points, 0u);
   EXPECT_EQ(with_holes->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
   EXPECT_EQ(with_holes->points.station_ids.size(), 750u - 107u);
 }
@@ -456,6 +458,7 @@ TEST_F(E57Test, NonFiniteCoordinateFailsOrIsDropped) {
   ASSERT_TRUE(read.ok()) << read.status().message();
   EXPECT_EQ(read->points.size(), 2u);
   EXPECT_EQ(read->dropped_points, 1u);
+  EXPECT_EQ(read->no_return_points, 0u);
 }
 
 TEST(E57XmlTest, ParsesEntitiesCdataAndPrefixes) {

@@ -449,7 +449,10 @@ class PcdReader {
                              FormatDouble(p[1]) + " " + FormatDouble(p[2]) +
                              "); drop such points with drop_invalid_points");
     }
-    ++result_.dropped_points;
+    if (no_return)
+      ++result_.no_return_points;
+    else
+      ++result_.dropped_points;
     return Status::Ok();
   }
 

@@ -46,8 +46,9 @@
 // bounding-box center rounded to 1 m, as the PLY reader does for doubles.
 //
 // Invalid points: in organized clouds (HEIGHT > 1) a NaN coordinate marks "no
-// return"; such points are always dropped and counted. Elsewhere a NaN/Inf
-// coordinate is an error naming the point, unless drop_invalid_points.
+// return"; such points are always left out and counted in no_return_points.
+// Elsewhere a NaN/Inf coordinate is an error naming the point, unless
+// drop_invalid_points (then counted in dropped_points).
 //
 // Memory: ascii and binary bodies stream through a 1 MiB buffer. A
 // binary_compressed block is decompressed as a stream too (LZF references

@@ -203,7 +203,8 @@ TEST_F(PcdTest, BinaryCompressedIsFieldByFieldAndOrganizedNanPointsAreDropped) {
   ASSERT_TRUE(read.ok()) << read.status().message();
   const PointCloud& cloud = read->points;
   EXPECT_EQ(read->format, "pcd binary_compressed");
-  EXPECT_EQ(read->dropped_points, 1u);
+  EXPECT_EQ(read->no_return_points, 1u);  // organized: a NaN is a cell without a return
+  EXPECT_EQ(read->dropped_points, 0u);
   EXPECT_EQ(cloud.positions, (std::vector<float>{1, 0, -1, 2, 0, -1, 4, 0, -1}));
   EXPECT_EQ(cloud.colors, (std::vector<uint8_t>{1, 2, 3, 4, 5, 6, 10, 11, 12}));
   EXPECT_FALSE(cloud.has_stations());  // identity VIEWPOINT
@@ -315,7 +316,8 @@ TEST_F(PcdTest, BinaryCompressedDoubleCoordinatesWithNoReturnsAndTranslation) {
   const auto read = ReadPcd(Write(header + CompressedBody(soa)), {});
   ASSERT_TRUE(read.ok()) << read.status().message();
   const PointCloud& cloud = read->points;
-  EXPECT_EQ(read->dropped_points, 2u);
+  EXPECT_EQ(read->no_return_points, 2u);
+  EXPECT_EQ(read->dropped_points, 0u);
   EXPECT_EQ(cloud.origin, (std::array<double, 3>{652352, 5412346, 313}));
   EXPECT_EQ(cloud.positions, (std::vector<float>{-0.875f, -1, -0.75f, 1, 0.5f, 0}));
   EXPECT_EQ(cloud.stations, (std::vector<std::array<double, 3>>{{10, -0.5, 0}}));
@@ -336,6 +338,7 @@ TEST_F(PcdTest, BinaryCompressedUnorganizedNanIsAnErrorUnlessDropped) {
   const auto read = ReadPcd(Write(file), options);
   ASSERT_TRUE(read.ok()) << read.status().message();
   EXPECT_EQ(read->dropped_points, 2u);
+  EXPECT_EQ(read->no_return_points, 0u);  // unorganized: no grid cells
   EXPECT_EQ(read->points.positions, (std::vector<float>{0, 0, 0}));
 }
 
@@ -538,7 +541,8 @@ TEST_F(PcdTest, OfficeKinectBinaryCompressed) {
   const PointCloud& cloud = read->points;
   EXPECT_EQ(read->format, "pcd binary_compressed");
   EXPECT_EQ(cloud.size(), 254456u);
-  EXPECT_EQ(read->dropped_points, 307200u - 254456u);
+  EXPECT_EQ(read->no_return_points, 307200u - 254456u);
+  EXPECT_EQ(read->dropped_points, 0u);
   EXPECT_GT(progress_calls, 0);
   ASSERT_TRUE(cloud.has_colors());
   EXPECT_FALSE(cloud.has_normals());
@@ -615,7 +619,7 @@ TEST_F(PcdTest, AnOrganizedFrameInItsSensorsFrameHasItsSensorAtTheOrigin) {
     const std::string data = c.data;
     const auto read = ReadPcd(Write(OrganizedFrame(data, {0, 0, 0}, c.doubles, c.viewpoint)), {});
     ASSERT_TRUE(read.ok()) << read.status().message();
-    EXPECT_EQ(read->dropped_points, 133u);
+    EXPECT_EQ(read->no_return_points, 133u);
     EXPECT_EQ(read->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
     EXPECT_EQ(read->points.station_ids, std::vector<uint16_t>(1200 - 133, 0));
     EXPECT_THAT(read->warnings, ::testing::Contains(HasSubstr(

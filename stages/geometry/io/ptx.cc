@@ -241,7 +241,7 @@ class PtxParser {
                                "such points)");
       }
       if (v[0] == 0 && v[1] == 0 && v[2] == 0) {  // no return
-        ++result_.dropped_points;
+        ++result_.no_return_points;
         continue;
       }
       std::array<double, 3> p;

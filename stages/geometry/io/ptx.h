@@ -39,8 +39,8 @@
 //     If some scans have colors and others not, colors are dropped with a
 //     warning.
 //   - "no return": a point written exactly as 0 0 0 (before the transform) is
-//     a grid cell without a measurement; it is always dropped and counted in
-//     `dropped_points`.
+//     a grid cell without a measurement; it is always left out and counted in
+//     `no_return_points`.
 //   - NaN/Inf in any value of a point line: an error naming the line, or
 //     dropped and counted when `options.drop_invalid_points`.
 // Blank lines are ignored; "\r\n" line ends are accepted.

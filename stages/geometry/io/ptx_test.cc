@@ -137,7 +137,8 @@ TEST_F(PtxTest, RotatedScanWithNoReturnsFromPdal) {
   ASSERT_TRUE(read.ok()) << read.status().message();
   const PointCloud& cloud = read->points;
   ASSERT_EQ(cloud.size(), 4u);  // 2 x 6 grid, 8 cells are 0 0 0
-  EXPECT_EQ(read->dropped_points, 8u);
+  EXPECT_EQ(read->no_return_points, 8u);
+  EXPECT_EQ(read->dropped_points, 0u);
   ASSERT_TRUE(cloud.has_colors());
   EXPECT_THAT(cloud.colors, ElementsAre(33, 38, 24, 31, 37, 24, 30, 37, 23, 31, 37, 23));
   EXPECT_EQ(cloud.stations[0], (std::array<double, 3>{-3.028748, -3.819741, -1.384333}));
@@ -164,7 +165,7 @@ TEST_F(PtxTest, RotationAndTranslationAreAppliedAsRowVectors) {
   ASSERT_TRUE(read.ok()) << read.status().message();
   const PointCloud& cloud = read->points;
   ASSERT_EQ(cloud.size(), 1u);
-  EXPECT_EQ(read->dropped_points, 1u);
+  EXPECT_EQ(read->no_return_points, 1u);
   EXPECT_EQ(cloud.origin, (std::array<double, 3>{8, 21, 33}));
   EXPECT_DOUBLE_EQ(Absolute(cloud, 0, 0), 10 - 2);
   EXPECT_DOUBLE_EQ(Absolute(cloud, 0, 1), 20 + 1);
@@ -210,7 +211,8 @@ TEST_F(PtxTest, NanPointsAreDroppedOnRequest) {
   auto read = ReadPtx(Write("nan.ptx", text), options);
   ASSERT_TRUE(read.ok()) << read.status().message();
   EXPECT_EQ(read->points.size(), 1u);
-  EXPECT_EQ(read->dropped_points, 2u);  // one NaN, one no-return
+  EXPECT_EQ(read->dropped_points, 1u);  // the NaN
+  EXPECT_EQ(read->no_return_points, 1u);  // the 0 0 0
 }
 
 TEST_F(PtxTest, ProgressEndsAtOne) {

@@ -31,7 +31,12 @@ struct ScanReadOptions {
 
 struct ScanReadResult {
   PointCloud points;
-  uint64_t dropped_points = 0;        // invalid points dropped
+  uint64_t dropped_points = 0;        // points with NaN/Inf coordinates dropped (drop_invalid_points)
+  // Cells of a scan grid the file marks as measuring nothing (PTX 0 0 0, a
+  // NaN in an organized PCD, E57 invalidState 1 or 2): always left out, not
+  // an error and not in dropped_points; a structured scan has many (sky,
+  // windows, out of range).
+  uint64_t no_return_points = 0;
   std::vector<std::string> warnings;  // shown to the user, e.g. "3 scans merged"
   std::string format;                 // e.g. "pcd binary_compressed", "e57"
   // Points (ascending indices) whose color / intensity the file marks as no
