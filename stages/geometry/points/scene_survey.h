@@ -45,10 +45,11 @@
 //   * A scan without stations (a merged or photogrammetric cloud, an
 //     object): a front view face-on to its main plane (the principal axis
 //     of least variance of the points, from the side their normals face if
-//     they mostly face one, else from above the horizon), then that view
-//     turned 40° to the left and to the right about the camera's up and
-//     raised 15°; each as far as frames 98 % of the points (their reach
-//     across the view, plus the nearest of them toward the eye). Face-on,
+//     their mean leans at least 0.1 along it, else from above the horizon),
+//     then that view turned 40° to the left and to the right about the
+//     camera's up and raised 15°; each as far as frames 98 % of the points
+//     (their reach across the view, plus the nearest of them toward the
+//     eye). Face-on,
 //     a wall or a relief fills the frame instead of being seen edge-on,
 //     where the outline's pixels would outweigh the surface's.
 // All in absolute meters (the cloud's origin added), `up` as given (z by
