@@ -5,20 +5,19 @@
 #include <cmath>
 #include <numeric>
 
+#include "stages/geometry/core/vec3.h"
 #include "stages/geometry/points/spacing.h"
 
 namespace pb {
 namespace {
 
-using Vec3 = std::array<double, 3>;
+using Vec3 = vec3::V3;
+using vec3::Add;
+using vec3::Cross;
+using vec3::Dot;
+using vec3::Scale;
+using vec3::Sub;
 
-Vec3 Add(const Vec3& a, const Vec3& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-Vec3 Sub(const Vec3& a, const Vec3& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-Vec3 Scale(const Vec3& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double Dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-Vec3 Cross(const Vec3& a, const Vec3& b) {
-  return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
 Vec3 Normalized(const Vec3& a) { return Scale(a, 1.0 / std::sqrt(Dot(a, a))); }
 
 // The point's direction (unit, in the frame e1, e2, up) at azimuth and elevation.
