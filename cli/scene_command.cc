@@ -165,9 +165,9 @@ int RunScene(const std::vector<std::string>& args) {
   SceneSurveyOptions options;
   if (!ParseVector(up_text, &options.up))
     return fail("--up " + up_text + ": expected three numbers x,y,z");
-  if (!out_path.empty() && !force && fs::exists(out_path))
-    return fail(out_path + " exists; give --force to replace it, or another -o");
   Env* env = Env::Default();
+  if (!out_path.empty() && !force && env->Exists(out_path))
+    return fail(out_path + " exists; give --force to replace it, or another -o");
   if (!env->Exists(scan_path)) return fail(scan_path + ": file not found");
   if (name.empty()) name = DefaultWorkflowName(scan_path);
   if (name.empty() || !std::isalnum(static_cast<unsigned char>(name[0]))) name = "scan_" + name;
