@@ -28,6 +28,12 @@ constexpr const char* kSchema = R"({
       "default": "auto",
       "description": "How each normal's sign is chosen: 'stations' faces the scanner that saw the point; 'input' takes the side of the normal the point came with (a file's own normals, e.g. a scanner's or a fusion's software's); 'propagate' spreads a consistent sign over the neighbour graph (Hoppe 1992) from the point farthest from the centroid, facing outward; 'auto' uses stations when the cloud has them, else the input normals when every point has a usable one, else propagate; 'none' keeps the solver's arbitrary sign."
     },
+    "interior": {
+      "type": "string",
+      "enum": ["auto", "yes", "no"],
+      "default": "auto",
+      "description": "For 'propagate': whether the scan is an interior seen from inside, whose normals face the space it encloses (a room merged into one file without its scanner stations would otherwise come out inside-out). 'auto' looks for free space the scan closes around, openings up to 1.5 m wide closed, at least 1 m3 once 0.75 m from the scan: a room's, not an object's inside; 'no' always faces outward (version 2); 'yes' faces inward, toward the centroid, for an interior the test misses (open on a wider side)."
+    },
     "implementation": {
       "type": "string",
       "enum": ["own", "pcl", "open3d"],
@@ -62,6 +68,16 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {3, 100}));
   PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation"));
   PB_ASSIGN_OR_RETURN(const NormalOrientation orientation, ParseOrientation(orientation_name));
+  PB_ASSIGN_OR_RETURN(const std::string interior_name, StringParam(ctx, kId, "interior"));
+  NormalInterior interior = NormalInterior::kAuto;
+  if (interior_name == "yes") {
+    interior = NormalInterior::kYes;
+  } else if (interior_name == "no") {
+    interior = NormalInterior::kNo;
+  } else if (interior_name != "auto") {
+    return Status::Invalid(std::string(kId) + ": parameter 'interior' must be one of auto, yes, "
+                           "no; got '" + interior_name + "'");
+  }
   PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
   NormalImplementation solver = NormalImplementation::kOwn;
   if (implementation == "pcl") {
@@ -80,6 +96,7 @@ Status Run(StageContext& ctx) {
     NormalOptions options;
     options.k = static_cast<int>(k);
     options.orientation = orientation;
+    options.interior = interior;
     options.implementation = solver;
     options.threads = ctx.threads();
     options.progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); };
@@ -87,6 +104,10 @@ Status Run(StageContext& ctx) {
   }
   ctx.counter("points", static_cast<double>(report.points));
   ctx.counter("flipped", static_cast<double>(report.flipped));
+  if (report.orientation_used == NormalOrientation::kPropagate && interior == NormalInterior::kAuto) {
+    ctx.counter("enclosed_volume_m3", report.enclosed_volume_m3);
+    ctx.counter("facing_enclosure", static_cast<double>(report.facing_enclosure));
+  }
   const nlohmann::json meta =
       InputPointsMetaWith(ctx, {{"points", cloud.size()},
                                 {"has_normals", true},
@@ -103,7 +124,7 @@ Status Run(StageContext& ctx) {
 StageType NormalsStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;
+  type.version = 3;
   type.summary = "k-NN PCA normals, oriented toward the scanner, like the file's own, or by propagation";
   type.doc =
       "Estimates a unit normal per point: the eigenvector of the smallest eigenvalue of the "
@@ -111,7 +132,10 @@ StageType NormalsStage() {
       "kd-tree search. `orientation` then picks each sign: toward the point's scanner station "
       "(`stations`, needs per-point station ids), by minimum-spanning-tree propagation over the "
       "neighbour graph seeded outward from the point farthest from the centroid (`propagate`, "
-      "Hoppe et al. 1992; right for closed objects), like the normals the points came with "
+      "Hoppe et al. 1992; right for closed objects; with `interior: auto`, version 3, where the "
+      "scan encloses free space, a room's, the points beside it face it and the propagation "
+      "starts from them, so that a room merged without its stations is not meshed inside-out), "
+      "like the normals the points came with "
       "(`input`: a file's own normals, whose software knew the sensor; propagation can flip "
       "whole thin parts), `auto` (stations if present, else the input normals if every point "
       "has a usable one, else propagate; version 2, which added `input`) or `none`. Existing "
@@ -121,7 +145,10 @@ StageType NormalsStage() {
       "for campaigns that compare implementations.\n\n"
       "Meta added: `has_normals`, `normals_k`, `normals_orientation` (the method used), "
       "`normals_implementation`. "
-      "Counters: `points`, `flipped` (normals whose sign orientation reversed).";
+      "Counters: `points`, `flipped` (normals whose sign orientation reversed); with "
+      "propagation and `interior: auto`, `enclosed_volume_m3` (the enclosed space found, 0 for "
+      "none; stages/geometry/points/enclosure.h) and `facing_enclosure` (points oriented to face "
+      "it; the rest by propagation from them).";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "The points to estimate normals for.", false}};
   type.outputs = {{"points", "points", "The same points with unit normals.", false}};

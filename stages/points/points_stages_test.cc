@@ -17,6 +17,7 @@
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/points/module_calls.h"
 #include "stages/geometry/io/e57_test_writer.h"
+#include "stages/geometry/testing/clouds.h"
 #include "stages/geometry/testing/test_data.h"
 #include "stages/stage_test_util.h"
 
@@ -609,6 +610,42 @@ TEST_F(PointsStagesTest, NormalsOfASphereFaceOutward) {
     const float* normal = &out->points.normals[3 * i];
     ASSERT_GT((p[0] * normal[0] + p[1] * normal[1] + p[2] * normal[2]) / 0.2, 0.98) << "point " << i;
   }
+}
+
+// A room merged into one file without stations: the stage finds the space
+// it encloses (counters) and faces its walls into it; `interior: no` keeps
+// the outward rule and reports nothing.
+TEST_F(PointsStagesTest, NormalsOfARoomWithoutStationsFaceIntoIt) {
+  const std::string input = (dir_ / "room.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, pb::testing::RoomWithTable(6.0, 4.5, 1.0, 7)).ok());
+  // The share of the points on the wall x = 0 whose normal points into the room.
+  auto wall_inward = [](const PointCloud& cloud) {
+    size_t wall = 0, inward = 0;
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      if (std::abs(cloud.positions[3 * i]) > 0.01 || cloud.positions[3 * i + 2] < 0.2) continue;
+      ++wall, inward += cloud.normals[3 * i] > 0;
+    }
+    return double(inward) / double(wall);
+  };
+  for (const std::string interior : {"auto", "no"}) {
+    FakeContext ctx(dir_ / interior, {{"interior", interior}});
+    ctx.AddInput("points", "points", input);
+    const Status status = Run("points.normals", ctx);
+    ASSERT_TRUE(status.ok()) << status.message();
+    auto out = ReadPlyPoints(ctx.outputs_["points"]);
+    ASSERT_TRUE(out.ok()) << out.status().message();
+    if (interior == "auto") {
+      EXPECT_GT(ctx.counters_["enclosed_volume_m3"], 8.0);
+      EXPECT_GT(ctx.counters_["facing_enclosure"], 0.5 * double(out->points.size()));
+      EXPECT_GT(wall_inward(out->points), 0.99);
+    } else {
+      EXPECT_EQ(ctx.counters_.count("enclosed_volume_m3"), 0u);
+      EXPECT_LT(wall_inward(out->points), 0.01);
+    }
+  }
+  FakeContext bad(dir_ / "bad", {{"interior", "maybe"}});
+  bad.AddInput("points", "points", input);
+  EXPECT_THAT(Run("points.normals", bad).message(), HasSubstr("interior"));
 }
 
 TEST_F(PointsStagesTest, NormalsRejectsBadParameters) {

@@ -27,10 +27,12 @@
 #include <functional>
 #include <limits>
 #include <numbers>
+#include <optional>
 #include <string>
 #include <vector>
 
 #include "stages/geometry/core/module.h"
+#include "stages/geometry/points/enclosure.h"
 #include "stages/geometry/points/knn.h"
 #include "stages/geometry/points/module_calls.h"
 
@@ -186,7 +188,12 @@ class Frontier {
   size_t size_ = 0;
 };
 
-size_t OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph) {
+// Propagation (normals.h, kPropagate). `inward` seeds each part facing the
+// centroid instead of away from it. With a non-empty `enclosure`, every point
+// whose one side lies in the enclosed space and whose other does not faces
+// it first, and the propagation spreads from those points.
+void OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph, bool inward,
+                         const EnclosedSpace* enclosure, NormalReport& report) {
   const size_t n = cloud.size();
   const float* positions = cloud.positions.data();
   float* normals = cloud.normals.data();
@@ -211,12 +218,13 @@ size_t OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph
     return normals[3 * a] * normals[3 * b] + normals[3 * a + 1] * normals[3 * b + 1] +
            normals[3 * a + 2] * normals[3 * b + 2];
   };
-  auto flip = [normals](size_t i) {
+  size_t flipped = 0;
+  auto flip = [normals, &flipped](size_t i) {
     for (int a = 0; a < 3; ++a) normals[3 * i + a] = -normals[3 * i + a];
+    ++flipped;
   };
   std::vector<uint8_t> visited(n, 0);
   Frontier frontier;
-  size_t flipped = 0;
   auto visit = [&](uint32_t i) {
     visited[i] = 1;
     for (int j = 0; j < kPropagationNeighbors; ++j) {
@@ -225,26 +233,49 @@ size_t OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph
       frontier.Push(1.0f - std::fabs(dot(i, t)), {t, i});
     }
   };
+  auto grow = [&] {
+    while (!frontier.empty()) {
+      const Edge edge = frontier.Pop();
+      if (visited[edge.target]) continue;
+      if (dot(edge.parent, edge.target) < 0) flip(edge.target);
+      visit(edge.target);
+    }
+  };
+  if (enclosure != nullptr) {
+    // Probes 1.5 voxels ahead of and behind each point: one in the space,
+    // the other not, decides the side (a wall's, a table's in the room);
+    // both or neither (a thin part, a wall between two rooms, surface far
+    // from the room) leaves it to the propagation.
+    const float probe = float(1.5 * enclosure->voxel_m());
+    std::vector<uint32_t> decided;
+    for (size_t i = 0; i < n; ++i) {
+      float ahead[3], behind[3];
+      for (int a = 0; a < 3; ++a) {
+        ahead[a] = positions[3 * i + a] + probe * normals[3 * i + a];
+        behind[a] = positions[3 * i + a] - probe * normals[3 * i + a];
+      }
+      const bool front = enclosure->Contains(ahead), back = enclosure->Contains(behind);
+      if (front == back) continue;
+      if (back) flip(i);
+      visited[i] = 1;
+      decided.push_back(uint32_t(i));
+    }
+    report.facing_enclosure = decided.size();
+    for (uint32_t i : decided) {
+      visited[i] = 0;  // visit() marks it again and queues its edges
+      visit(i);
+    }
+    grow();
+  }
   for (const auto& [negative_d2, seed] : by_distance) {
     if (visited[seed]) continue;
     double outward = 0;
     for (int a = 0; a < 3; ++a) outward += (positions[3 * seed + a] - centroid[a]) * normals[3 * seed + a];
-    if (outward < 0) {
-      flip(seed);
-      ++flipped;
-    }
+    if (inward ? outward > 0 : outward < 0) flip(seed);
     visit(seed);
-    while (!frontier.empty()) {
-      const Edge edge = frontier.Pop();
-      if (visited[edge.target]) continue;
-      if (dot(edge.parent, edge.target) < 0) {
-        flip(edge.target);
-        ++flipped;
-      }
-      visit(edge.target);
-    }
+    grow();
   }
-  return flipped;
+  report.flipped = flipped;
 }
 
 // The propagation graph alone (kPropagationNeighbors per point, self
@@ -359,7 +390,16 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
   report.orientation_used = orientation;
   if (orientation == NormalOrientation::kStations) report.flipped = OrientTowardStations(cloud);
   if (orientation == NormalOrientation::kInput) report.flipped = OrientLikeInput(cloud, input);
-  if (orientation == NormalOrientation::kPropagate) report.flipped = OrientByPropagation(cloud, graph);
+  if (orientation == NormalOrientation::kPropagate) {
+    std::optional<EnclosedSpace> enclosure;
+    if (options.interior == NormalInterior::kAuto) {
+      PB_ASSIGN_OR_RETURN(enclosure, EnclosedSpace::Find(cloud));
+      report.enclosed_volume_m3 = enclosure->volume_m3();
+      if (enclosure->empty()) enclosure.reset();
+    }
+    OrientByPropagation(cloud, graph, options.interior == NormalInterior::kYes,
+                        enclosure ? &*enclosure : nullptr, report);
+  }
   if (options.progress) options.progress(1.0);
   return Status::Ok();
 }

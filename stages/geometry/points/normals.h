@@ -17,8 +17,19 @@
 //               seed whose normal points away from the cloud's centroid; each
 //               point takes its tree parent's side. Disconnected parts are
 //               seeded the same way. Right for closed objects (a sphere gets
-//               outward normals); for interiors scanned from inside, use
-//               stations.
+//               outward normals). An interior scanned from inside and
+//               merged without its stations (a room as one PLY) would come
+//               out inside-out, so `interior` decides each part's side:
+//               kAuto looks for the free space the scan encloses
+//               (enclosure.h: a room's, not an object's inside); every point
+//               with one side in it and the other not (probes 1.5 voxels
+//               ahead and behind: a wall's, a floor's, a table's in the
+//               room) faces it, and the propagation grows from those points
+//               to the rest (propagation alone is unreliable across the
+//               sharp creases where furniture meets a floor). kNo keeps the
+//               outward seeds (version 2's rule); kYes seeds inward, toward
+//               the centroid, for an interior the enclosure test misses (a
+//               room open on a side wider than 1.5 m).
 //   kInput:     the side of the normal the cloud came with (a file's own
 //               normals: a scanner's or a fusion's software knew the sensor;
 //               PCL and Open3D write oriented ones), dot(n_in, n) >= 0. Needs
@@ -42,6 +53,9 @@ namespace pb {
 
 enum class NormalOrientation { kAuto, kStations, kInput, kPropagate, kNone };
 
+// Whether kPropagate treats the scan as an interior seen from inside.
+enum class NormalInterior { kAuto, kYes, kNo };
+
 // Whose code finds the unoriented normals (the orientation step is always
 // ours, so the three differ only in the PCA): ours (above), PCL 1.13's
 // NormalEstimationOMP (pointbake-pcl.so) or Open3D 0.16's
@@ -55,6 +69,7 @@ struct NormalOptions {
   NormalImplementation implementation = NormalImplementation::kOwn;
   int k = 16;  // points in each PCA neighbourhood, the point included; 3..100
   NormalOrientation orientation = NormalOrientation::kAuto;
+  NormalInterior interior = NormalInterior::kAuto;  // kPropagate only
   int threads = 0;  // worker threads; 0 = TBB's default (all cores)
   // Called from the calling thread with the fraction done, in [0, 1].
   std::function<void(double fraction)> progress;
@@ -64,6 +79,10 @@ struct NormalReport {
   size_t points = 0;
   size_t flipped = 0;  // normals whose sign orientation reversed
   NormalOrientation orientation_used = NormalOrientation::kNone;  // kAuto resolved
+  // kPropagate with interior kAuto: the enclosed space found (0: none), and
+  // the points oriented to face it (the rest by propagation).
+  double enclosed_volume_m3 = 0.0;
+  size_t facing_enclosure = 0;
 };
 
 // Replaces cloud.normals with estimated, oriented unit normals (3 floats per

@@ -254,5 +254,67 @@ TEST(NormalsTest, SameNormalsWithOneAndTwoThreads) {
   EXPECT_EQ(report_one.flipped, report_two.flipped);
 }
 
+// The share of the room's wall, floor and ceiling points whose normals face
+// into the room (toward the box's center side of their face), and of the
+// table's facing out of it.
+struct RoomSides {
+  double walls_inward = 0, table_outward = 0;
+};
+RoomSides SidesOf(const PointCloud& room, double width_m, double depth_m) {
+  size_t walls = 0, walls_in = 0, table = 0, table_out = 0;
+  const double table_center[3] = {0.3 * width_m + 0.6, 0.5 * depth_m + 0.4, 0.375};
+  const double room_center[3] = {0.5 * width_m, 0.5 * depth_m, 1.5};
+  for (size_t i = 0; i < room.size(); ++i) {
+    const float* p = &room.positions[3 * i];
+    const float* n = &room.normals[3 * i];
+    const bool on_table = p[0] > 0.3 * width_m - 0.01 && p[0] < 0.3 * width_m + 1.21 &&
+                          p[1] > 0.5 * depth_m - 0.01 && p[1] < 0.5 * depth_m + 0.81 &&
+                          p[2] < 0.76 && p[2] > 0.01;
+    const double* c = on_table ? table_center : room_center;
+    const double toward[3] = {c[0] - p[0], c[1] - p[1], c[2] - p[2]};
+    const bool faces_center = Dot(n, toward) > 0;
+    if (on_table) {
+      ++table, table_out += !faces_center;
+    } else {
+      ++walls, walls_in += faces_center;
+    }
+  }
+  return {double(walls_in) / double(walls), double(table_out) / double(table)};
+}
+
+// A room merged into one cloud without its stations: propagation alone
+// would face its walls outward (inside-out); the enclosed space turns them
+// in. The table, an object in the room, faces out of itself, into the room.
+TEST(NormalsTest, PropagationFacesARoomsInside) {
+  PointCloud room = testing::RoomWithTable(6.0, 4.5, 1.0, 3);
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(room, {}, &report).ok());  // auto -> propagate: no stations
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kPropagate);
+  EXPECT_GT(report.enclosed_volume_m3, 8.0);
+  EXPECT_GT(report.facing_enclosure, room.size() / 2);
+  RoomSides sides = SidesOf(room, 6.0, 4.5);
+  EXPECT_GT(sides.walls_inward, 0.99);
+  EXPECT_GT(sides.table_outward, 0.95);
+
+  // interior: no is version 2's rule: outward from the centroid.
+  room = testing::RoomWithTable(6.0, 4.5, 1.0, 3);
+  ASSERT_TRUE(EstimateNormals(room, {.interior = NormalInterior::kNo}, &report).ok());
+  EXPECT_LT(SidesOf(room, 6.0, 4.5).walls_inward, 0.01);
+}
+
+// A room open on a side wider than the enclosure test closes: auto finds no
+// enclosed space and faces outward; interior: yes faces it inward.
+TEST(NormalsTest, InteriorYesForARoomTheTestMisses) {
+  PointCloud room = testing::RoomWithTable(6.0, 4.5, 2.5, 3);
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(room, {}, &report).ok());
+  EXPECT_EQ(report.enclosed_volume_m3, 0.0);
+  EXPECT_EQ(report.facing_enclosure, 0u);
+  EXPECT_LT(SidesOf(room, 6.0, 4.5).walls_inward, 0.01);
+  room = testing::RoomWithTable(6.0, 4.5, 2.5, 3);
+  ASSERT_TRUE(EstimateNormals(room, {.interior = NormalInterior::kYes}, &report).ok());
+  EXPECT_GT(SidesOf(room, 6.0, 4.5).walls_inward, 0.99);
+}
+
 }  // namespace
 }  // namespace pb

@@ -1,0 +1,263 @@
+#include "stages/geometry/points/enclosure.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+namespace pb {
+namespace {
+
+constexpr uint8_t kFree = 0, kOccupied = 1, kOutside = 2, kEnclosed = 3, kSmall = 4;
+
+struct Grid {
+  std::array<int, 3> dims{};
+  size_t Index(int x, int y, int z) const {
+    return (size_t(z) * size_t(dims[1]) + size_t(y)) * size_t(dims[0]) + size_t(x);
+  }
+  size_t size() const { return size_t(dims[0]) * size_t(dims[1]) * size_t(dims[2]); }
+  size_t Stride(int axis) const {
+    return axis == 0 ? 1 : axis == 1 ? size_t(dims[0]) : size_t(dims[0]) * size_t(dims[1]);
+  }
+};
+
+// Sets every voxel within `radius` voxels along `axis` of a voxel equal to
+// `value` to `value` (one pass of a separable cube growth); others keep theirs.
+void GrowAlong(const Grid& grid, int axis, int radius, uint8_t value, std::vector<uint8_t>& cells) {
+  const size_t stride = grid.Stride(axis);
+  const int length = grid.dims[axis];
+  std::vector<int> before(length);
+  std::vector<uint8_t> line(length);
+  const int a1 = (axis + 1) % 3, a2 = (axis + 2) % 3;
+  for (int v = 0; v < grid.dims[a2]; ++v) {
+    for (int u = 0; u < grid.dims[a1]; ++u) {
+      std::array<int, 3> start{};
+      start[a1] = u;
+      start[a2] = v;
+      const size_t first = grid.Index(start[0], start[1], start[2]);
+      for (int i = 0; i < length; ++i) line[i] = cells[first + size_t(i) * stride] == value;
+      // Distance to the nearest marked voxel before and after each one.
+      int last = -1 - radius;
+      for (int i = 0; i < length; ++i) {
+        if (line[i]) last = i;
+        before[i] = i - last;
+      }
+      int next = length + radius;
+      for (int i = length - 1; i >= 0; --i) {
+        if (line[i]) next = i;
+        if (std::min(before[i], next - i) <= radius) cells[first + size_t(i) * stride] = value;
+      }
+    }
+  }
+}
+
+void Grow(const Grid& grid, int radius, uint8_t value, std::vector<uint8_t>& cells) {
+  for (int axis = 0; axis < 3; ++axis) GrowAlong(grid, axis, radius, value, cells);
+}
+
+// Visits the 6-connected voxels equal to `from` reachable from `queue`'s
+// voxels (already set to `to`), setting them to `to`; returns how many.
+size_t Fill(const Grid& grid, uint8_t from, uint8_t to, std::vector<uint32_t>& queue,
+            std::vector<uint8_t>& cells) {
+  size_t head = 0;
+  while (head < queue.size()) {
+    const uint32_t i = queue[head++];
+    const int x = int(i % uint32_t(grid.dims[0]));
+    const int y = int((i / uint32_t(grid.dims[0])) % uint32_t(grid.dims[1]));
+    const int z = int(i / (uint32_t(grid.dims[0]) * uint32_t(grid.dims[1])));
+    const int coords[3] = {x, y, z};
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int step : {-1, 1}) {
+        const int c = coords[axis] + step;
+        if (c < 0 || c >= grid.dims[axis]) continue;
+        const size_t j = step < 0 ? i - grid.Stride(axis) : i + grid.Stride(axis);
+        if (cells[j] != from) continue;
+        cells[j] = to;
+        queue.push_back(uint32_t(j));
+      }
+    }
+  }
+  return queue.size();
+}
+
+double Quantile(std::vector<float>& values, double q) {
+  const size_t k = std::min(values.size() - 1, size_t(q * double(values.size() - 1) + 0.5));
+  std::nth_element(values.begin(), values.begin() + k, values.end());
+  return values[k];
+}
+
+}  // namespace
+
+Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const EnclosureOptions& options) {
+  if (cloud.empty()) return Status::Invalid("enclosed space: the cloud has no points");
+  if (!(options.gap_m > 0) || !(options.min_volume_m3 > 0) || options.max_voxels_per_side < 16)
+    return Status::Invalid("enclosed space: gap_m and min_volume_m3 must be positive");
+  PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "enclosed space"));
+  const size_t n = cloud.size();
+  const float* positions = cloud.positions.data();
+
+  // The robust box, from at most ~10^6 points.
+  const size_t step = std::max<size_t>(1, n / 1000000);
+  std::array<double, 3> lo{}, hi{};
+  for (int axis = 0; axis < 3; ++axis) {
+    std::vector<float> values;
+    values.reserve(n / step + 1);
+    for (size_t i = 0; i < n; i += step) values.push_back(positions[3 * i + axis]);
+    lo[axis] = Quantile(values, 0.005);
+    hi[axis] = Quantile(values, 0.995);
+  }
+  const double longest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+  const double margin = 0.02 * longest + options.gap_m;
+  EnclosedSpace space;
+  space.voxel_m_ = std::max(options.gap_m / 4,
+                            (longest + 2 * margin) / double(options.max_voxels_per_side - 4));
+  const double voxel = space.voxel_m_;
+  const int radius = std::max(1, int(std::ceil(options.gap_m / voxel - 1e-9)));
+  Grid grid;
+  for (int axis = 0; axis < 3; ++axis) {
+    space.min_[axis] = lo[axis] - margin - 2 * voxel;
+    grid.dims[axis] = std::max(
+        3, int(std::ceil((hi[axis] - lo[axis] + 2 * margin + 4 * voxel) / voxel)));
+    grid.dims[axis] = std::min(grid.dims[axis], options.max_voxels_per_side);
+  }
+  space.dims_ = grid.dims;
+
+  std::vector<uint8_t> cells(grid.size(), kFree);
+  for (size_t i = 0; i < n; ++i) {
+    int c[3];
+    bool in = true;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double f = std::floor((positions[3 * i + axis] - space.min_[axis]) / voxel);
+      in = in && f >= 0 && f < grid.dims[axis];
+      c[axis] = in ? int(f) : 0;
+    }
+    if (in) cells[grid.Index(c[0], c[1], c[2])] = kOccupied;
+  }
+  const std::vector<uint8_t> scanned = cells;  // voxels holding a point
+  Grow(grid, radius, kOccupied, cells);
+
+  // The outside: free voxels the border reaches.
+  std::vector<uint32_t> queue;
+  for (int z = 0; z < grid.dims[2]; ++z) {
+    for (int y = 0; y < grid.dims[1]; ++y) {
+      for (int x = 0; x < grid.dims[0]; ++x) {
+        const bool border = x == 0 || y == 0 || z == 0 || x == grid.dims[0] - 1 ||
+                            y == grid.dims[1] - 1 || z == grid.dims[2] - 1;
+        const size_t i = grid.Index(x, y, z);
+        if (border && cells[i] == kFree) {
+          cells[i] = kOutside;
+          queue.push_back(uint32_t(i));
+        }
+      }
+    }
+  }
+  Fill(grid, kFree, kOutside, queue, cells);
+
+  // The enclosed parts, each kept if large enough.
+  const double voxel_volume = voxel * voxel * voxel;
+  size_t enclosed = 0;
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (cells[i] != kFree) continue;
+    queue.assign(1, uint32_t(i));
+    cells[i] = kSmall;
+    const size_t count = Fill(grid, kFree, kSmall, queue, cells);
+    if (double(count) * voxel_volume < options.min_volume_m3) continue;
+    for (uint32_t j : queue) cells[j] = kEnclosed;
+    enclosed += count;
+  }
+  space.volume_m3_ = double(enclosed) * voxel_volume;
+  if (enclosed == 0) return space;
+
+  // The deepest enclosed voxel: city-block distance to the nearest voxel
+  // outside the parts, by a forward and a backward pass.
+  std::vector<uint16_t> depth(cells.size(), 0);
+  for (size_t i = 0; i < cells.size(); ++i) depth[i] = cells[i] == kEnclosed ? std::numeric_limits<uint16_t>::max() : 0;
+  for (int pass = 0; pass < 2; ++pass) {
+    const int s = pass == 0 ? 1 : -1;
+    for (int zi = 0; zi < grid.dims[2]; ++zi) {
+      const int z = pass == 0 ? zi : grid.dims[2] - 1 - zi;
+      for (int yi = 0; yi < grid.dims[1]; ++yi) {
+        const int y = pass == 0 ? yi : grid.dims[1] - 1 - yi;
+        for (int xi = 0; xi < grid.dims[0]; ++xi) {
+          const int x = pass == 0 ? xi : grid.dims[0] - 1 - xi;
+          const size_t i = grid.Index(x, y, z);
+          if (depth[i] == 0) continue;
+          int d = depth[i];
+          const int coords[3] = {x, y, z};
+          for (int axis = 0; axis < 3; ++axis) {
+            const int c = coords[axis] - s;
+            if (c < 0 || c >= grid.dims[axis]) {
+              d = std::min(d, 1);
+              continue;
+            }
+            const size_t j = s > 0 ? i - grid.Stride(axis) : i + grid.Stride(axis);
+            d = std::min(d, int(depth[j]) + 1);
+          }
+          depth[i] = uint16_t(d);
+        }
+      }
+    }
+  }
+  // Of the deepest voxels (a box room has a whole slab of them), the one
+  // nearest their centroid.
+  const uint16_t most = *std::max_element(depth.begin(), depth.end());
+  auto center_of = [&](size_t i) {
+    const size_t coords[3] = {i % size_t(grid.dims[0]), (i / size_t(grid.dims[0])) % size_t(grid.dims[1]),
+                              i / (size_t(grid.dims[0]) * size_t(grid.dims[1]))};
+    std::array<double, 3> c{};
+    for (int axis = 0; axis < 3; ++axis) c[axis] = space.min_[axis] + (double(coords[axis]) + 0.5) * voxel;
+    return c;
+  };
+  std::array<double, 3> mean{};
+  size_t deepest_count = 0;
+  for (size_t i = 0; i < depth.size(); ++i) {
+    if (depth[i] != most) continue;
+    const std::array<double, 3> c = center_of(i);
+    for (int axis = 0; axis < 3; ++axis) mean[axis] += c[axis];
+    ++deepest_count;
+  }
+  for (double& m : mean) m /= double(deepest_count);
+  double nearest = std::numeric_limits<double>::infinity();
+  for (size_t i = 0; i < depth.size(); ++i) {
+    if (depth[i] != most) continue;
+    const std::array<double, 3> c = center_of(i);
+    const double d2 = (c[0] - mean[0]) * (c[0] - mean[0]) + (c[1] - mean[1]) * (c[1] - mean[1]) +
+                      (c[2] - mean[2]) * (c[2] - mean[2]);
+    if (d2 < nearest) nearest = d2, space.deepest_ = c;
+  }
+
+  // The space reaches back to the scan: from the parts, every voxel without
+  // a point reachable without entering the outside grown back by the gap
+  // and a voxel (which fills an opening's width again, from outside), nor
+  // crossing a voxel with a point. So it fills the room up to its walls and
+  // furniture, also where they stand closer than 2 * gap_m, but not a closed
+  // object's inside (a table's) nor the outside through a door.
+  std::vector<uint8_t> reach(cells.size(), 0);
+  for (size_t i = 0; i < cells.size(); ++i) reach[i] = cells[i] == kOutside ? 1 : 0;
+  Grow(grid, radius + 1, 1, reach);
+  queue.clear();
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (cells[i] == kEnclosed) {
+      reach[i] = 2;
+      queue.push_back(uint32_t(i));
+    } else if (reach[i] == 0 && scanned[i] != kFree) {
+      reach[i] = 1;  // a point's voxel: a wall
+    }
+  }
+  Fill(grid, 0, 2, queue, reach);
+  space.inside_.resize(cells.size());
+  for (size_t i = 0; i < cells.size(); ++i) space.inside_[i] = reach[i] == 2;
+  return space;
+}
+
+bool EnclosedSpace::Contains(const float p[3]) const {
+  if (inside_.empty()) return false;
+  int c[3];
+  for (int axis = 0; axis < 3; ++axis) {
+    const double f = std::floor((double(p[axis]) - min_[axis]) / voxel_m_);
+    if (!(f >= 0 && f < dims_[axis])) return false;
+    c[axis] = int(f);
+  }
+  return inside_[(size_t(c[2]) * size_t(dims_[1]) + size_t(c[1])) * size_t(dims_[0]) + size_t(c[0])] != 0;
+}
+
+}  // namespace pb
