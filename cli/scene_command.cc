@@ -21,7 +21,8 @@ namespace fs = std::filesystem;
 constexpr const char* kDescription =
     "Write a scene file for a scan: its units, median spacing, the meshing and texture\n"
     "parameters of the shipped workflows in the shipped scenes' proportions, and\n"
-    "viewpoints (from its scanner stations, or face-on to it without stations), each\n"
+    "viewpoints (from its scanner stations; without stations, from inside the space\n"
+    "it encloses, a room's, or else face-on to it), each\n"
     "with a comment saying where it came from. Then:\n"
     "  pointbake run configs/workflows/point_transfer.yaml --scene FILE --until scan_render\n"
     "draws the scan from those viewpoints (out/point_transfer/scan_frames/) to check them;\n"
@@ -99,6 +100,10 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
        (survey.stations == 1 ? "" : "s") + ", median spacing " + Length(survey.spacing_m) + ",\n";
   y += "# robust extent " + Length(extent[0]) + " x " + Length(extent[1]) + " x " +
        Length(extent[2]) + " (1st to 99th percentile per axis).\n";
+  if (survey.enclosed_volume_m3 > 0)
+    y += "# The points enclose " + Number(std::round(survey.enclosed_volume_m3)) +
+         " m3 of free space (at least 0.75 m from them): read as an interior seen from\n"
+         "# inside, as points.normals (interior: auto) will orient its normals.\n";
   y += "# The parameters follow the shipped scenes' proportions and the viewpoints are a\n";
   y += "# guess (stages/geometry/points/scene_survey.h): check them by drawing the scan,\n";
   y += "#   pointbake run configs/workflows/point_transfer.yaml --scene THIS_FILE --until "

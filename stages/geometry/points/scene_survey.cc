@@ -3,9 +3,13 @@
 #include <Eigen/Eigenvalues>
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
+#include <optional>
+#include <string>
 
 #include "stages/geometry/core/vec3.h"
+#include "stages/geometry/points/enclosure.h"
 #include "stages/geometry/points/spacing.h"
 
 namespace pb {
@@ -41,6 +45,113 @@ double Quantile(std::vector<double>& values, double q) {
   return values[k];
 }
 
+// The points around an eye, binned by azimuth about up (10° bins), for the
+// densest 60° sectors of them.
+class Panorama {
+ public:
+  struct Sector {
+    double azimuth = 0, elevation = 0, distance = 0;  // center; the points' medians
+    double share = 0;                                 // of the points looked at
+  };
+  // The points `select(i)` picks, every step-th of them so that at most
+  // ~200,000 are looked at.
+  template <typename Select>
+  Panorama(const PointCloud& cloud, const Vec3& eye, const Vec3& up, const Vec3& e1, const Vec3& e2,
+           size_t selected, Select select) {
+    const size_t step = std::max<size_t>(1, selected / 200000);
+    size_t seen = 0;
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      if (!select(i) || seen++ % step != 0) continue;
+      const Vec3 p = {cloud.origin[0] + cloud.positions[3 * i],
+                      cloud.origin[1] + cloud.positions[3 * i + 1],
+                      cloud.origin[2] + cloud.positions[3 * i + 2]};
+      const Vec3 v = Sub(p, eye);
+      const double h1 = Dot(v, e1), h2 = Dot(v, e2), vertical = Dot(v, up);
+      const double horizontal = std::hypot(h1, h2);
+      if (horizontal == 0 && vertical == 0) continue;
+      azimuth_.push_back(std::atan2(h2, h1));
+      elevation_.push_back(std::atan2(vertical, horizontal));
+      distance_.push_back(std::sqrt(Dot(v, v)));
+      ++histogram_[BinOf(azimuth_.back())];
+    }
+  }
+  bool empty() const { return azimuth_.empty(); }
+
+  // The densest sector (kMostPoints), or the one whose points lie farthest
+  // (kFarthest: the largest median distance, of the sectors holding at
+  // least 1 % of the points), whose center lies at least `apart_deg` in
+  // azimuth from each of `others`; nothing if no such sector has a point.
+  enum Rank { kMostPoints, kFarthest };
+  std::optional<Sector> Best(Rank rank, const std::vector<Sector>& others = {},
+                             double apart_deg = 0) const {
+    std::optional<Sector> best;
+    size_t best_count = 0;
+    for (int first = 0; first < kBins; ++first) {
+      const double center = CenterOf(first);
+      const bool near_other = std::any_of(others.begin(), others.end(), [&](const Sector& other) {
+        return std::abs(std::remainder(center - other.azimuth, 2 * M_PI)) <
+               apart_deg * M_PI / 180 - 1e-9;
+      });
+      if (near_other) continue;
+      size_t count = 0;
+      for (int k = 0; k < kSectorBins; ++k) count += histogram_[(first + k) % kBins];
+      if (count == 0) continue;
+      if (rank == kMostPoints) {
+        if (count > best_count) best_count = count, best = SectorAt(first, count);
+        continue;
+      }
+      if (count * 100 < azimuth_.size()) continue;
+      const Sector sector = SectorAt(first, count);
+      if (!best || sector.distance > best->distance) best = sector;
+    }
+    return best;
+  }
+
+ private:
+  static constexpr int kBins = 36;       // 10° each
+  static constexpr int kSectorBins = 6;  // 60°
+  // The sector of kSectorBins bins from `first`, holding `count` points.
+  Sector SectorAt(int first, size_t count) const {
+    std::vector<double> elevation, distance;
+    for (size_t j = 0; j < azimuth_.size(); ++j) {
+      const int offset = (BinOf(azimuth_[j]) - first + kBins) % kBins;
+      if (offset < kSectorBins) elevation.push_back(elevation_[j]), distance.push_back(distance_[j]);
+    }
+    Sector sector;
+    sector.azimuth = CenterOf(first);
+    sector.elevation = Quantile(elevation, 0.5);
+    sector.distance = Quantile(distance, 0.5);
+    sector.share = double(count) / double(azimuth_.size());
+    return sector;
+  }
+  static int BinOf(double a) { return std::min(kBins - 1, int((a + M_PI) / (2 * M_PI) * kBins)); }
+  static double CenterOf(int first) { return -M_PI + (first + kSectorBins / 2.0) * 2 * M_PI / kBins; }
+  std::array<size_t, kBins> histogram_{};
+  std::vector<double> azimuth_, elevation_, distance_;
+};
+
+// A view from `eye`, raised by `raise` times the sector's distance, toward
+// the sector.
+SurveyViewpoint ViewToward(const Vec3& eye, double raise, const Panorama::Sector& sector,
+                           const Vec3& up, const Vec3& e1, const Vec3& e2, double fov_deg) {
+  const Vec3 look = Direction(e1, e2, up, sector.azimuth, sector.elevation);
+  SurveyViewpoint view;
+  view.eye = Add(eye, Scale(up, raise * sector.distance));
+  view.target = Add(eye, Scale(look, sector.distance));
+  // Looking (nearly) along up, the camera's up is the sector's horizontal.
+  view.up = std::abs(Dot(look, up)) < 0.95 ? up : Direction(e1, e2, up, sector.azimuth, 0.0);
+  view.fov_deg = fov_deg;
+  return view;
+}
+
+std::string Percent(double share) { return std::to_string(int(std::lround(100.0 * share))); }
+
+std::string Meters(double m) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.1f m", m);
+  return text;
+}
+
 // The station views: from each of the stations that saw the most points,
 // toward the densest 60° sector of azimuths around up.
 void StationViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1, const Vec3& e2,
@@ -60,72 +171,27 @@ void StationViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1, const
   survey->stations =
       size_t(std::count_if(counts.begin(), counts.end(), [](size_t c) { return c > 0; }));
 
-  constexpr int kBins = 36;       // 10° each
-  constexpr int kSectorBins = 6;  // 60°
   int made = 0;
   for (size_t station : order) {
     if (made == options.max_station_views || counts[station] == 0) break;
     const Vec3& s = cloud.stations[station];
-    // Every point of the station, subsampled to at most ~200,000.
-    const size_t step = std::max<size_t>(1, counts[station] / 200000);
-    std::vector<double> azimuth, elevation, distance;
-    size_t seen = 0;
-    for (size_t i = 0; i < n; ++i) {
-      if (cloud.has_stations() && cloud.station_ids[i] != station) continue;
-      if (seen++ % step != 0) continue;
-      const Vec3 p = {cloud.origin[0] + cloud.positions[3 * i],
-                      cloud.origin[1] + cloud.positions[3 * i + 1],
-                      cloud.origin[2] + cloud.positions[3 * i + 2]};
-      const Vec3 v = Sub(p, s);
-      const double h1 = Dot(v, e1), h2 = Dot(v, e2), vertical = Dot(v, up);
-      const double horizontal = std::hypot(h1, h2);
-      if (horizontal == 0 && vertical == 0) continue;
-      azimuth.push_back(std::atan2(h2, h1));
-      elevation.push_back(std::atan2(vertical, horizontal));
-      distance.push_back(std::sqrt(Dot(v, v)));
-    }
-    if (azimuth.empty()) continue;
-    std::array<size_t, kBins> histogram{};
-    auto bin_of = [&](double a) {
-      return std::min(kBins - 1, int((a + M_PI) / (2 * M_PI) * kBins));
-    };
-    for (double a : azimuth) ++histogram[bin_of(a)];
-    int best = 0;
-    size_t best_count = 0;
-    for (int first = 0; first < kBins; ++first) {
-      size_t count = 0;
-      for (int k = 0; k < kSectorBins; ++k) count += histogram[(first + k) % kBins];
-      if (count > best_count) best_count = count, best = first;
-    }
-    // The sector's points: their median elevation and distance.
-    std::vector<double> sector_elevation, sector_distance;
-    for (size_t j = 0; j < azimuth.size(); ++j) {
-      const int offset = (bin_of(azimuth[j]) - best + kBins) % kBins;
-      if (offset < kSectorBins)
-        sector_elevation.push_back(elevation[j]), sector_distance.push_back(distance[j]);
-    }
-    const double center_azimuth = -M_PI + (best + kSectorBins / 2.0) * 2 * M_PI / kBins;
-    const double median_elevation = Quantile(sector_elevation, 0.5);
-    const double median_distance = Quantile(sector_distance, 0.5);
-    if (std::abs(median_elevation) > 60.0 * M_PI / 180)
+    const Panorama panorama(cloud, s, up, e1, e2, counts[station], [&](size_t i) {
+      return !cloud.has_stations() || cloud.station_ids[i] == station;
+    });
+    const std::optional<Panorama::Sector> sector = panorama.Best(Panorama::kMostPoints);
+    if (!sector) continue;
+    if (std::abs(sector->elevation) > 60.0 * M_PI / 180)
       survey->warnings.push_back(
           "most points of station " + std::to_string(station) + " lie " +
-          std::to_string(int(std::lround(std::abs(median_elevation) * 180 / M_PI))) + " degrees " +
-          (median_elevation > 0 ? "above" : "below") +
+          std::to_string(int(std::lround(std::abs(sector->elevation) * 180 / M_PI))) +
+          " degrees " + (sector->elevation > 0 ? "above" : "below") +
           " its horizon: is the up direction right? (a camera frame's is often -y)");
-    const Vec3 look = Direction(e1, e2, up, center_azimuth, median_elevation);
-    SurveyViewpoint view;
+    SurveyViewpoint view = ViewToward(s, 0.05, *sector, up, e1, e2, options.fov_deg);
     view.name = "station" + std::to_string(made + 1);
-    view.eye = Add(s, Scale(up, 0.05 * median_distance));
-    view.target = Add(s, Scale(look, median_distance));
-    // Looking (nearly) along up, the camera's up is the sector's horizontal.
-    view.up = std::abs(Dot(look, up)) < 0.95 ? up : Direction(e1, e2, up, center_azimuth, 0.0);
-    view.fov_deg = options.fov_deg;
-    view.why =
-        "from scanner station " + std::to_string(station) + " (" + std::to_string(counts[station]) +
-        " points), toward the 60-degree sector it saw most of (" +
-        std::to_string(int(std::lround(100.0 * double(best_count) / double(azimuth.size())))) +
-        " % of its points), raised 5 % of the distance";
+    view.why = "from scanner station " + std::to_string(station) + " (" +
+               std::to_string(counts[station]) +
+               " points), toward the 60-degree sector it saw most of (" + Percent(sector->share) +
+               " % of its points), raised 5 % of the distance";
     survey->viewpoints.push_back(view);
     ++made;
   }
@@ -146,6 +212,38 @@ void StationViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1, const
       first.name +
       "'s view turned 40 degrees about its target and raised 15: what the scanner did not see";
   survey->viewpoints.push_back(oblique);
+}
+
+// Three level views from the place deepest in the space a scan without
+// stations encloses (a room merged into one file): toward the 60° sector
+// whose points lie farthest, then the farthest at least 120° from it, then
+// the farthest at least 90° from both.
+void InteriorViews(const PointCloud& cloud, const EnclosedSpace& space, const Vec3& up,
+                   const Vec3& e1, const Vec3& e2, const SceneSurveyOptions& options,
+                   SceneSurvey* survey) {
+  const std::array<double, 3> deepest = space.Deepest();
+  const Vec3 eye = Add(cloud.origin, deepest);
+  const Panorama panorama(cloud, eye, up, e1, e2, cloud.size(), [](size_t) { return true; });
+  std::vector<Panorama::Sector> sectors;
+  for (int k = 0; k < 3; ++k) {
+    // 120° apart leaves room for a third view only when the first two are
+    // about 120° apart too; the third keeps 90°.
+    std::optional<Panorama::Sector> sector =
+        panorama.Best(Panorama::kFarthest, sectors, k < 2 ? 120.0 : 90.0);
+    if (!sector) break;
+    sectors.push_back(*sector);
+    sector->elevation = 0;  // level: walls, floor and ceiling in one frame
+    SurveyViewpoint view = ViewToward(eye, 0.0, *sector, up, e1, e2, options.fov_deg);
+    view.name = "inside" + std::to_string(k + 1);
+    view.why = (k == 0 ? std::string("from the place deepest in the free space the scan encloses "
+                                     "(no stations: a room merged into one file), level, toward "
+                                     "the 60-degree sector whose points lie farthest (")
+                       : "from there, level, toward the farthest sector at least " +
+                             std::string(k < 2 ? "120" : "90") + " degrees from the views before (") +
+               Percent(sector->share) + " % of the points, their median " +
+               Meters(sector->distance) + " away)";
+    survey->viewpoints.push_back(view);
+  }
 }
 
 // Three views of a scan without stations: face-on to its main plane (the
@@ -289,6 +387,12 @@ Expected<SceneSurvey> SurveyScene(const PointCloud& cloud, const SceneSurveyOpti
   const Vec3 e1 = Normalized(Sub(axis, Scale(up, Dot(axis, up))));
   const Vec3 e2 = Cross(up, e1);
   if (!cloud.stations.empty()) StationViews(cloud, up, e1, e2, options, &survey);
+  if (survey.viewpoints.empty()) {
+    // No stations: a room merged into one file is seen from inside.
+    PB_ASSIGN_OR_RETURN(const EnclosedSpace space, EnclosedSpace::Find(cloud));
+    survey.enclosed_volume_m3 = space.volume_m3();
+    if (!space.empty()) InteriorViews(cloud, space, up, e1, e2, options, &survey);
+  }
   if (survey.viewpoints.empty()) FaceOnViews(cloud, up, e1, options, &survey);
   return survey;
 }

@@ -42,7 +42,14 @@
 //     little (where a model invents or loses surface). Then one oblique
 //     view: the first station's view turned 40° about its target and raised,
 //     which shows what the scanner did not see (the sides Poisson closes).
-//   * A scan without stations (a merged or photogrammetric cloud, an
+//   * A scan without stations that encloses free space (enclosure.h: a
+//     room merged into one file, seen from inside): three level views from
+//     the enclosed place farthest from the scan, toward the 60° sector of
+//     azimuths whose points lie farthest (median distance, of the sectors
+//     holding at least 1 % of them: down the room's length, walls, floor
+//     and ceiling in the frame), then toward the farthest at least 120°
+//     from it and the farthest at least 90° from both.
+//   * Any other scan without stations (a merged or photogrammetric cloud, an
 //     object): a front view face-on to its main plane (the principal axis
 //     of least variance of the points, from the side their normals face if
 //     their mean leans at least 0.1 along it, else from above the horizon),
@@ -92,6 +99,7 @@ struct SceneSurvey {
   double spacing_m = 0.0;  // median nearest-neighbour distance (MedianSpacing)
   Bounds robust_bounds;    // absolute; per axis the 1st..99th percentile of the points
   size_t stations = 0;     // stations with at least one point
+  double enclosed_volume_m3 = 0.0;  // without stations: the free space enclosed (enclosure.h)
   int depth_high = 0, depth_low = 0;
   int64_t faces_high = 0, faces_low = 0;
   int texture = 0, frame_size = 0;

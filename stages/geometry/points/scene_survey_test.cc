@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "stages/geometry/testing/clouds.h"
+
 namespace pb {
 namespace {
 
@@ -187,6 +189,49 @@ TEST(SceneSurveyTest, WithoutStationsFaceOnAndTurnedEitherWay) {
   EXPECT_NEAR(survey->viewpoints[1].eye[1], survey->viewpoints[2].eye[1], 1e-3);
   EXPECT_NEAR(survey->viewpoints[1].eye[0] - 10.0, -(survey->viewpoints[2].eye[0] - 10.0), 1e-3);
   EXPECT_LT(survey->viewpoints[1].eye[0], 10.0 - 1.0);
+}
+
+// A room merged into one cloud (no stations): three level views from inside
+// it, from one place away from the walls, looking about the room.
+TEST(SceneSurveyTest, WithoutStationsARoomIsSeenFromInside) {
+  PointCloud room = testing::RoomWithTable(6.0, 4.5, 1.0, 3);
+  room.origin = {500000.0, 4000000.0, 120.0};
+  Expected<SceneSurvey> survey = SurveyScene(room);
+  ASSERT_TRUE(survey.ok()) << survey.status().message();
+  EXPECT_GT(survey->enclosed_volume_m3, 8.0);
+  ASSERT_EQ(survey->viewpoints.size(), 3u);
+  const Vec3 eye = survey->viewpoints[0].eye;
+  EXPECT_GT(eye[0] - room.origin[0], 1.0);
+  EXPECT_LT(eye[0] - room.origin[0], 5.0);
+  EXPECT_GT(eye[1] - room.origin[1], 1.0);
+  EXPECT_LT(eye[1] - room.origin[1], 3.5);
+  EXPECT_GT(eye[2] - room.origin[2], 1.0);
+  EXPECT_LT(eye[2] - room.origin[2], 2.0);
+  for (int k = 0; k < 3; ++k) {
+    const SurveyViewpoint& view = survey->viewpoints[k];
+    EXPECT_EQ(view.name, "inside" + std::to_string(k + 1));
+    EXPECT_LT(Distance(view.eye, eye), 1e-9) << view.name;
+    EXPECT_NEAR(view.up[2], 1.0, 1e-9);
+    EXPECT_NEAR(view.target[2], eye[2], 1e-6) << view.name;  // level
+    // Looking at a wall: the target about as far as the room's walls.
+    EXPECT_GT(Distance(view.target, eye), 1.0) << view.name;
+    EXPECT_LT(Distance(view.target, eye), 5.0) << view.name;
+    for (int j = 0; j < k; ++j) {  // turned at least 120°, the third 90°
+      const SurveyViewpoint& other = survey->viewpoints[j];
+      const double a = std::atan2(view.target[1] - eye[1], view.target[0] - eye[0]);
+      const double b = std::atan2(other.target[1] - eye[1], other.target[0] - eye[0]);
+      EXPECT_GT(std::abs(std::remainder(a - b, 2 * M_PI)), (k < 2 ? 2 * M_PI / 3 : M_PI / 2) - 1e-6)
+          << view.name;
+    }
+  }
+  // The first view looks down the room's length (x, 6 m; y is 4.5 m).
+  const SurveyViewpoint& first = survey->viewpoints[0];
+  EXPECT_GT(std::abs(first.target[0] - eye[0]), std::abs(first.target[1] - eye[1]));
+  // An object has no inside to stand in: the face-on views.
+  survey = SurveyScene(Sphere());
+  ASSERT_TRUE(survey.ok());
+  EXPECT_EQ(survey->enclosed_volume_m3, 0.0);
+  EXPECT_EQ(survey->viewpoints[0].name, "front");
 }
 
 TEST(SceneSurveyTest, WithoutStationsFromTheSideTheNormalsFace) {
