@@ -75,7 +75,6 @@ class Panorama {
       ++histogram_[BinOf(azimuth_.back())];
     }
   }
-  bool empty() const { return azimuth_.empty(); }
 
   // The densest sector (kMostPoints), or the one whose points lie farthest
   // (kFarthest: the largest median distance, of the sectors holding at
