@@ -102,8 +102,8 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
        Length(extent[2]) + " (1st to 99th percentile per axis).\n";
   if (survey.enclosed_volume_m3 > 0)
     y += "# The points enclose " + Number(std::round(survey.enclosed_volume_m3)) +
-         " m3 of free space (at least 0.75 m from them): read as an interior seen from\n"
-         "# inside, as points.normals (interior: auto) will orient its normals.\n";
+         " m3 of free space (0.75 m or more from them): an interior,\n"
+         "# viewed from inside; points.normals (interior: auto) faces its normals in.\n";
   y += "# The parameters follow the shipped scenes' proportions and the viewpoints are a\n";
   y += "# guess (stages/geometry/points/scene_survey.h): check them by drawing the scan,\n";
   y += "#   pointbake run configs/workflows/point_transfer.yaml --scene THIS_FILE --until "
