@@ -19,8 +19,8 @@
 //               seeded the same way. Right for closed objects (a sphere gets
 //               outward normals). An interior scanned from inside and
 //               merged without its stations (a room as one PLY) would come
-//               out inside-out, so `interior` decides each part's side:
-//               kAuto looks for the free space the scan encloses
+//               out inside-out, so `interior` decides the sides: kAuto
+//               looks for the free space the scan encloses
 //               (enclosure.h: a room's, not an object's inside); every point
 //               with one side in it and the other not (probes 1.5 voxels
 //               ahead and behind: a wall's, a floor's, a table's in the
