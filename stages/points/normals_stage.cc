@@ -1,5 +1,7 @@
 // points.normals: k-NN PCA normals with orientation (stages/geometry/points/normals.h).
+#include <initializer_list>
 #include <string>
+#include <utility>
 
 #include "stages/geometry/points/normals.h"
 #include "stages/params.h"
@@ -43,14 +45,18 @@ constexpr const char* kSchema = R"({
   }
 })";
 
-Expected<NormalOrientation> ParseOrientation(const std::string& name) {
-  if (name == "auto") return NormalOrientation::kAuto;
-  if (name == "stations") return NormalOrientation::kStations;
-  if (name == "input") return NormalOrientation::kInput;
-  if (name == "propagate") return NormalOrientation::kPropagate;
-  if (name == "none") return NormalOrientation::kNone;
-  return Status::Invalid(std::string(kId) + ": parameter 'orientation' must be one of auto, stations, "
-                         "input, propagate, none; got '" + name + "'");
+// The value named `value` of the choice parameter `name`, or Status::Invalid
+// listing the names.
+template <typename T>
+Expected<T> Choice(const char* name, const std::string& value,
+                   std::initializer_list<std::pair<const char*, T>> choices) {
+  std::string names;
+  for (const auto& [text, choice] : choices) {
+    if (value == text) return choice;
+    names += (names.empty() ? "" : ", ") + std::string(text);
+  }
+  return Status::Invalid(std::string(kId) + ": parameter '" + name + "' must be one of " + names +
+                         "; got '" + value + "'");
 }
 
 const char* OrientationName(NormalOrientation orientation) {
@@ -67,27 +73,25 @@ const char* OrientationName(NormalOrientation orientation) {
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {3, 100}));
   PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation"));
-  PB_ASSIGN_OR_RETURN(const NormalOrientation orientation, ParseOrientation(orientation_name));
+  PB_ASSIGN_OR_RETURN(const NormalOrientation orientation,
+                      Choice<NormalOrientation>("orientation", orientation_name,
+                                                {{"auto", NormalOrientation::kAuto},
+                                                 {"stations", NormalOrientation::kStations},
+                                                 {"input", NormalOrientation::kInput},
+                                                 {"propagate", NormalOrientation::kPropagate},
+                                                 {"none", NormalOrientation::kNone}}));
   PB_ASSIGN_OR_RETURN(const std::string interior_name, StringParam(ctx, kId, "interior"));
-  NormalInterior interior = NormalInterior::kAuto;
-  if (interior_name == "yes") {
-    interior = NormalInterior::kYes;
-  } else if (interior_name == "no") {
-    interior = NormalInterior::kNo;
-  } else if (interior_name != "auto") {
-    return Status::Invalid(std::string(kId) + ": parameter 'interior' must be one of auto, yes, "
-                           "no; got '" + interior_name + "'");
-  }
+  PB_ASSIGN_OR_RETURN(const NormalInterior interior,
+                      Choice<NormalInterior>("interior", interior_name,
+                                             {{"auto", NormalInterior::kAuto},
+                                              {"yes", NormalInterior::kYes},
+                                              {"no", NormalInterior::kNo}}));
   PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
-  NormalImplementation solver = NormalImplementation::kOwn;
-  if (implementation == "pcl") {
-    solver = NormalImplementation::kPcl;
-  } else if (implementation == "open3d") {
-    solver = NormalImplementation::kOpen3d;
-  } else if (implementation != "own") {
-    return Status::Invalid(std::string(kId) + ": parameter 'implementation' must be one of own, "
-                           "pcl, open3d; got '" + implementation + "'");
-  }
+  PB_ASSIGN_OR_RETURN(const NormalImplementation solver,
+                      Choice<NormalImplementation>("implementation", implementation,
+                                                   {{"own", NormalImplementation::kOwn},
+                                                    {"pcl", NormalImplementation::kPcl},
+                                                    {"open3d", NormalImplementation::kOpen3d}}));
   PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.3));
   PointCloud& cloud = input.cloud;
   NormalReport report;

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <string>
+#include <vector>
 
 namespace pb {
 
@@ -40,6 +41,29 @@ Bounds AbsoluteBounds(const PointCloud& cloud) {
   for (int axis = 0; axis < 3; ++axis) {
     bounds.min_m[axis] += cloud.origin[axis];
     bounds.max_m[axis] += cloud.origin[axis];
+  }
+  return bounds;
+}
+
+Bounds RobustLocalBounds(const PointCloud& cloud, double fraction) {
+  Bounds bounds;
+  bounds.min_m.fill(std::numeric_limits<double>::infinity());
+  bounds.max_m.fill(-std::numeric_limits<double>::infinity());
+  const size_t n = cloud.size();
+  if (n == 0) return bounds;
+  const size_t step = std::max<size_t>(1, n / 1000000);
+  std::vector<float> values;
+  values.reserve(n / step + 1);
+  auto quantile = [&values](double q) {
+    const size_t k = std::min(values.size() - 1, size_t(q * double(values.size() - 1) + 0.5));
+    std::nth_element(values.begin(), values.begin() + k, values.end());
+    return double(values[k]);
+  };
+  for (int axis = 0; axis < 3; ++axis) {
+    values.clear();
+    for (size_t i = 0; i < n; i += step) values.push_back(cloud.positions[3 * i + axis]);
+    bounds.min_m[axis] = quantile(fraction);
+    bounds.max_m[axis] = quantile(1.0 - fraction);
   }
   return bounds;
 }

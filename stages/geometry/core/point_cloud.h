@@ -58,6 +58,12 @@ Bounds BoundsOf(std::span<const float> positions_xyz);
 // Bounds relative to the cloud's origin / in absolute coordinates.
 Bounds LocalBounds(const PointCloud& cloud);
 Bounds AbsoluteBounds(const PointCloud& cloud);
+// Robust bounds relative to the origin: per axis the `fraction` and
+// 1 - `fraction` quantiles of the positions (the k = round(q (m - 1))-th
+// smallest), over every step-th point so that at most ~10^6 are sorted, step
+// = max(1, size / 10^6). Strays and a far field of a few points do not
+// stretch them. Empty bounds for an empty cloud.
+Bounds RobustLocalBounds(const PointCloud& cloud, double fraction);
 
 // A cloud read in another length unit, in meters: origin, positions and
 // stations times `meters_per_unit` (base/units.h); normals are directions

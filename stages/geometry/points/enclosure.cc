@@ -79,12 +79,6 @@ size_t Fill(const Grid& grid, uint8_t from, uint8_t to, std::vector<uint32_t>& q
   return queue.size();
 }
 
-double Quantile(std::vector<float>& values, double q) {
-  const size_t k = std::min(values.size() - 1, size_t(q * double(values.size() - 1) + 0.5));
-  std::nth_element(values.begin(), values.begin() + k, values.end());
-  return values[k];
-}
-
 }  // namespace
 
 Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const EnclosureOptions& options) {
@@ -95,16 +89,9 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
   const size_t n = cloud.size();
   const float* positions = cloud.positions.data();
 
-  // The robust box, from at most ~10^6 points.
-  const size_t step = std::max<size_t>(1, n / 1000000);
-  std::array<double, 3> lo{}, hi{};
-  for (int axis = 0; axis < 3; ++axis) {
-    std::vector<float> values;
-    values.reserve(n / step + 1);
-    for (size_t i = 0; i < n; i += step) values.push_back(positions[3 * i + axis]);
-    lo[axis] = Quantile(values, 0.005);
-    hi[axis] = Quantile(values, 0.995);
-  }
+  const Bounds robust = RobustLocalBounds(cloud, 0.005);
+  const std::array<double, 3>& lo = robust.min_m;
+  const std::array<double, 3>& hi = robust.max_m;
   const double longest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
   const double margin = 0.02 * longest + options.gap_m;
   EnclosedSpace space;

@@ -84,7 +84,8 @@ class Panorama {
   std::optional<Sector> Best(Rank rank, const std::vector<Sector>& others = {},
                              double apart_deg = 0) const {
     std::optional<Sector> best;
-    size_t best_count = 0;
+    int most_first = -1;
+    size_t most_count = 0;
     for (int first = 0; first < kBins; ++first) {
       const double center = CenterOf(first);
       const bool near_other = std::any_of(others.begin(), others.end(), [&](const Sector& other) {
@@ -96,13 +97,14 @@ class Panorama {
       for (int k = 0; k < kSectorBins; ++k) count += histogram_[(first + k) % kBins];
       if (count == 0) continue;
       if (rank == kMostPoints) {
-        if (count > best_count) best_count = count, best = SectorAt(first, count);
+        if (count > most_count) most_count = count, most_first = first;
         continue;
       }
       if (count * 100 < azimuth_.size()) continue;
       const Sector sector = SectorAt(first, count);
       if (!best || sector.distance > best->distance) best = sector;
     }
+    if (most_first >= 0) best = SectorAt(most_first, most_count);
     return best;
   }
 
@@ -362,16 +364,12 @@ Expected<SceneSurvey> SurveyScene(const PointCloud& cloud, const SceneSurveyOpti
   spacing_options.sample = options.spacing_sample;
   PB_ASSIGN_OR_RETURN(survey.spacing_m, MedianSpacing(cloud, spacing_options));
 
-  // The robust box: per axis the 1st and 99th percentiles (strays and a far
-  // field of a few points do not stretch it), over at most ~10^6 points.
+  // The robust box: per axis the 1st and 99th percentiles.
   const size_t n = cloud.size();
-  const size_t step = std::max<size_t>(1, n / 1000000);
+  survey.robust_bounds = RobustLocalBounds(cloud, 0.01);
   for (int axis = 0; axis < 3; ++axis) {
-    std::vector<double> values;
-    values.reserve(n / step + 1);
-    for (size_t i = 0; i < n; i += step) values.push_back(double(cloud.positions[3 * i + axis]));
-    survey.robust_bounds.min_m[axis] = cloud.origin[axis] + Quantile(values, 0.01);
-    survey.robust_bounds.max_m[axis] = cloud.origin[axis] + Quantile(values, 0.99);
+    survey.robust_bounds.min_m[axis] += cloud.origin[axis];
+    survey.robust_bounds.max_m[axis] += cloud.origin[axis];
   }
   const Vec3 extent = survey.robust_bounds.extent_m();
   const double longest = std::max({extent[0], extent[1], extent[2]});
