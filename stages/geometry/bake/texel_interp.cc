@@ -14,7 +14,10 @@
 //   - a face whose UV corners are collinear has no 2-D triangulation: it
 //     takes the nearest sample's value;
 //   - normals are re-normalized; a zero interpolated normal takes the
-//     corners' interpolated normal, then (0, 0, 1).
+//     corners' interpolated normal, then (0, 0, 1);
+//   - with corner_samples false (bake.from_points' `neighbors`, whose
+//     samples then include the neighbouring faces' points) the corners are
+//     left out unless the points are fewer than three or on one line.
 // kNearest, kIdw and kSplat are the campaign's alternatives; kSplat fills
 // the texels no footprint covers by pull-push (Gortler et al. 1996, "The
 // Lumigraph", sec. 3.3; Grossman & Dally 1998, "Point Sample Rendering").
@@ -291,8 +294,10 @@ class PullPush {
 // Everything kept between faces.
 struct InterpScratch {
   // Samples: the three corners (indices 0-2), then the finite points in the
-  // order given.
+  // order given; the interpolation uses those from `first` on (3: the
+  // corners are left out, TexelInterpolationOptions::corner_samples).
   std::vector<Position> positions;
+  size_t first = 0;
   std::vector<Value> values;
   std::vector<Value> texel_values;  // per texel, before normalization
 
@@ -335,22 +340,24 @@ void WriteOut(const Value& v, const Value& corner_blend, std::array<float, 3>& c
 }
 
 void InterpolateNearest(InterpScratch& s, std::span<const BakeTexel> texels) {
-  s.grid.Build(s.positions, 2);
+  const std::span<const Position> used = std::span<const Position>(s.positions).subspan(s.first);
+  s.grid.Build(used, 2);
   for (size_t i = 0; i < texels.size(); ++i) {
-    s.grid.Nearest(s.positions, texels[i].s, texels[i].t, 1, s.neighbors);
-    s.texel_values[i] = s.values[s.neighbors[0].index];
+    s.grid.Nearest(used, texels[i].s, texels[i].t, 1, s.neighbors);
+    s.texel_values[i] = s.values[s.first + s.neighbors[0].index];
   }
 }
 
 void InterpolateIdw(InterpScratch& s, std::span<const BakeTexel> texels,
                     const TexelInterpolationOptions& options) {
-  size_t k = size_t(std::clamp<int>(options.idw_neighbors, 1, int(s.positions.size())));
+  const std::span<const Position> used = std::span<const Position>(s.positions).subspan(s.first);
+  size_t k = size_t(std::clamp<int>(options.idw_neighbors, 1, int(used.size())));
   double power = std::isfinite(options.idw_power) ? std::max(0.0f, options.idw_power) : 2.0;
-  s.grid.Build(s.positions, 2);
+  s.grid.Build(used, 2);
   for (size_t i = 0; i < texels.size(); ++i) {
-    s.grid.Nearest(s.positions, texels[i].s, texels[i].t, k, s.neighbors);
+    s.grid.Nearest(used, texels[i].s, texels[i].t, k, s.neighbors);
     if (s.neighbors[0].d2 == 0) {
-      s.texel_values[i] = s.values[s.neighbors[0].index];
+      s.texel_values[i] = s.values[s.first + s.neighbors[0].index];
       continue;
     }
     Value sum{};
@@ -358,7 +365,7 @@ void InterpolateIdw(InterpScratch& s, std::span<const BakeTexel> texels,
     for (const Neighbor& n : s.neighbors) {
       double w = power == 2 ? 1 / n.d2 : std::pow(n.d2, -0.5 * power);
       weight_sum += w;
-      for (int c = 0; c < 6; ++c) sum[c] += w * s.values[n.index][c];
+      for (int c = 0; c < 6; ++c) sum[c] += w * s.values[s.first + n.index][c];
     }
     for (int c = 0; c < 6; ++c) s.texel_values[i][c] = sum[c] / weight_sum;
   }
@@ -400,7 +407,7 @@ void InterpolateSplat(InterpScratch& s, std::span<const BakeTexel> texels,
   for (size_t i = 0; i < texels.size(); ++i) {
     if (s.texel_weights[i] > 0) s.pull_push.Add(texels[i].x, texels[i].y, s.texel_values[i]);
   }
-  for (int c = 0; c < 3; ++c) s.pull_push.Add(s.positions[c][0], s.positions[c][1], s.values[c]);
+  for (size_t c = s.first; c < 3; ++c) s.pull_push.Add(s.positions[c][0], s.positions[c][1], s.values[c]);
   s.pull_push.Solve();
   for (size_t i = 0; i < texels.size(); ++i) {
     if (s.texel_weights[i] == 0) s.texel_values[i] = s.pull_push.At(texels[i].x, texels[i].y);
@@ -468,15 +475,17 @@ void InterpolateDelaunay(InterpScratch& s, std::span<const BakeTexel> texels) {
   Delaunay& dt = s.triangulation;
   s.points.clear();
   for (const Position& p : s.positions) s.points.emplace_back(p[0], p[1]);
-  if (CGAL::orientation(s.points[0], s.points[1], s.points[2]) == CGAL::COLLINEAR) {
+  const bool corners_collinear =
+      CGAL::orientation(s.points[0], s.points[1], s.points[2]) == CGAL::COLLINEAR;
+  if (corners_collinear && s.first == 0) {
     InterpolateNearest(s, texels);
     return;
   }
 
-  // Corners first, so the hull is the face from the start, then the points
-  // in Morton order, so that each insertion starts its walk next to the
-  // previous one; a sample that lands on an existing vertex is averaged
-  // into it.
+  // Corners first (unless left out), so the hull is the face from the
+  // start, then the points in Morton order, so that each insertion starts
+  // its walk next to the previous one; a sample that lands on an existing
+  // vertex is averaged into it.
   dt.clear();
   s.vertex_values.clear();
   s.vertex_counts.clear();
@@ -496,8 +505,18 @@ void InterpolateDelaunay(InterpScratch& s, std::span<const BakeTexel> texels) {
     }
     hint = v->face();
   };
-  for (size_t i = 0; i < 3; ++i) insert(i);
+  for (size_t i = s.first; i < 3; ++i) insert(i);
   for (const auto& [code, i] : s.order) insert(i);
+  if (dt.dimension() < 2) {
+    // The points without the corners lie on one line: the corners join
+    // them, as they would have by default.
+    if (corners_collinear) {
+      InterpolateNearest(s, texels);
+      return;
+    }
+    hint = Delaunay::Face_handle();
+    for (size_t i = 0; i < 3; ++i) insert(i);
+  }
   for (size_t v = 0; v < s.vertex_values.size(); ++v) {
     if (s.vertex_counts[v] == 1) continue;
     for (double& x : s.vertex_values[v]) x /= s.vertex_counts[v];
@@ -565,6 +584,7 @@ void FaceInterpolator::Interpolate(const std::array<TexelSample, 3>& corners,
     return;
   }
 
+  s.first = !options.corner_samples && s.positions.size() >= 6 ? 3 : 0;
   s.texel_values.resize(texels.size());
   switch (options.mode) {
     case TexelInterpolation::kDelaunay:

@@ -46,6 +46,15 @@ struct TexelInterpolationOptions {
   // footprint is cut at 2 sigma. Texels no footprint covers are filled by
   // pull-push over the face's texel bounding box, the corners included.
   float splat_sigma_texels = 1;
+  // false: the corners are samples only for a face with fewer than three
+  // points, or whose points all lie on one line. For callers that pass the
+  // points of the neighbouring faces too (bake.from_points' `neighbors`),
+  // whose samples surround the face: the corners' values (a mesh's smooth
+  // vertex colors) would otherwise draw slivers of their own color around
+  // each corner, between it and the first points. Texels outside the
+  // points' hull take the nearest hull triangle's clamped interpolation
+  // (kDelaunay) or the nearest samples (the others).
+  bool corner_samples = true;
 };
 
 // One per thread: keeps scratch buffers between faces (CGAL's triangulation

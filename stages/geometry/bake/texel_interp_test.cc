@@ -486,5 +486,45 @@ TEST(TexelInterpTest, LargeAndSliverFacesStayWithinTheSampleRange) {
   }
 }
 
+TEST(TexelInterpTest, WithoutCornerSamplesThePointsAloneFillTheFace) {
+  auto corners = RightTriangle();  // corner colors red, green, blue at 100
+  auto texels = TexelsInside(corners);
+  const Vec3 gray{200, 200, 200};
+  // Three points in the middle of the face, gray: no texel may show a
+  // corner's color, in any mode, inside or outside the points' hull.
+  const std::vector<TexelSample> three = {Sample(3.5f, 3.5f, gray), Sample(9.5f, 3.5f, gray),
+                                          Sample(3.5f, 9.5f, gray)};
+  for (TexelInterpolation mode : kAllModes) {
+    FaceInterpolator interpolator;
+    TexelInterpolationOptions options;
+    options.mode = mode;
+    options.corner_samples = false;
+    Output out = Interp(interpolator, corners, three, texels, options);
+    for (size_t i = 0; i < texels.size(); ++i) {
+      for (int c = 0; c < 3; ++c) ASSERT_NEAR(out.colors[i][c], 200, 1e-3) << int(mode) << " texel " << i;
+    }
+    // The default keeps the corners: the texel on corner A is red's.
+    options.corner_samples = true;
+    out = Interp(interpolator, corners, three, texels, options);
+    size_t a = 0;
+    TexelAt(texels, 0, 0, &a);
+    EXPECT_NEAR(out.colors[a][0], 100, 1e-3) << int(mode);
+  }
+  // Fewer than three points, or three on one line: the corners are samples
+  // again (Delaunay), so the texel on corner A is red's.
+  const std::vector<TexelSample> two = {Sample(3.5f, 3.5f, gray), Sample(9.5f, 3.5f, gray)};
+  const std::vector<TexelSample> line = {Sample(3.5f, 3.5f, gray), Sample(6.5f, 3.5f, gray),
+                                         Sample(9.5f, 3.5f, gray)};
+  for (const auto* points : {&two, &line}) {
+    FaceInterpolator interpolator;
+    TexelInterpolationOptions options;
+    options.corner_samples = false;
+    Output out = Interp(interpolator, corners, *points, texels, options);
+    size_t a = 0;
+    TexelAt(texels, 0, 0, &a);
+    EXPECT_EQ(out.colors[a], (Vec3{100, 0, 0})) << points->size() << " points";
+  }
+}
+
 }  // namespace
 }  // namespace pb
