@@ -64,6 +64,7 @@ TEST_F(BakeStagesTest, SchemasAreWellFormed) {
       nlohmann::json::parse(registry_.Find("bake.from_points")->params_schema);
   EXPECT_EQ(schema["properties"]["interpolation"]["default"], "delaunay");
   EXPECT_EQ(schema["properties"]["max_distance"]["default"], 4);
+  EXPECT_EQ(schema["properties"]["neighbors"]["default"], true);
 }
 
 TEST_F(BakeStagesTest, VertexColorsWritesMeshWithTangentsAndBothMaps) {
@@ -96,6 +97,7 @@ TEST_F(BakeStagesTest, FromPointsBakesThePointsAndWritesExrOnRequest) {
                          {"max_distance", 4.0},
                          {"max_angle_deg", 90.0},
                          {"idw_neighbors", 4},
+                         {"neighbors", true},
                          {"splat_sigma", 1.0}});
   ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
   ctx.AddInput("points", "points", WriteInputPoints("points", Points()), {{"spacing_m", 1.0 / 64}});
@@ -110,6 +112,9 @@ TEST_F(BakeStagesTest, FromPointsBakesThePointsAndWritesExrOnRequest) {
   EXPECT_NEAR(normal->at_f32(10, 10, 2), 1.0f, 1e-6);
   EXPECT_EQ(ctx.counters_["points"], 64 * 64);
   EXPECT_EQ(ctx.counters_["points_assigned"], 64 * 64);
+  // Each of the two faces borrows the other's points near their diagonal.
+  EXPECT_GT(ctx.counters_["points_borrowed"], 0);
+  EXPECT_EQ(ctx.meta_["color"]["bake"]["neighbors"], true);
   EXPECT_TRUE(ctx.warnings_.empty());
   EXPECT_EQ(ctx.meta_["color"]["bake"]["spacing_source"], "meta");
   EXPECT_NEAR(ctx.meta_["color"]["bake"]["max_distance_m"].get<double>(), 4.0 / 64, 1e-12);
@@ -127,6 +132,7 @@ TEST_F(BakeStagesTest, FromPointsWarnsWhenNoPointReachesTheMesh) {
                          {"max_distance", 4.0},
                          {"max_angle_deg", 90.0},
                          {"idw_neighbors", 4},
+                         {"neighbors", true},
                          {"splat_sigma", 1.0}});
   ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
   ctx.AddInput("points", "points", WriteInputPoints("points", far), {{"spacing_m", 1.0 / 64}});
@@ -140,11 +146,13 @@ TEST_F(BakeStagesTest, FromPointsWarnsWhenNoPointReachesTheMesh) {
 TEST_F(BakeStagesTest, FromPointsMeasuresSpacingWhenTheMetaHasNone) {
   FakeContext ctx(dir_, {{"size", 16}, {"gutter", 0}, {"normal_format", "png"},
                          {"interpolation", "nearest"}, {"max_distance", 4.0},
-                         {"max_angle_deg", 90.0}, {"idw_neighbors", 4}, {"splat_sigma", 1.0}});
+                         {"max_angle_deg", 90.0}, {"idw_neighbors", 4}, {"neighbors", false},
+                         {"splat_sigma", 1.0}});
   ctx.AddInput("mesh", "mesh", WriteInputMesh("mesh", Square()));
   ctx.AddInput("points", "points", WriteInputPoints("points", Points()));
   ASSERT_TRUE(Run("bake.from_points", ctx).ok());
   EXPECT_EQ(ctx.meta_["color"]["bake"]["spacing_source"], "measured");
+  EXPECT_EQ(ctx.counters_["points_borrowed"], 0);  // neighbors: false
   EXPECT_NEAR(ctx.meta_["color"]["bake"]["spacing_m"].get<double>(), 1.0 / 64, 1e-4);
 }
 

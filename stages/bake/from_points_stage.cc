@@ -46,6 +46,11 @@ constexpr const char* kOwnProperties = R"(,
       "default": 4,
       "description": "idw: how many nearest samples are weighted (by 1 / distance^2)."
     },
+    "neighbors": {
+      "type": "boolean",
+      "default": true,
+      "description": "true (version 2): a face with points of its own also takes the points of the faces across its edges near the shared edge, unfolded into its UV plane, and its corners are samples only where it has fewer than three points of its own. false (the paper, version 1): from its own points and its corners, the mesh's smooth vertex colors, which draw slivers of their color from every vertex and along every edge where the points are sparse against the texels."
+    },
     "splat_sigma": {
       "type": "number",
       "exclusiveMinimum": 0,
@@ -78,6 +83,7 @@ Status Run(StageContext& ctx) {
                            ": max_distance and splat_sigma must be > 0 and max_angle_deg in (0, 180]");
   }
   from_points.interpolation.idw_neighbors = static_cast<int>(neighbors);
+  PB_ASSIGN_OR_RETURN(from_points.neighbors, BoolParam(ctx, kId, "neighbors"));
 
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.05));
   PB_ASSIGN_OR_RETURN(InputPoints points, ReadInputPoints(ctx, kId, 0.25));
@@ -122,9 +128,11 @@ Status Run(StageContext& ctx) {
   ctx.counter("points_too_far", static_cast<double>(assign.too_far));
   ctx.counter("points_wrong_angle", static_cast<double>(assign.wrong_angle));
   ctx.counter("faces_from_corners", static_cast<double>(report.faces_from_corners));
+  ctx.counter("points_borrowed", static_cast<double>(report.points_borrowed));
   PB_RETURN_IF_ERROR(WriteBakeOutputs(
       ctx, kId, result,
       {{"interpolation", interpolation},
+       {"neighbors", from_points.neighbors},
        {"spacing_m", spacing_m},
        {"spacing_source", spacing_source},
        {"max_distance_m", from_points.max_distance_m},
@@ -135,7 +143,8 @@ Status Run(StageContext& ctx) {
        {"points_wrong_angle", assign.wrong_angle},
        {"mean_distance_m", assign.mean_distance_m},
        {"faces_with_points", report.faces_with_points},
-       {"faces_from_corners", report.faces_from_corners}}));
+       {"faces_from_corners", report.faces_from_corners},
+       {"points_borrowed", report.points_borrowed}}));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -145,21 +154,25 @@ Status Run(StageContext& ctx) {
 StageType FromPointsBakeStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;
   type.summary = "Color and normal maps straight from the point cloud (the paper's detail transfer)";
   type.doc =
       "The paper's point-based detail transfer. Every point is assigned to the nearest face of "
       "the mesh within `max_distance` spacings whose normal is within `max_angle_deg` of the "
       "point's, at the nearest point of that face; its barycentric coordinates there place it "
-      "in the face's UV triangle. Each face's texels are then filled from its three corners "
-      "(the mesh's vertex colors and normals) plus its points, by `interpolation`. Point "
-      "normals go into the normal map in the output mesh's tangent frames; faces no point "
+      "in the face's UV triangle. Each face's texels are then filled from its points plus, with "
+      "`neighbors` (the default, version 2), the points of the faces across its edges that lie "
+      "within about two spacings of the shared edge, unfolded into its UV plane; its three "
+      "corners (the mesh's vertex colors and normals) are samples too without `neighbors` (the "
+      "paper) or where the face has fewer than three points of its own. By `interpolation`. "
+      "Point normals go into the normal map in the output mesh's tangent frames; faces no point "
       "reached are filled from their corners as bake.vertex_colors would. Then `gutter` passes "
       "of dilation. Distances are in multiples of the points' spacing (`spacing_m` in their "
       "meta, from synth.scan or points.spacing; measured here otherwise). Deterministic "
       "whatever the thread count.\n\n"
       "Counters: `points`, `points_assigned`, `points_too_far`, `points_wrong_angle`, "
-      "`faces_from_corners`, `covered_texels`, `edge_texels`, `gutter_texels`.";
+      "`faces_from_corners` (faces with no point of their own), `points_borrowed` "
+      "(points used by a face across an edge), `covered_texels`, `edge_texels`, `gutter_texels`.";
   type.params_schema = std::string(R"({"type": "object", "additionalProperties": false, "properties": {)") +
                        BakeCommonSchemaProperties() + kOwnProperties + "}}";
   type.inputs = {{"mesh", "mesh", "The low mesh, with uvs (and vertex colors for the corners) (mesh.ply).", false},

@@ -2,8 +2,9 @@
 // Transfer Algorithm"): scan points are assigned to the low mesh's faces
 // (point_assign.h), mapped into each face's UV triangle, and every texel of
 // the face is filled from the face's corners plus its points
-// (texel_interp.h). Faces no point reached are filled from their corners'
-// vertex colors, as bake.vertex_colors would.
+// (texel_interp.h), optionally with the points of its neighbours near their
+// shared edges (FromPointsOptions::neighbors). Faces no point reached are
+// filled from their corners' vertex colors, as bake.vertex_colors would.
 #pragma once
 
 #include <cstddef>
@@ -23,12 +24,27 @@ struct FromPointsOptions {
   // kSplat: a point's footprint sigma in meters (typically the scan's point
   // spacing); converted per face with its texel density.
   double splat_sigma_m = 0.002;
+  // false (the paper): a face's texels come from its corners and its own
+  // points. true: a face with points of its own also takes the points of
+  // the faces across its edges that lie near the shared edge (a band two
+  // point spacings wide), unfolded about that edge into the face's UV
+  // plane, and, with three or more points of its own, leaves its corners
+  // out. The paper's per-face triangulation ends at the face's edges, so
+  // its outermost points join the corners in long slivers in the corners'
+  // color (the mesh's smooth vertex colors): stars around every vertex and
+  // streaks along every edge wherever the points are sparse against the
+  // texels. A face with no point of its own keeps its corners' blend.
+  // Faces are neighbours when their edge's end points have the same
+  // position, so UV seams do not separate them; an edge of more than two
+  // faces has none.
+  bool neighbors = false;
 };
 
 struct FromPointsReport {
   AssignReport assign;
   size_t faces_with_points = 0;
   size_t faces_from_corners = 0;  // faces owning texels but no points
+  size_t points_borrowed = 0;     // `neighbors`: points used by a face across an edge
 };
 
 // Consumes the cloud (see AssignPointsToFaces for memory). The cloud needs

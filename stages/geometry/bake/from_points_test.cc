@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 
 namespace pb {
@@ -145,16 +146,155 @@ TEST(BakeFromPointsTest, ThreadCountDoesNotChangeBytes) {
   bake.gutter = 3;
   for (TexelInterpolation mode : {TexelInterpolation::kDelaunay, TexelInterpolation::kNearest,
                                   TexelInterpolation::kIdw, TexelInterpolation::kSplat}) {
-    bake.threads = 1;
-    PointCloud copy = cloud;
-    auto one = BakeFromPoints(plane, std::move(copy), bake, Options(mode));
-    bake.threads = 2;
-    copy = cloud;
-    auto two = BakeFromPoints(plane, std::move(copy), bake, Options(mode));
-    ASSERT_TRUE(one.ok() && two.ok());
-    EXPECT_EQ(one->maps.color.data, two->maps.color.data) << int(mode);
-    EXPECT_EQ(one->maps.normal.data, two->maps.normal.data) << int(mode);
+    for (bool neighbors : {false, true}) {
+      FromPointsOptions options = Options(mode);
+      options.neighbors = neighbors;
+      bake.threads = 1;
+      PointCloud copy = cloud;
+      auto one = BakeFromPoints(plane, std::move(copy), bake, options);
+      bake.threads = 2;
+      copy = cloud;
+      auto two = BakeFromPoints(plane, std::move(copy), bake, options);
+      ASSERT_TRUE(one.ok() && two.ok());
+      EXPECT_EQ(one->maps.color.data, two->maps.color.data) << int(mode) << " " << neighbors;
+      EXPECT_EQ(one->maps.normal.data, two->maps.normal.data) << int(mode) << " " << neighbors;
+    }
   }
+}
+
+// Two faces folded 90 degrees about their shared edge BC (x = 1, z = 0):
+// face 0 = A B C in z = 0, face 1 = B C D in x = 1, each with its own UV
+// island (a seam along BC), face 1's turned a quarter relative to face 0's.
+// Vertex colors black on purpose: the corners' values are wrong.
+Mesh Fold() {
+  Mesh mesh;
+  auto vertex = [&](float x, float y, float z, float u, float v, std::array<float, 3> n) {
+    mesh.positions.insert(mesh.positions.end(), {x, y, z});
+    mesh.uvs.insert(mesh.uvs.end(), {u, v});
+    mesh.normals.insert(mesh.normals.end(), n.begin(), n.end());
+    mesh.colors.insert(mesh.colors.end(), {0, 0, 0});
+  };
+  // Face 0: uv = (0.05 + 0.4 x, 0.05 + 0.4 y).
+  vertex(0, 0, 0, 0.05f, 0.05f, {0, 0, 1});
+  vertex(1, 0, 0, 0.45f, 0.05f, {0, 0, 1});
+  vertex(1, 1, 0, 0.45f, 0.45f, {0, 0, 1});
+  // Face 1: uv = (0.55 + 0.4 y, 0.55 + 0.4 z).
+  vertex(1, 0, 0, 0.55f, 0.55f, {1, 0, 0});
+  vertex(1, 1, 0, 0.95f, 0.55f, {1, 0, 0});
+  vertex(1, 0, 1, 0.55f, 0.95f, {1, 0, 0});
+  mesh.indices = {0, 1, 2, 3, 4, 5};
+  return mesh;
+}
+
+// The ramp both faces carry, linear in the fold's unfolded coordinates:
+// u = x on face 0, 1 + z on face 1 (the distance across the fold), and y.
+std::array<double, 3> Ramp(double u, double y) { return {40 + 100 * u, 128, 60 + 100 * y}; }
+
+// Points on a jittered 0.1 m grid over both faces (sparse: 5 texels apart at
+// 128^2), colored by the ramp, with their face's normal.
+PointCloud FoldPoints() {
+  PointCloud cloud;
+  uint32_t state = 7;
+  auto jitter = [&state] {
+    state = state * 1664525u + 1013904223u;
+    return 0.04f * (float(state >> 8) / float(1 << 24) - 0.5f);
+  };
+  auto add = [&](float x, float y, float z, double u, std::array<float, 3> n) {
+    cloud.positions.insert(cloud.positions.end(), {x, y, z});
+    const auto color = Ramp(u, y);
+    for (double c : color) cloud.colors.push_back(uint8_t(std::lround(c)));
+    cloud.normals.insert(cloud.normals.end(), n.begin(), n.end());
+  };
+  for (int i = 0; i < 10; ++i) {
+    for (int j = 0; j < 10; ++j) {
+      const float a = (i + 0.5f) / 10 + jitter(), b = (j + 0.5f) / 10 + jitter();
+      if (b < a - 0.01f) add(a, b, 0, a, {0, 0, 1});       // face 0: x = a, y = b
+      if (a + b < 0.99f) add(1, a, b, 1 + b, {1, 0, 0});   // face 1: y = a, z = b
+    }
+  }
+  return cloud;
+}
+
+// Largest deviation from the ramp over the texels of both faces at least
+// `margin` meters inside their outer edges (the fold edge BC included).
+double WorstRampError(const BakeResult& result, int size, double margin) {
+  double worst = 0;
+  for (int ty = 0; ty < size; ++ty) {
+    for (int tx = 0; tx < size; ++tx) {
+      const double u = (tx + 0.5) / size, v = 1 - (ty + 0.5) / size;
+      std::array<double, 3> expected;
+      if (u < 0.5) {  // face 0: x, y in [0, 1], y <= x
+        const double x = (u - 0.05) / 0.4, y = (v - 0.05) / 0.4;
+        if (!(y >= margin && (x - y) / std::sqrt(2.0) >= margin && x <= 1)) continue;
+        expected = Ramp(x, y);
+      } else {  // face 1: y, z >= 0, y + z <= 1
+        const double y = (u - 0.55) / 0.4, z = (v - 0.55) / 0.4;
+        if (!(y >= margin && (1 - y - z) / std::sqrt(2.0) >= margin && z >= 0)) continue;
+        expected = Ramp(1 + z, y);
+      }
+      for (int c = 0; c < 3; ++c) {
+        worst = std::max(worst, std::abs(result.maps.color.at_u8(tx, ty, c) - expected[c]));
+      }
+    }
+  }
+  return worst;
+}
+
+TEST(BakeFromPointsTest, NeighborsCarryTheColorAcrossEdgesSeamsAndFolds) {
+  BakeOptions bake;
+  bake.size = 128;
+  bake.gutter = 0;
+  FromPointsOptions options = Options(TexelInterpolation::kDelaunay);
+  options.neighbors = true;
+  FromPointsReport report;
+  auto with = BakeFromPoints(Fold(), FoldPoints(), bake, options, &report);
+  ASSERT_TRUE(with.ok()) << with.status().message();
+  EXPECT_EQ(report.faces_from_corners, 0u);
+  EXPECT_GT(report.points_borrowed, 0u);
+  // Linear interpolation reproduces the ramp wherever the points surround
+  // the texel: right up to the fold, across the seam and the quarter turn,
+  // with none of the corners' black.
+  EXPECT_LE(WorstRampError(*with, bake.size, 0.12), 2.0);
+  // The paper's per-face triangulation: between the last points and the
+  // fold edge the texels blend towards the black corners.
+  options.neighbors = false;
+  auto without = BakeFromPoints(Fold(), FoldPoints(), bake, options, &report);
+  ASSERT_TRUE(without.ok());
+  EXPECT_EQ(report.points_borrowed, 0u);
+  EXPECT_GT(WorstRampError(*without, bake.size, 0.12), 40.0);
+}
+
+// A face with no point of its own borrows none: it keeps its corners'
+// blend (here black), as in the paper, while its neighbour borrows nothing
+// from it either.
+TEST(BakeFromPointsTest, NeighborsLeaveAFaceWithoutPointsToItsCorners) {
+  PointCloud all = FoldPoints(), face0;
+  for (size_t i = 0; i < all.size(); ++i) {
+    if (all.positions[3 * i + 2] != 0) continue;  // keep the points in z = 0
+    for (int c = 0; c < 3; ++c) {
+      face0.positions.push_back(all.positions[3 * i + c]);
+      face0.colors.push_back(all.colors[3 * i + c]);
+      face0.normals.push_back(all.normals[3 * i + c]);
+    }
+  }
+  BakeOptions bake;
+  bake.size = 128;
+  bake.gutter = 0;
+  FromPointsOptions options = Options(TexelInterpolation::kDelaunay);
+  options.neighbors = true;
+  FromPointsReport report;
+  auto result = BakeFromPoints(Fold(), std::move(face0), bake, options, &report);
+  ASSERT_TRUE(result.ok()) << result.status().message();
+  EXPECT_EQ(report.faces_from_corners, 1u);
+  EXPECT_EQ(report.points_borrowed, 0u);
+  size_t checked = 0;
+  for (int ty = 0; ty < bake.size; ++ty) {
+    for (int tx = bake.size / 2; tx < bake.size; ++tx) {  // face 1's island
+      for (int c = 0; c < 3; ++c) ASSERT_EQ(result->maps.color.at_u8(tx, ty, c), 0) << tx << "," << ty;
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 0u);
 }
 
 TEST(BakeFromPointsTest, NeedsColoredPoints) {
