@@ -7,7 +7,8 @@
 # each interpolation mode). Prints a Markdown table of the bake stages (wall,
 # CPU, peak RSS against the budget "cloud in memory + 2x the textures");
 # passes or fails on nothing.
-# Usage: bench/bake.sh [POINTS] [SIZE] [FACES] [MODES]   (MODES e.g. "delaunay splat")
+# Usage: bench/bake.sh [POINTS] [SIZE] [FACES] [MODES]   (MODES e.g. "delaunay splat";
+#        "delaunay-paper": without the neighbours' points, as the paper)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 points=${1:-30000000}
@@ -32,7 +33,10 @@ stages:
   vertex_colors: { uses: bake.vertex_colors, in: { mesh: uv.mesh }, with: { size: $size } }
 YAML
   for mode in $modes; do
-    echo "  points_$mode: { uses: bake.from_points, in: { mesh: uv.mesh, points: normals.points }, with: { size: $size, interpolation: $mode } }"
+    # MODE-paper: without the neighbours' points (bake.from_points version 1).
+    neighbors=true
+    [ "${mode%-paper}" = "$mode" ] || neighbors=false
+    echo "  points_${mode//-/_}: { uses: bake.from_points, in: { mesh: uv.mesh, points: normals.points }, with: { size: $size, interpolation: ${mode%-paper}, neighbors: $neighbors } }"
   done
   echo "outputs: { lpm: vertex_colors.color }"
 } > "$work/bake.yaml"

@@ -1,11 +1,12 @@
-// The same synthetic wall baked four ways, for docs/bake.md: one low mesh
+// The same synthetic wall baked five ways, for docs/bake.md: one low mesh
 // (Poisson depth 7, decimated, unwrapped) baked from its vertex colors (LPM),
 // from a Poisson depth 9 mesh (Remeshing's bake.from_mesh) and from the
-// points (bake.from_points, delaunay and splat), next to the ground truth.
-// Writes a PNG of five panels (truth, vertex colors, from mesh, from points
-// delaunay, from points splat): an orthographic view of a piece of the
-// room's south wall, each panel drawn by sampling its color map bilinearly
-// through the low mesh's uvs (the truth panel samples the scene's albedo).
+// points (bake.from_points: delaunay as the paper, delaunay with the
+// neighbours' points, splat), next to the ground truth. Writes a PNG of six
+// panels (truth, vertex colors, from mesh, the three from points): an
+// orthographic view of a piece of the room's south wall, each panel drawn
+// by sampling its color map bilinearly through the low mesh's uvs (the
+// truth panel samples the scene's albedo).
 // Prints a Markdown table of each bake's mean |baked - true albedo| over all
 // texels on the true surface, and its time.
 //
@@ -168,18 +169,26 @@ int Main(int argc, char** argv) {
   cage.cage_m = 0.03;
   baked.push_back({"bake.from_mesh (Remeshing's bake, from the depth-9 mesh)",
                    Take(BakeFromMesh(low, high, options, cage), "from mesh"), Seconds(start)});
-  for (TexelInterpolation mode : {TexelInterpolation::kDelaunay, TexelInterpolation::kSplat}) {
+  struct Variant {
+    const char* name;
+    TexelInterpolation mode;
+    bool neighbors;
+  };
+  for (const Variant& variant :
+       {Variant{"bake.from_points, delaunay (the paper)", TexelInterpolation::kDelaunay, false},
+        Variant{"bake.from_points, delaunay with the neighbours' points (default)",
+                TexelInterpolation::kDelaunay, true},
+        Variant{"bake.from_points, splat", TexelInterpolation::kSplat, false}}) {
     FromPointsOptions transfer;
     transfer.max_distance_m = 4 * spacing_m;
     transfer.max_angle_deg = 90;
     transfer.splat_sigma_m = spacing_m;
-    transfer.interpolation.mode = mode;
+    transfer.interpolation.mode = variant.mode;
+    transfer.neighbors = variant.neighbors;
     PointCloud copy = scan.cloud;
     start = std::chrono::steady_clock::now();
     BakeResult result = Take(BakeFromPoints(low, std::move(copy), options, transfer), "from points");
-    baked.push_back({mode == TexelInterpolation::kDelaunay ? "bake.from_points, delaunay (the paper)"
-                                                           : "bake.from_points, splat",
-                     std::move(result), Seconds(start)});
+    baked.push_back({variant.name, std::move(result), Seconds(start)});
   }
 
   std::printf("| bake | mean abs. color error vs truth (0-255) | time |\n|---|---:|---:|\n");
@@ -196,7 +205,7 @@ int Main(int argc, char** argv) {
   const SurfaceSample inner = SampleSurface(scene, {x_mid, min_m[1] + 0.3, 1.0});
   const double wall_y = min_m[1] + 0.3 - inner.distance_m;
   const Window window{x_mid - 0.45, 0.75, 0.6, 0.45, wall_y, 1000};
-  const int panels = 5, gap = 6;
+  const int panels = 6, gap = 6;
   Image picture = Image::Make(panels * window.width() + (panels - 1) * gap, window.height(), 3,
                               Image::PixelType::kU8);
   std::fill(picture.data.begin(), picture.data.end(), uint8_t(255));
@@ -208,12 +217,12 @@ int Main(int argc, char** argv) {
       for (int c = 0; c < 3; ++c) picture.at_u8(x, y, c) = uint8_t(std::lround(255 * truth.albedo[c]));
     }
   }
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < 5; ++i) {
     DrawPanel(baked[i].result.mesh, baked[i].result.maps.color, window, picture,
               (i + 1) * (window.width() + gap));
   }
   Check(WritePng(out_path, picture), "write");
-  std::fprintf(stderr, "wrote %s: truth | vertex colors | from mesh | from points delaunay | splat\n",
+  std::fprintf(stderr, "wrote %s: truth | vertex colors | from mesh | from points delaunay | with neighbours | splat\n",
                out_path.c_str());
   return 0;
 }
