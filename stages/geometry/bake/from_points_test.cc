@@ -240,28 +240,34 @@ double WorstRampError(const BakeResult& result, int size, double margin) {
   return worst;
 }
 
-TEST(BakeFromPointsTest, NeighborsCarryTheColorAcrossEdgesSeamsAndFolds) {
+constexpr int kFoldSize = 128;
+
+// The fold baked at kFoldSize^2 without gutter, by Delaunay.
+Expected<BakeResult> BakeFold(PointCloud points, bool neighbors, FromPointsReport* report) {
   BakeOptions bake;
-  bake.size = 128;
+  bake.size = kFoldSize;
   bake.gutter = 0;
   FromPointsOptions options = Options(TexelInterpolation::kDelaunay);
-  options.neighbors = true;
+  options.neighbors = neighbors;
+  return BakeFromPoints(Fold(), std::move(points), bake, options, report);
+}
+
+TEST(BakeFromPointsTest, NeighborsCarryTheColorAcrossEdgesSeamsAndFolds) {
   FromPointsReport report;
-  auto with = BakeFromPoints(Fold(), FoldPoints(), bake, options, &report);
+  auto with = BakeFold(FoldPoints(), /*neighbors=*/true, &report);
   ASSERT_TRUE(with.ok()) << with.status().message();
   EXPECT_EQ(report.faces_from_corners, 0u);
   EXPECT_GT(report.points_borrowed, 0u);
   // Linear interpolation reproduces the ramp wherever the points surround
   // the texel: right up to the fold, across the seam and the quarter turn,
   // with none of the corners' black.
-  EXPECT_LE(WorstRampError(*with, bake.size, 0.12), 2.0);
+  EXPECT_LE(WorstRampError(*with, kFoldSize, 0.12), 2.0);
   // The paper's per-face triangulation: between the last points and the
   // fold edge the texels blend towards the black corners.
-  options.neighbors = false;
-  auto without = BakeFromPoints(Fold(), FoldPoints(), bake, options, &report);
+  auto without = BakeFold(FoldPoints(), /*neighbors=*/false, &report);
   ASSERT_TRUE(without.ok());
   EXPECT_EQ(report.points_borrowed, 0u);
-  EXPECT_GT(WorstRampError(*without, bake.size, 0.12), 40.0);
+  EXPECT_GT(WorstRampError(*without, kFoldSize, 0.12), 40.0);
 }
 
 // A face with no point of its own borrows none: it keeps its corners'
@@ -277,19 +283,14 @@ TEST(BakeFromPointsTest, NeighborsLeaveAFaceWithoutPointsToItsCorners) {
       face0.normals.push_back(all.normals[3 * i + c]);
     }
   }
-  BakeOptions bake;
-  bake.size = 128;
-  bake.gutter = 0;
-  FromPointsOptions options = Options(TexelInterpolation::kDelaunay);
-  options.neighbors = true;
   FromPointsReport report;
-  auto result = BakeFromPoints(Fold(), std::move(face0), bake, options, &report);
+  auto result = BakeFold(std::move(face0), /*neighbors=*/true, &report);
   ASSERT_TRUE(result.ok()) << result.status().message();
   EXPECT_EQ(report.faces_from_corners, 1u);
   EXPECT_EQ(report.points_borrowed, 0u);
   size_t checked = 0;
-  for (int ty = 0; ty < bake.size; ++ty) {
-    for (int tx = bake.size / 2; tx < bake.size; ++tx) {  // face 1's island
+  for (int ty = 0; ty < kFoldSize; ++ty) {
+    for (int tx = kFoldSize / 2; tx < kFoldSize; ++tx) {  // face 1's island
       for (int c = 0; c < 3; ++c) ASSERT_EQ(result->maps.color.at_u8(tx, ty, c), 0) << tx << "," << ty;
       ++checked;
     }
