@@ -5,12 +5,13 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <cstring>
-#include <limits>
+#include <span>
 #include <string>
-#include <unordered_map>
 #include <utility>
+#include <vector>
 
+#include "stages/geometry/bake/raster.h"
+#include "stages/geometry/core/mesh.h"
 #include "stages/geometry/core/vec3.h"
 
 namespace pb {
@@ -22,8 +23,6 @@ using vec3::Norm;
 using vec3::Scale;
 using vec3::Sub;
 using vec3::V3;
-
-constexpr uint32_t kNoEdge = std::numeric_limits<uint32_t>::max();
 
 struct FaceScratch {
   FaceInterpolator interpolator;
@@ -52,78 +51,18 @@ double TexelsPerMeter(const Mesh& mesh, uint32_t face, int size) {
   return std::sqrt(area_texels / area_m2);
 }
 
-struct PositionHash {
-  size_t operator()(const std::array<float, 3>& p) const {
-    uint32_t bits[3];
-    std::memcpy(bits, p.data(), sizeof bits);
-    uint64_t h = bits[0];
-    h = h * 0x9E3779B97F4A7C15ull ^ bits[1];
-    h = h * 0x9E3779B97F4A7C15ull ^ bits[2];
-    return size_t(h ^ (h >> 29));
-  }
-};
-
-// Edge k of face f runs from its corner k to corner (k + 1) % 3; half-edge
-// 3 f + k. `across` names the half-edge of the one other face with the same
-// two end points, or kNoEdge (a border, or an edge of more than two faces).
-// Vertices are matched by position (`welded`), so that UV seams, which
-// duplicate vertices, do not separate faces.
-struct EdgeAdjacency {
-  std::vector<uint32_t> welded;
-  std::vector<uint32_t> across;
-};
-
-EdgeAdjacency AdjacencyOf(const Mesh& mesh) {
-  EdgeAdjacency adjacency;
-  std::unordered_map<std::array<float, 3>, uint32_t, PositionHash> ids;
-  ids.reserve(mesh.vertex_count());
-  adjacency.welded.resize(mesh.vertex_count());
-  for (size_t v = 0; v < mesh.vertex_count(); ++v) {
-    const std::array<float, 3> p{mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
-    adjacency.welded[v] = ids.try_emplace(p, uint32_t(ids.size())).first->second;
-  }
-  std::vector<std::pair<uint64_t, uint32_t>> edges;  // (edge key, half-edge)
-  edges.reserve(mesh.indices.size());
-  for (size_t e = 0; e < mesh.indices.size(); ++e) {
-    const size_t face = e / 3, k = e % 3;
-    const uint32_t a = adjacency.welded[mesh.indices[e]];
-    const uint32_t b = adjacency.welded[mesh.indices[3 * face + (k + 1) % 3]];
-    if (a != b) edges.push_back({EdgeKey(a, b), uint32_t(e)});
-  }
-  std::sort(edges.begin(), edges.end());
-  adjacency.across.assign(mesh.indices.size(), kNoEdge);
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
-    if (j - i == 2 && edges[i].second / 3 != edges[i + 1].second / 3) {
-      adjacency.across[edges[i].second] = edges[i + 1].second;
-      adjacency.across[edges[i + 1].second] = edges[i].second;
-    }
-    i = j;
-  }
-  return adjacency;
-}
-
-// Vertex v's texel-space position on a size x size map (bake_raster.h).
-std::array<double, 2> TexelOf(const Mesh& mesh, size_t v, int size) {
-  return {double(mesh.uvs[2 * v]) * size, (1.0 - double(mesh.uvs[2 * v + 1])) * size};
-}
-
-V3 PositionOf(const Mesh& mesh, size_t v) {
-  return {mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
-}
-
 // Appends to `out` the points of the faces across `face`'s edges that lie
 // within a band of about two point spacings of the shared edge, placed in
 // `face`'s texel space: the neighbour is unfolded about the edge into the
 // face's plane (an isometry), and the face's affine map from its plane to
 // its UV triangle takes it from there. Returns how many were appended.
-size_t BorrowAcrossEdges(const Mesh& mesh, const EdgeAdjacency& adjacency, const MappedPoints& mapped,
+size_t BorrowAcrossEdges(const Mesh& mesh, std::span<const uint32_t> welded,
+                         std::span<const uint32_t> partners, const MappedPoints& mapped,
                          uint32_t face, int size, bool point_normals, std::vector<TexelSample>& out) {
   size_t borrowed = 0;
   for (int k = 0; k < 3; ++k) {
-    const uint32_t partner = adjacency.across[3 * size_t(face) + k];
-    if (partner == kNoEdge) continue;
+    const uint32_t partner = partners[3 * size_t(face) + k];
+    if (partner == kBorderEdge || partner == kNoPartner) continue;
     const uint32_t other = partner / 3;
     const uint64_t begin = mapped.face_begin[other], end = mapped.face_begin[other + 1];
     if (begin == end) continue;
@@ -133,8 +72,8 @@ size_t BorrowAcrossEdges(const Mesh& mesh, const EdgeAdjacency& adjacency, const
     const size_t g0 = mesh.indices[partner];
     const size_t g1 = mesh.indices[3 * size_t(other) + (partner % 3 + 1) % 3];
     const size_t gd = mesh.indices[3 * size_t(other) + (partner % 3 + 2) % 3];
-    const V3 a = PositionOf(mesh, fa), b = PositionOf(mesh, fb), c = PositionOf(mesh, fc);
-    const V3 d = PositionOf(mesh, gd);
+    const V3 a = VertexPosition(mesh, fa), b = VertexPosition(mesh, fb), c = VertexPosition(mesh, fc);
+    const V3 d = VertexPosition(mesh, gd);
     // The face in a 2-D frame: a at the origin, b on +x, c above.
     const V3 ab = Sub(b, a), ac = Sub(c, a), ad = Sub(d, a);
     const double length = Norm(ab);
@@ -145,12 +84,14 @@ size_t BorrowAcrossEdges(const Mesh& mesh, const EdgeAdjacency& adjacency, const
     // d unfolded below the edge, and its barycentric coordinates there.
     const double dx = Dot(ad, x_axis), dy = -Norm(Sub(ad, Scale(x_axis, dx)));
     const double gamma = dy / cy, beta = (dx - gamma * cx) / length, alpha = 1 - beta - gamma;
-    const auto ta = TexelOf(mesh, fa, size), tb = TexelOf(mesh, fb, size), tc = TexelOf(mesh, fc, size);
+    const auto ta = TexelPosition(mesh, fa, size), tb = TexelPosition(mesh, fb, size),
+               tc = TexelPosition(mesh, fc, size);
     const std::array<double, 2> td{alpha * ta[0] + beta * tb[0] + gamma * tc[0],
                                    alpha * ta[1] + beta * tb[1] + gamma * tc[1]};
     // The neighbour's own texel triangle, and where its corners go.
-    const auto s0 = TexelOf(mesh, g0, size), s1 = TexelOf(mesh, g1, size), s2 = TexelOf(mesh, gd, size);
-    const bool same_way = adjacency.welded[g0] == adjacency.welded[fa];
+    const auto s0 = TexelPosition(mesh, g0, size), s1 = TexelPosition(mesh, g1, size),
+               s2 = TexelPosition(mesh, gd, size);
+    const bool same_way = welded[g0] == welded[fa];
     const auto& t0 = same_way ? ta : tb;
     const auto& t1 = same_way ? tb : ta;
     const double det = (s1[0] - s0[0]) * (s2[1] - s0[1]) - (s2[0] - s0[0]) * (s1[1] - s0[1]);
@@ -213,8 +154,11 @@ Expected<BakeResult> BakeFromPoints(Mesh low, PointCloud&& cloud, const BakeOpti
   result.maps = BakeMaps::Make(options.size, options.float_normals);
   BakeMaps& maps = result.maps;
   const bool point_normals = !mapped.normals.empty();
-  EdgeAdjacency adjacency;
-  if (from_points.neighbors) adjacency = AdjacencyOf(mesh);
+  std::vector<uint32_t> welded, partners;
+  if (from_points.neighbors) {
+    welded = WeldedVertices(mesh);
+    partners = EdgePartners(mesh, welded);
+  }
   std::atomic<size_t> faces_with_points{0}, faces_from_corners{0}, points_borrowed{0};
   tbb::enumerable_thread_specific<FaceScratch> scratch;
   ForEachBakeFace(mesh, raster, options.threads, [&](uint32_t face, std::span<const BakeTexel> texels) {
@@ -242,14 +186,15 @@ Expected<BakeResult> BakeFromPoints(Mesh low, PointCloud&& cloud, const BakeOpti
     const bool borrow = from_points.neighbors && end > begin;
     if (borrow) {
       const size_t borrowed =
-          BorrowAcrossEdges(mesh, adjacency, mapped, face, options.size, point_normals, local.points);
+          BorrowAcrossEdges(mesh, welded, partners, mapped, face, options.size, point_normals, local.points);
       points_borrowed.fetch_add(borrowed, std::memory_order_relaxed);
     }
     std::array<TexelSample, 3> corners;
     for (int k = 0; k < 3; ++k) {
       const size_t v = mesh.indices[3 * size_t(face) + k];
-      corners[k].s = mesh.uvs[2 * v] * float(options.size);
-      corners[k].t = (1.0f - mesh.uvs[2 * v + 1]) * float(options.size);
+      const std::array<double, 2> texel = TexelPosition(mesh, v, options.size);
+      corners[k].s = float(texel[0]);
+      corners[k].t = float(texel[1]);
       for (int c = 0; c < 3; ++c) {
         // Without vertex colors the corners take the face's mean point color
         // (mid gray on a face with no points).

@@ -50,9 +50,7 @@ struct TexelTriangle {
 TexelTriangle MakeTexelTriangle(const Mesh& mesh, uint32_t face, int size) {
   TexelTriangle tri;
   for (int k = 0; k < 3; ++k) {
-    const uint32_t vertex = mesh.indices[3 * size_t(face) + k];
-    tri.p[k] = {double(mesh.uvs[2 * size_t(vertex)]) * size,
-                (1.0 - double(mesh.uvs[2 * size_t(vertex) + 1])) * size};
+    tri.p[k] = TexelPosition(mesh, mesh.indices[3 * size_t(face) + k], size);
   }
   tri.area2 = (tri.p[1][0] - tri.p[0][0]) * (tri.p[2][1] - tri.p[0][1]) -
               (tri.p[1][1] - tri.p[0][1]) * (tri.p[2][0] - tri.p[0][0]);

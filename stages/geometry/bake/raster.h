@@ -39,6 +39,11 @@
 
 namespace pb {
 
+// Vertex v's position in texel space: (u * size, (1 - v) * size).
+inline std::array<double, 2> TexelPosition(const Mesh& mesh, size_t v, int size) {
+  return {double(mesh.uvs[2 * v]) * size, (1.0 - double(mesh.uvs[2 * v + 1])) * size};
+}
+
 // A texel to bake and where on its face it samples.
 struct BakeTexel {
   int32_t x = 0;  // column

@@ -1,6 +1,9 @@
 #include "stages/geometry/core/mesh.h"
 
+#include <algorithm>
 #include <cstdint>
+#include <numeric>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -86,6 +89,49 @@ Status Validate(const Mesh& mesh) {
     }
   }
   return Status::Ok();
+}
+
+std::vector<uint32_t> WeldedVertices(const Mesh& mesh) {
+  const size_t nv = mesh.vertex_count();
+  std::vector<uint32_t> order(nv);
+  std::iota(order.begin(), order.end(), 0u);
+  const auto position = [&](uint32_t v) {
+    return std::array<float, 3>{mesh.positions[3 * size_t{v}], mesh.positions[3 * size_t{v} + 1],
+                                mesh.positions[3 * size_t{v} + 2]};
+  };
+  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
+    const auto pa = position(a), pb = position(b);
+    return pa != pb ? pa < pb : a < b;
+  });
+  std::vector<uint32_t> welded(nv);
+  for (size_t i = 0; i < nv; ++i) {
+    welded[order[i]] = i > 0 && position(order[i]) == position(order[i - 1]) ? welded[order[i - 1]] : order[i];
+  }
+  return welded;
+}
+
+std::vector<uint32_t> EdgePartners(const Mesh& mesh, std::span<const uint32_t> welded) {
+  std::vector<uint32_t> partner(mesh.indices.size(), kNoPartner);
+  std::vector<std::pair<uint64_t, uint32_t>> edges;  // (edge key, half-edge)
+  edges.reserve(mesh.indices.size());
+  for (size_t e = 0; e < mesh.indices.size(); ++e) {
+    const uint32_t a = welded[mesh.indices[e]];
+    const uint32_t b = welded[mesh.indices[e - e % 3 + (e + 1) % 3]];
+    if (a != b) edges.push_back({EdgeKey(a, b), static_cast<uint32_t>(e)});
+  }
+  std::sort(edges.begin(), edges.end());
+  for (size_t i = 0; i < edges.size();) {
+    size_t j = i;
+    while (j < edges.size() && edges[j].first == edges[i].first) ++j;
+    if (j - i == 1) {
+      partner[edges[i].second] = kBorderEdge;
+    } else if (j - i == 2 && edges[i].second / 3 != edges[i + 1].second / 3) {
+      partner[edges[i].second] = edges[i + 1].second;
+      partner[edges[i + 1].second] = edges[i].second;
+    }
+    i = j;
+  }
+  return partner;
 }
 
 }  // namespace pb

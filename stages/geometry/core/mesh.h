@@ -12,6 +12,7 @@
 #include <array>
 #include <cstddef>
 #include <cstdint>
+#include <span>
 #include <vector>
 
 #include "base/status.h"
@@ -51,5 +52,24 @@ Status Validate(const Mesh& mesh);
 // Drops the vertices no face uses (the others keep their order and every
 // attribute) and renumbers the indices. Returns how many were dropped.
 size_t DropUnreferencedVertices(Mesh& mesh);
+
+// Vertex v's position in double precision (meters, relative to origin).
+inline std::array<double, 3> VertexPosition(const Mesh& mesh, size_t v) {
+  return {mesh.positions[3 * v], mesh.positions[3 * v + 1], mesh.positions[3 * v + 2]};
+}
+
+// For every vertex, the smallest index among the vertices at exactly its
+// position: the copies uv.unwrap makes along its seams weld back into one.
+std::vector<uint32_t> WeldedVertices(const Mesh& mesh);
+
+// Half-edge 3 f + k runs from corner k of face f to corner (k + 1) % 3.
+// EdgePartners gives, for each, over the welded vertices (WeldedVertices):
+// the half-edge of the one other face with the same two end points, in
+// either direction; kBorderEdge if no other half-edge has them; kNoPartner
+// if more than two do, if the other is in the same face, or if the two end
+// points weld into one.
+inline constexpr uint32_t kBorderEdge = 0xffffffffu;
+inline constexpr uint32_t kNoPartner = 0xfffffffeu;
+std::vector<uint32_t> EdgePartners(const Mesh& mesh, std::span<const uint32_t> welded);
 
 }  // namespace pb

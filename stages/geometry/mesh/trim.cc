@@ -135,39 +135,8 @@ double MeanEdgeLength(const Mesh& mesh) {
 uint64_t CountBoundaryEdges(const Mesh& mesh) {
   // Vertices at one position are one vertex: uv.unwrap splits vertices along
   // its seams, and a seam is no border of the surface.
-  const size_t nv = mesh.vertex_count();
-  std::vector<uint32_t> order(nv);
-  std::iota(order.begin(), order.end(), 0u);
-  const auto position = [&](uint32_t v) {
-    return std::array<float, 3>{mesh.positions[3 * size_t{v}], mesh.positions[3 * size_t{v} + 1],
-                                mesh.positions[3 * size_t{v} + 2]};
-  };
-  std::sort(order.begin(), order.end(), [&](uint32_t a, uint32_t b) {
-    const auto pa = position(a), pb = position(b);
-    return pa != pb ? pa < pb : a < b;
-  });
-  std::vector<uint32_t> welded(nv);
-  for (size_t i = 0; i < nv; ++i) {
-    welded[order[i]] = i > 0 && position(order[i]) == position(order[i - 1]) ? welded[order[i - 1]] : order[i];
-  }
-  std::vector<uint64_t> edges;
-  edges.reserve(mesh.indices.size());
-  for (size_t f = 0; f < mesh.face_count(); ++f) {
-    const uint32_t* t = &mesh.indices[3 * f];
-    for (int k = 0; k < 3; ++k) {
-      const uint32_t a = welded[t[k]], b = welded[t[(k + 1) % 3]];
-      if (a != b) edges.push_back(EdgeKey(a, b));
-    }
-  }
-  std::sort(edges.begin(), edges.end());
-  uint64_t boundary = 0;
-  for (size_t i = 0; i < edges.size();) {
-    size_t j = i;
-    while (j < edges.size() && edges[j] == edges[i]) ++j;
-    if (j - i == 1) ++boundary;
-    i = j;
-  }
-  return boundary;
+  const std::vector<uint32_t> partners = EdgePartners(mesh, WeldedVertices(mesh));
+  return static_cast<uint64_t>(std::count(partners.begin(), partners.end(), kBorderEdge));
 }
 
 Expected<Mesh> TrimUnsupported(const Mesh& mesh, const PointCloud& points,

@@ -31,10 +31,6 @@ using vec3::Dot;
 using vec3::Cross;
 using vec3::Norm;
 
-V3 Position(const Mesh& mesh, uint32_t v) {
-  return {mesh.positions[3 * size_t(v)], mesh.positions[3 * size_t(v) + 1],
-          mesh.positions[3 * size_t(v) + 2]};
-}
 
 constexpr uint32_t kNone = std::numeric_limits<uint32_t>::max();
 
@@ -107,8 +103,8 @@ Topology BuildTopology(const Mesh& mesh) {
   const uint32_t* idx = mesh.indices.data();
   tbb::parallel_for(tbb::blocked_range<size_t>(0, faces, 4096), [&](const auto& r) {
     for (size_t f = r.begin(); f < r.end(); ++f) {
-      const V3 a = Position(mesh, idx[3 * f]), b = Position(mesh, idx[3 * f + 1]),
-               c = Position(mesh, idx[3 * f + 2]);
+      const V3 a = VertexPosition(mesh, idx[3 * f]), b = VertexPosition(mesh, idx[3 * f + 1]),
+               c = VertexPosition(mesh, idx[3 * f + 2]);
       topo.area_normal[f] = Cross(Sub(b, a), Sub(c, a));
     }
   });
@@ -219,7 +215,7 @@ FlatChart Project(const Mesh& mesh, const Topology& topo, std::vector<uint32_t> 
   FlatChart chart = ChartSkeleton(mesh, std::move(faces));
   chart.uv_m.resize(2 * chart.vertices.size());
   for (size_t i = 0; i < chart.vertices.size(); ++i) {
-    const V3 p = Position(mesh, chart.vertices[i]);
+    const V3 p = VertexPosition(mesh, chart.vertices[i]);
     chart.uv_m[2 * i] = Dot(p, t1);
     chart.uv_m[2 * i + 1] = Dot(p, t2);
   }
@@ -524,8 +520,8 @@ std::vector<FlatChart> MakeFlatCharts(const Mesh& mesh, const ChartOptions& opti
       for (int k = 0; k < 3; ++k) {
         const uint32_t g = topo.neighbor[3 * f + k];
         if (g == kNone || g < f || chart_of[g] == chart_of[f]) continue;
-        seam += Norm(Sub(Position(mesh, mesh.indices[3 * f + k]),
-                         Position(mesh, mesh.indices[3 * f + (k + 1) % 3])));
+        seam += Norm(Sub(VertexPosition(mesh, mesh.indices[3 * f + k]),
+                         VertexPosition(mesh, mesh.indices[3 * f + (k + 1) % 3])));
       }
     }
     *seam_length_m = seam;

@@ -50,10 +50,6 @@ V3 Normalized(const V3& v) {
   const double n = Norm(v);
   return n > 0 ? V3{v[0] / n, v[1] / n, v[2] / n} : V3{0, 0, 0};
 }
-V3 Position(const Mesh& mesh, uint32_t v) {
-  return {mesh.positions[3 * size_t(v)], mesh.positions[3 * size_t(v) + 1],
-          mesh.positions[3 * size_t(v) + 2]};
-}
 
 struct FaceData {
   Topology topo;
@@ -254,8 +250,8 @@ std::vector<std::vector<uint32_t>> MergeSmallCharts(const Mesh& mesh, const Face
         const uint32_t g = data.topo.neighbor[3 * size_t(f) + k];
         if (g == kNone || chart_of[g] == c || chart_of[g] == kIsolated) continue;
         if (Dot(data.unit_normal[f], data.unit_normal[g]) < crease_cos) continue;  // a crease
-        const V3 a = Position(mesh, mesh.indices[3 * size_t(f) + k]);
-        const V3 b = Position(mesh, mesh.indices[3 * size_t(f) + (k + 1) % 3]);
+        const V3 a = VertexPosition(mesh, mesh.indices[3 * size_t(f) + k]);
+        const V3 b = VertexPosition(mesh, mesh.indices[3 * size_t(f) + (k + 1) % 3]);
         const double length = Norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]});
         auto it = std::find_if(shared.begin(), shared.end(),
                                [&](const auto& s) { return s.first == chart_of[g]; });
@@ -312,10 +308,10 @@ Tri2 ChartTriangle(const FlatChart& chart, size_t i) {
 void ProjectOnPlane(const Mesh& mesh, const V3& normal, FlatChart* chart) {
   V3 t1, t2;
   PlaneBasis(normal, &t1, &t2);
-  const V3 origin = Position(mesh, chart->vertices.front());
+  const V3 origin = VertexPosition(mesh, chart->vertices.front());
   chart->uv_m.assign(2 * chart->vertices.size(), 0.0);
   for (size_t i = 0; i < chart->vertices.size(); ++i) {
-    const V3 p = Position(mesh, chart->vertices[i]);
+    const V3 p = VertexPosition(mesh, chart->vertices[i]);
     const V3 d{p[0] - origin[0], p[1] - origin[1], p[2] - origin[2]};
     chart->uv_m[2 * i] = Dot(d, t1);
     chart->uv_m[2 * i + 1] = Dot(d, t2);
@@ -367,10 +363,10 @@ bool FlattenChart(const Mesh& mesh, const FaceData& data, double max_stretch, Fl
   }
   const size_t n = chart->vertices.size();
   if (n > kMaxSolveVertices) return false;
-  const V3 origin = Position(mesh, chart->vertices.front());
+  const V3 origin = VertexPosition(mesh, chart->vertices.front());
   std::vector<double> positions(3 * n);
   for (size_t i = 0; i < n; ++i) {
-    const V3 p = Position(mesh, chart->vertices[i]);
+    const V3 p = VertexPosition(mesh, chart->vertices[i]);
     for (int d = 0; d < 3; ++d) positions[3 * i + d] = p[d] - origin[d];
   }
   if (!LscmFlatten(positions, chart->corners, &chart->uv_m)) return chart->faces.size() == 1;
@@ -531,8 +527,8 @@ void MergeFlatSmallCharts(const Mesh& mesh, const FaceData& data, double max_str
         const uint32_t g = data.topo.neighbor[3 * size_t(f) + k];
         if (g == kNone || chart_of[g] == c || chart_of[g] == kNone) continue;
         if (Dot(data.unit_normal[f], data.unit_normal[g]) < crease_cos) continue;  // a crease
-        const V3 a = Position(mesh, mesh.indices[3 * size_t(f) + k]);
-        const V3 b = Position(mesh, mesh.indices[3 * size_t(f) + (k + 1) % 3]);
+        const V3 a = VertexPosition(mesh, mesh.indices[3 * size_t(f) + k]);
+        const V3 b = VertexPosition(mesh, mesh.indices[3 * size_t(f) + (k + 1) % 3]);
         const double length = Norm({a[0] - b[0], a[1] - b[1], a[2] - b[2]});
         auto it = std::find_if(shared.begin(), shared.end(),
                                [&](const auto& x) { return x.first == chart_of[g]; });
@@ -614,7 +610,7 @@ double ChartStretchL2(const Mesh& mesh, const FlatChart& chart) {
     const Tri2 t = ChartTriangle(chart, i);
     const double a2 = SignedArea(t);
     V3 q[3];
-    for (int k = 0; k < 3; ++k) q[k] = Position(mesh, mesh.indices[3 * size_t(chart.faces[i]) + k]);
+    for (int k = 0; k < 3; ++k) q[k] = VertexPosition(mesh, mesh.indices[3 * size_t(chart.faces[i]) + k]);
     const V3 e1{q[1][0] - q[0][0], q[1][1] - q[0][1], q[1][2] - q[0][2]};
     const V3 e2{q[2][0] - q[0][0], q[2][1] - q[0][1], q[2][2] - q[0][2]};
     const double a3 = 0.5 * Norm(Cross(e1, e2));
