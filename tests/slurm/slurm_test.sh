@@ -144,8 +144,8 @@ EOF
   "$pb" run wf2.yaml --executor slurm --default-mem 300M --cache cache --out out2 > run2.txt 2>&1 &&
     fail "a stage over twice its memory should fail"
   err=$(stage_field out2/run.json too_big error)
-  echo "$err" | grep -q "out of memory at --mem=600M" || fail "error does not say out of memory: $err"
-  echo "$err" | grep -q "retried once with twice the memory" || fail "error does not say it was retried: $err"
+  grep -q "out of memory at --mem=600M" <<< "$err" || fail "error does not say out of memory: $err"
+  grep -q "retried once with twice the memory" <<< "$err" || fail "error does not say it was retried: $err"
   echo "$err" | grep -Eq "OUT_OF_MEMORY|exceeded memory limit" || fail "error lacks Slurm's reason: $err"
   [ -z "$(ls cache/tmp)" ] || fail "staging leftovers in the cache: $(ls cache/tmp)"
   verify cache
@@ -173,7 +173,7 @@ EOF
   scancel "$job_id"
   wait "$pid" && fail "a cancelled stage should fail the run"
   err=$(stage_field out/run.json slow error)
-  echo "$err" | grep -q "CANCELLED" || fail "error lacks Slurm's state: $err"
+  grep -q "CANCELLED" <<< "$err" || fail "error lacks Slurm's state: $err"
   [ "$(stage_field out/run.json b status)" = ran ] || fail "--keep-going: the independent branch did not run"
   no_jobs_left || fail "jobs left in the queue"
   [ -z "$(ls cache/tmp)" ] || fail "staging leftovers in the cache: $(ls cache/tmp)"
@@ -211,7 +211,7 @@ EOF
   "$pb" run wf.yaml --executor slurm --time 1 --cache cache --out out > run.txt 2>&1 &&
     fail "a stage over its time limit should fail"
   err=$(stage_field out/run.json endless error)
-  echo "$err" | grep -q "TIMEOUT" || fail "error lacks Slurm's state: $err"
+  grep -q "TIMEOUT" <<< "$err" || fail "error lacks Slurm's state: $err"
   [ -z "$(ls cache/tmp)" ] || fail "staging leftovers in the cache: $(ls cache/tmp)"
   verify cache
   ;;
@@ -237,7 +237,7 @@ EOF
   scontrol update nodename="$node" state=resume 2>/dev/null || true
   [ "$rc" != 0 ] || fail "a stage on a failed node should fail"
   err=$(stage_field out/run.json doomed error)
-  echo "$err" | grep -q "NODE_FAIL" || fail "error lacks Slurm's state: $err"
+  grep -q "NODE_FAIL" <<< "$err" || fail "error lacks Slurm's state: $err"
   for _ in $(seq 100); do
     scontrol show node "$node" | grep -q "State=IDLE" && break
     sleep 0.2
