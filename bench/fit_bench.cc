@@ -1,10 +1,11 @@
 // fit_bench: mesh.fit's FitMeshToPoints on a mesh and its scan written by a
 // workflow (docs/bench-fit.md, bench/fit.sh).
 //
-//   fit_bench MESH.ply POINTS.ply [THREADS=2] [EXPECTED.ply]
+//   fit_bench [--normals] MESH.ply POINTS.ply [THREADS=2] [EXPECTED.ply]
 //
 // Reads both (pointbake PLY, e.g. a workflow's `outputs:` of a decimated
-// mesh and the points it is fitted to), fits with the stage's defaults on
+// mesh and the points it is fitted to), fits with the stage's defaults
+// (with --normals: along the vertex normals only, version 3's fit) on
 // THREADS threads and prints one line: wall and CPU seconds of the fit alone
 // (reading excluded), peak RSS, the point and face counts, the report's mean
 // |distance| before and after, and an XXH3-128 digest of the output positions'
@@ -101,8 +102,15 @@ bool CompareEngines(const pb::Mesh& input, const pb::Mesh& fitted, const pb::Poi
 
 int main(int argc, char** argv) {
   using namespace pb;
+  const bool along_normals = argc > 1 && std::string_view(argv[1]) == "--normals";
+  if (along_normals) {
+    argv[1] = argv[0];
+    ++argv;
+    --argc;
+  }
   if (argc < 3 || argc > 5) {
-    std::fprintf(stderr, "usage: fit_bench MESH.ply POINTS.ply [THREADS=2] [EXPECTED.ply]\n");
+    std::fprintf(stderr,
+                 "usage: fit_bench [--normals] MESH.ply POINTS.ply [THREADS=2] [EXPECTED.ply]\n");
     return 2;
   }
   const int threads = argc > 3 ? std::atoi(argv[3]) : 2;
@@ -117,6 +125,7 @@ int main(int argc, char** argv) {
 
   FitOptions options;
   options.threads = threads;
+  options.free_directions = !along_normals;
   FitReport report;
   bench::ResetPeakRss();
   const double cpu0 = bench::CpuSeconds();

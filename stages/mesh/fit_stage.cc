@@ -108,6 +108,24 @@ constexpr const char* kSchema = R"({
       "default": 0.5,
       "description": "How far past the outermost scan points the border pass puts a border, in their local spacings (the scan's own render, render.splats, draws the surface up to one spacing past its last point)."
     },
+    "directions": {
+      "enum": ["normals", "free"],
+      "default": "free",
+      "description": "How a vertex may move: 'normals', along its normal only; 'free', in any direction the points ask (a 3 x 3 solve per vertex, sliding along its own tangent plane costing as much as the smoothness), so a vertex on a crease the coarse Poisson solve rounded off (a plinth's or a wall's edge) moves out to the crease instead of only along its diagonal normal (version 4; 'normals' is version 3's fit)."
+    },
+    "tangent_weight": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 0.1,
+      "description": "With directions 'free': the smoothness of the displacement across the vertex normal, as a fraction of `smoothness` (which then acts along the normal), with a tie of that weight to the vertex's place. Small lets a vertex slide to a crease; 1 smooths all three components alike."
+    },
+    "crease_deg": {
+      "type": "number",
+      "minimum": 0,
+      "exclusiveMaximum": 180,
+      "default": 20,
+      "description": "With directions 'free': only a vertex with a face turned more than this from its normal (on a crease or a rounded edge) moves freely; the others, and border vertices, move along their normals. 0 frees every interior vertex."
+    },
     "threads": {
       "type": "integer",
       "minimum": 0,
@@ -139,6 +157,10 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.border_reach_edges, NumberParam(ctx, kId, "border_reach_edges"));
   PB_ASSIGN_OR_RETURN(options.border_margin_spacings,
                       NumberParam(ctx, kId, "border_margin_spacings"));
+  PB_ASSIGN_OR_RETURN(const std::string directions, StringParam(ctx, kId, "directions"));
+  options.free_directions = directions == "free";
+  PB_ASSIGN_OR_RETURN(options.tangent_weight, NumberParam(ctx, kId, "tangent_weight"));
+  PB_ASSIGN_OR_RETURN(options.crease_deg, NumberParam(ctx, kId, "crease_deg"));
   PB_ASSIGN_OR_RETURN(const int64_t threads, IntegerParam(ctx, kId, "threads", {0}));
   options.threads = threads > 0 ? static_cast<int>(threads) : ctx.threads();
 
@@ -191,8 +213,9 @@ Status Run(StageContext& ctx) {
 StageType FitStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;  // 2: outside_weight (0.75; version 1 was 0.5); 3: the border pass
-  type.summary = "Moves a mesh's vertices along their normals so the surface fits the scan's points";
+  // 2: outside_weight (0.75; version 1 was 0.5); 3: the border pass; 4: directions free.
+  type.version = 4;
+  type.summary = "Moves a mesh's vertices so the surface fits the scan's points, out to its creases";
   type.doc =
       "A decimated mesh's vertices lie on the surface it was decimated from, so its chords cut "
       "inside every convex part (pipes), and a coarse Poisson solve rounds thin parts inward: "
@@ -210,8 +233,14 @@ StageType FitStage() {
       "sweeps; the displacement is smoothed, not the positions, so the mesh does not "
       "shrink), and each vertex moves along its normal by `damping` of it, at most "
       "`max_step_edges` of its mean edge per round and at most `max_offset_edges` from where it "
-      "started. Border vertices move the same way, along "
-      "the normal only. A move that would turn a face by more than `max_turn_deg` (from the "
+      "started. Version 4 (`directions: free`, the default) moves each vertex in any direction: "
+      "its displacement is a vector, solved as a 3 x 3 block per vertex, the smoothness acting "
+      "along the vertex normal and, `tangent_weight` of it, across, so a vertex on a crease "
+      "(a face turned more than `crease_deg` from its normal) "
+      "that the coarse Poisson solve rounded off (a plinth's edge) moves out to the crease, "
+      "where moving along its diagonal normal bent both faces (version 3, `directions: "
+      "normals`, left the low mesh's outline a pixel inside a box's corners). Other vertices "
+      "and border vertices move along their normals. A move that would turn a face by more than `max_turn_deg` (from the "
       "input or the round before) or collapse it is halved until none does. Then (version 3) "
       "a border pass moves border vertices outward in their faces' planes until each border "
       "edge passes `border_margin_spacings` local spacings beyond the points whose closest "

@@ -462,13 +462,16 @@ TEST_F(MeshStagesTest, TrimRemovesUnsupportedFacesAndCleanFillsPinHoles) {
 }
 
 // mesh.fit: a grid 4 mm under points on z = 0 is lifted onto them, every
-// vertex along its normal; faces and colors are kept; the counters say so.
+// vertex along its normal (free directions or not: the points ask nothing
+// else of a plane); faces and colors are kept; the counters say so.
 // Points that do not fit (too few) give a clear error naming the files.
 TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
   const StageType* type = registry_.Find("mesh.fit");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 3);
+  EXPECT_EQ(type->version, 4);
   const nlohmann::json schema = CheckedSchema(*type, true);
+  EXPECT_EQ(schema["properties"]["directions"]["default"], "free");
+  EXPECT_EQ(schema["properties"]["tangent_weight"]["default"], 0.1);
   EXPECT_EQ(schema["properties"]["iterations"]["default"], 12);
   EXPECT_EQ(schema["properties"]["outside_weight"]["default"], 0.75);
   EXPECT_EQ(schema["properties"]["border_reach_edges"]["default"], 0.5);
@@ -521,6 +524,14 @@ TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
     EXPECT_NEAR(fitted->mesh.positions[3 * v], grid.positions[3 * v], 1e-6);
   }
   EXPECT_EQ(fit.counters_["border_vertices_moved"], 0);
+
+  // Along the normals only (version 3's fit): the same lift.
+  FakeContext normals(dir_ / "normals", {{"border_reach_edges", 0}, {"directions", "normals"}}, 2);
+  normals.AddInput("mesh", "mesh", WriteInputMesh("grid4", grid));
+  normals.AddInput("points", "points", WriteInputPoints("points4", points));
+  ASSERT_TRUE(Run("mesh.fit", normals).ok());
+  EXPECT_LT(normals.counters_["mean_abs_distance_after_m"], 2e-4);
+  EXPECT_EQ(normals.counters_["vertices_moved"], (n + 1) * (n + 1));
 
   // With the defaults the rim moves out in the plane, past the outermost
   // points by a fraction of their spacing (1 cm).

@@ -74,6 +74,21 @@ std::vector<V3> VertexNormals(const Mesh& mesh, const std::vector<V3>& crosses) 
   return normals;
 }
 
+// The solution of a x = b for a symmetric positive definite 3 x 3 `a`
+// (row-major), by Cramer's rule; zero when a is (nearly) singular.
+V3 SolveSymmetric3(const std::array<double, 9>& a, const V3& b) {
+  const double c00 = a[4] * a[8] - a[5] * a[7], c01 = a[5] * a[6] - a[3] * a[8],
+               c02 = a[3] * a[7] - a[4] * a[6];
+  const double det = a[0] * c00 + a[1] * c01 + a[2] * c02;
+  const double scale = std::abs(a[0]) + std::abs(a[4]) + std::abs(a[8]);
+  if (!(std::abs(det) > 1e-12 * scale * scale * scale)) return {0, 0, 0};
+  const double c11 = a[0] * a[8] - a[2] * a[6], c12 = a[1] * a[6] - a[0] * a[7],
+               c22 = a[0] * a[4] - a[1] * a[3];
+  // a is symmetric, so its cofactor matrix is too.
+  return {(c00 * b[0] + c01 * b[1] + c02 * b[2]) / det, (c01 * b[0] + c11 * b[1] + c12 * b[2]) / det,
+          (c02 * b[0] + c12 * b[1] + c22 * b[2]) / det};
+}
+
 // Barycentric coordinates of q (on the triangle) in (a, b, c); thirds for a
 // triangle without area.
 std::array<double, 3> Barycentric(const V3& q, const V3& a, const V3& b, const V3& c) {
@@ -416,6 +431,8 @@ Status CheckOptions(const FitOptions& o) {
   if (o.spacing_neighbors < 1) return bad("spacing_neighbors must be >= 1");
   if (!(o.border_reach_edges >= 0)) return bad("border_reach_edges must be >= 0");
   if (!(o.border_margin_spacings >= 0)) return bad("border_margin_spacings must be >= 0");
+  if (!(o.tangent_weight > 0)) return bad("tangent_weight must be > 0");
+  if (!(o.crease_deg >= 0 && o.crease_deg < 180)) return bad("crease_deg must be in [0, 180)");
   return Status::Ok();
 }
 
@@ -497,6 +514,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
   std::vector<uint8_t> supported_before(points.size(), 0);
   std::vector<uint32_t> nearest_face(points.size(), UINT32_MAX);  // hints for the next round
   std::vector<Assignment> assigned;  // each assignment's, reused
+  std::vector<uint8_t> on_border;    // free directions: vertices on a border side
 
   for (int round = 0; round < options.iterations; ++round) {
     const std::vector<V3> crosses = FaceCrosses(mesh, positions);
@@ -559,54 +577,158 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
     const double lambda_w = options.smoothness * weight_sum / static_cast<double>(with_data);
     // Gauss-Seidel sweeps in vertex order (sequential: the same result for
     // any thread count), from u = 0.
-    std::vector<double> u(nv, 0);
     const auto m_at = [&](uint32_t f, int i, int j) {
       if (i == j) return face_m[f][i];
       const int lo = std::min(i, j), hi = std::max(i, j);
       return face_m[f][lo == 0 ? (hi == 1 ? 3 : 4) : 5];
     };
-    for (int sweep = 0; sweep < options.sweeps; ++sweep) {
+    // Each vertex's step this round, a vector (along its normal unless
+    // free_directions).
+    std::vector<V3> step(nv, V3{0, 0, 0});
+    if (!options.free_directions) {
+      std::vector<double> u(nv, 0);
+      for (int sweep = 0; sweep < options.sweeps; ++sweep) {
+        for (size_t v = 0; v < nv; ++v) {
+          double numerator = 0, denominator = 0;
+          for (uint32_t j = vf_start[v]; j < vf_start[v + 1]; ++j) {
+            const uint32_t f = vf[j] / 3;
+            const int c = static_cast<int>(vf[j] % 3);
+            denominator += m_at(f, c, c);
+            numerator += face_r[f][c];
+            for (int k = 0; k < 3; ++k) {
+              if (k != c) numerator -= m_at(f, c, k) * u[mesh.indices[3 * size_t{f} + k]];
+            }
+          }
+          const uint32_t s = nb_start[v], e = nb_start[v + 1];
+          for (uint32_t j = s; j < e; ++j) numerator += lambda_w * u[nb[j]];
+          denominator += lambda_w * static_cast<double>(e - s);
+          u[v] = denominator > 0 ? numerator / denominator : 0.0;
+        }
+      }
+      // Steps, clamped to a fraction of each vertex's mean edge.
       for (size_t v = 0; v < nv; ++v) {
-        double numerator = 0, denominator = 0;
-        for (uint32_t j = vf_start[v]; j < vf_start[v + 1]; ++j) {
-          const uint32_t f = vf[j] / 3;
-          const int c = static_cast<int>(vf[j] % 3);
-          denominator += m_at(f, c, c);
-          numerator += face_r[f][c];
-          for (int k = 0; k < 3; ++k) {
-            if (k != c) numerator -= m_at(f, c, k) * u[mesh.indices[3 * size_t{f} + k]];
+        if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
+        const double limit = options.max_step_edges * input_edge[v];
+        const double length = options.damping * std::clamp(u[v], -limit, limit);
+        for (int c = 0; c < 3; ++c) step[v][c] = length * vnormals[v][c];
+      }
+    } else {
+      // Free directions: the displacement D_v is a vector, a point's distance
+      // changes by n_f . sum_k b_k D_k, so each sweep solves a vertex's 3 x 3
+      // block. Sliding along the vertex's own tangent plane costs as much as
+      // the smoothness (lambda W per neighbour), so a vertex in a flat or
+      // smooth region keeps moving along its normal, and one on a rounded
+      // crease, whose faces face two ways, moves out to the crease.
+      std::vector<V3> unit_normal(nf);
+      for (size_t f = 0; f < nf; ++f) unit_normal[f] = Unit(crosses[f]);
+      // Border vertices move along their normals only, as in version 3 (the
+      // border pass moves them outward after the rounds): with half their
+      // neighbours missing, the tie of a free one is too weak, and the
+      // diagonals of the faces along a rim twist it a few millimeters.
+      if (on_border.empty()) {
+        on_border.assign(nv, 0);
+        const std::vector<uint8_t> sides = BorderSides(mesh);
+        for (size_t e = 0; e < sides.size(); ++e) {
+          if (!sides[e]) continue;
+          on_border[mesh.indices[e]] = 1;
+          on_border[mesh.indices[3 * (e / 3) + (e % 3 + 1) % 3]] = 1;
+        }
+      }
+      // Only a vertex on a crease moves freely: one with a face turned
+      // more than crease_deg from its normal. Elsewhere the points pull
+      // along the normals anyway, and a free vertex would only drift along
+      // the surface with the noise (on a single depth frame's jagged rims,
+      // a pixel of outline lost here and there).
+      const double cos_crease = std::cos(options.crease_deg * std::numbers::pi / 180);
+      std::vector<uint8_t> along_normal_only(on_border);
+      for (size_t v = 0; v < nv; ++v) {
+        if (along_normal_only[v]) continue;
+        bool crease = false;
+        for (uint32_t j = vf_start[v]; j < vf_start[v + 1] && !crease; ++j) {
+          crease = Dot(unit_normal[vf[j] / 3], vnormals[v]) < cos_crease;
+        }
+        along_normal_only[v] = !crease;
+      }
+      std::vector<V3> d(nv, V3{0, 0, 0});
+      const double tangent_weight = options.tangent_weight;
+      for (int sweep = 0; sweep < options.sweeps; ++sweep) {
+        for (size_t v = 0; v < nv; ++v) {
+          std::array<double, 9> a{};  // row-major 3 x 3
+          V3 rhs{0, 0, 0};
+          for (uint32_t j = vf_start[v]; j < vf_start[v + 1]; ++j) {
+            const uint32_t f = vf[j] / 3;
+            const int c = static_cast<int>(vf[j] % 3);
+            const V3& n = unit_normal[f];
+            const double mcc = m_at(f, c, c);
+            double r = face_r[f][c];
+            for (int k = 0; k < 3; ++k) {
+              if (k != c) r -= m_at(f, c, k) * Dot(n, d[mesh.indices[3 * size_t{f} + k]]);
+            }
+            for (int x = 0; x < 3; ++x) {
+              rhs[x] += r * n[x];
+              for (int y = 0; y < 3; ++y) a[3 * x + y] += mcc * n[x] * n[y];
+            }
+          }
+          // The smoothness, split along the vertex normal (weight lambda W
+          // per neighbour) and across it (tangent_weight of that), plus a
+          // tie of the tangential part to the vertex's place.
+          const uint32_t s = nb_start[v], e = nb_start[v + 1];
+          const V3& nv_v = vnormals[v];
+          V3 sum{0, 0, 0};
+          for (uint32_t j = s; j < e; ++j) {
+            for (int x = 0; x < 3; ++x) sum[x] += d[nb[j]][x];
+          }
+          const double along = Dot(nv_v, sum);
+          const double count = static_cast<double>(e - s);
+          for (int x = 0; x < 3; ++x) {
+            rhs[x] += lambda_w * (along * nv_v[x] + tangent_weight * (sum[x] - along * nv_v[x]));
+            for (int y = 0; y < 3; ++y) {
+              const double nn = nv_v[x] * nv_v[y];
+              const double tangent = (x == y ? 1.0 : 0.0) - nn;
+              a[3 * x + y] += lambda_w * count * (nn + 2 * tangent_weight * tangent);
+            }
+          }
+          // A ridge of a thousandth of the block's trace across the normal,
+          // so that without smoothness a flat vertex (data along n_f only)
+          // still solves, moving along its normal.
+          const double ridge = 1e-3 * (a[0] + a[4] + a[8]);
+          for (int x = 0; x < 3; ++x) {
+            for (int y = 0; y < 3; ++y) {
+              a[3 * x + y] += ridge * ((x == y ? 1.0 : 0.0) - nv_v[x] * nv_v[y]);
+            }
+          }
+          d[v] = SolveSymmetric3(a, rhs);
+          if (along_normal_only[v]) {
+            const double along_normal = Dot(nv_v, d[v]);
+            for (int x = 0; x < 3; ++x) d[v][x] = along_normal * nv_v[x];
           }
         }
-        const uint32_t s = nb_start[v], e = nb_start[v + 1];
-        for (uint32_t j = s; j < e; ++j) numerator += lambda_w * u[nb[j]];
-        denominator += lambda_w * static_cast<double>(e - s);
-        u[v] = denominator > 0 ? numerator / denominator : 0.0;
       }
-    }
-    // Steps, clamped to a fraction of each vertex's mean edge.
-    std::vector<double> step(nv, 0);
-    for (size_t v = 0; v < nv; ++v) {
-      if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
-      const double limit = options.max_step_edges * input_edge[v];
-      step[v] = options.damping * std::clamp(u[v], -limit, limit);
+      for (size_t v = 0; v < nv; ++v) {
+        if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
+        const double limit = options.max_step_edges * input_edge[v];
+        const double length = Norm(d[v]);
+        const double take = options.damping * (length > limit ? limit / length : 1.0);
+        for (int c = 0; c < 3; ++c) step[v][c] = take * d[v][c];
+      }
     }
     // The face-turn guard halves the steps of the vertices of faces that
     // turn too far (or lose their area), then drops them. A vertex never
     // ends farther than max_offset_edges of its edge from where it started.
     std::vector<uint8_t> moving(nv, 0);
-    for (size_t v = 0; v < nv; ++v) moving[v] = step[v] != 0;
+    for (size_t v = 0; v < nv; ++v) moving[v] = step[v] != V3{0, 0, 0};
     std::vector<double> scale(nv, 1.0);
     std::vector<float> moved(positions.size());
     GuardFaceTurns(mesh, crosses, input_crosses, cos_turn, moving, scale, moved, [&] {
       for (size_t v = 0; v < nv; ++v) {
-        const double s = step[v] * scale[v];
+        const double s = scale[v];
         V3 p;
-        for (int c = 0; c < 3; ++c) p[c] = positions[3 * v + c] + s * vnormals[v][c];
+        for (int c = 0; c < 3; ++c) p[c] = positions[3 * v + c] + s * step[v][c];
         const V3 p0 = Position(mesh.positions, static_cast<uint32_t>(v));
         const V3 offset = Sub(p, p0);
         const double length = Norm(offset);
         const double limit = options.max_offset_edges * input_edge[v];
-        if (s != 0 && length > limit) {
+        if (s != 0 && moving[v] && length > limit) {
           for (int c = 0; c < 3; ++c) p[c] = p0[c] + offset[c] * (limit / length);
         }
         for (int c = 0; c < 3; ++c) moved[3 * v + c] = static_cast<float>(p[c]);

@@ -1,6 +1,7 @@
 // Fitting a mesh to its scan: moves the vertices of a (low) mesh along their
-// normals so that the surface passes through the scan's points instead of
-// being inscribed in a smoothed surface.
+// normals (or, with free_directions, in any direction) so that the surface
+// passes through the scan's points instead of being inscribed in a smoothed
+// surface.
 //
 // Why: a decimated mesh's vertices sit on the surface it was decimated from
 // (here a Poisson surface), so its chords cut inside every convex part (a
@@ -48,6 +49,26 @@
 //    position (a chord's sagitta is a fraction of an edge; a vertex pulled
 //    farther is pulled by another surface's points). Border vertices move
 //    the same way, along the normal only, in the rounds.
+//  * Free directions (`free_directions`, the stage's default since its
+//    version 4): the displacement D_v is a vector instead of u_v n_v; a
+//    point's distance changes by n_f . sum_k b_k D_k, so each sweep solves
+//    a 3 x 3 block per vertex, and the smoothness acts on D's component
+//    along n_v with weight lambda W and across it with `tangent_weight` of
+//    that, plus a tie of the same weight holding the tangential part at the
+//    vertex's place. Why: a coarse Poisson solve rounds a crease (a plinth's
+//    edge, a wall's corner) and the decimation keeps the rounding as a
+//    chamfer whose two rows of vertices sit on the two faces; moving them
+//    along their diagonal normals bends both faces, so the fit left them
+//    where they were, the model's outline a pixel inside the box's corner.
+//    Free, each slides along its own face out to the crease. Only a vertex
+//    with a face turned more than `crease_deg` from its normal moves freely
+//    (elsewhere the points pull along the normals anyway, and a free vertex
+//    drifts along the surface with the noise: on the office's single depth
+//    frame, whose rims are jagged everywhere, free vertices everywhere
+//    doubled the hole pixels at its outline); border vertices keep moving
+//    along their normals (the border pass moves them after the rounds):
+//    with half their neighbours missing, the faces' diagonals along a rim
+//    twist a free one by millimetres.
 //  * No face may turn by more than `max_turn_deg` from its normal before the
 //    step or in the input, nor lose its area: the steps of the vertices of
 //    such faces are halved (up to 6 times, then dropped) until none does.
@@ -108,6 +129,9 @@ struct FitOptions {
   int spacing_neighbors = 8;        // k of the local spacing, >= 1
   double border_reach_edges = 0.5;  // farthest a border vertex moves outward, in its mean edges; 0: off
   double border_margin_spacings = 0.5;  // border this many local spacings past the outermost points, >= 0
+  bool free_directions = true;      // vertices move in 3-D (crease-aware); false: along normals (v3)
+  double tangent_weight = 0.1;      // free_directions: smoothness across the normal, of lambda's; > 0
+  double crease_deg = 20.0;         // free_directions: only where a face turns more from the vertex normal
   int threads = 0;                  // 0: TBB's default (all cores)
 };
 

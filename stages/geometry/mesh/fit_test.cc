@@ -2,8 +2,11 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
+#include <vector>
 
 namespace pb {
 namespace {
@@ -69,6 +72,7 @@ TEST(FitTest, MovesAnInscribedCylinderOntoItsPoints) {
   const Mesh mesh = InscribedCylinder(r, 0.3, 12, 7);  // chords 5.2 cm, sagitta 3.4 mm
   const PointCloud points = CylinderPoints(r, 0.3, 0.004);
   FitOptions options;
+  options.free_directions = false;  // version 3's fit, along the normals
   options.outside_weight = 0.5;  // plain least squares: the mesh straddles the points
   FitReport report;
   Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
@@ -96,25 +100,46 @@ TEST(FitTest, MovesAnInscribedCylinderOntoItsPoints) {
   // The default weighs a point outside three times one inside: the chords
   // move farther out, and fewer points are left outside the mesh (the ones a
   // silhouette would miss).
+  FitOptions weighted_options;
+  weighted_options.free_directions = false;
   FitReport weighted;
-  Expected<Mesh> covering = FitMeshToPoints(mesh, points, FitOptions{}, &weighted);
+  Expected<Mesh> covering = FitMeshToPoints(mesh, points, weighted_options, &weighted);
   ASSERT_TRUE(covering.ok()) << covering.status().message();
   EXPECT_LT(weighted.mean_signed_distance_after_m, -0.0003);
   EXPECT_LT(weighted.outside_fraction_after, report.outside_fraction_after - 0.1);
   EXPECT_GT(MeanRadiusOfFaces(*covering), MeanRadiusOfFaces(*fitted));
   EXPECT_LT(MeanRadiusOfFaces(*covering), r + 0.003);
+
+  // Free directions on a smooth surface: the same fit, and no vertex slides
+  // along it (around the axis or along it) by more than a millimeter; the
+  // two rims move out along the axis by the border pass, as along normals.
+  FitOptions free_options;  // the default: free directions
+  Expected<Mesh> free_fit = FitMeshToPoints(mesh, points, free_options, nullptr);
+  ASSERT_TRUE(free_fit.ok()) << free_fit.status().message();
+  EXPECT_NEAR(MeanRadiusOfFaces(*free_fit), MeanRadiusOfFaces(*covering), 0.0005);
+  for (size_t v = 12; v + 12 < mesh.vertex_count(); ++v) {
+    const float* p = &free_fit->positions[3 * v];
+    const float* p0 = &mesh.positions[3 * v];
+    const double turn = std::remainder(std::atan2(p[1], p[0]) - std::atan2(p0[1], p0[0]),
+                                       2 * std::numbers::pi);
+    EXPECT_LT(std::hypot(r * turn, p[2] - p0[2]), 0.001)
+        << "vertex " << v << " turn " << r * turn << " along " << p[2] - p0[2];
+  }
 }
 
 TEST(FitTest, SameBytesForAnyThreadCount) {
   const Mesh mesh = InscribedCylinder(0.1, 0.3, 10, 5);
   const PointCloud points = CylinderPoints(0.1, 0.3, 0.005);
-  FitOptions one, two;
-  one.threads = 1;
-  two.threads = 2;
-  Expected<Mesh> a = FitMeshToPoints(mesh, points, one, nullptr);
-  Expected<Mesh> b = FitMeshToPoints(mesh, points, two, nullptr);
-  ASSERT_TRUE(a.ok() && b.ok());
-  EXPECT_EQ(a->positions, b->positions);
+  for (const bool free : {false, true}) {
+    FitOptions one, two;
+    one.free_directions = two.free_directions = free;
+    one.threads = 1;
+    two.threads = 2;
+    Expected<Mesh> a = FitMeshToPoints(mesh, points, one, nullptr);
+    Expected<Mesh> b = FitMeshToPoints(mesh, points, two, nullptr);
+    ASSERT_TRUE(a.ok() && b.ok());
+    EXPECT_EQ(a->positions, b->positions) << (free ? "free directions" : "along normals");
+  }
 }
 
 // An n x n grid of 10 cm squares (two triangles each) in the plane z = `z`,
@@ -157,25 +182,32 @@ TEST(FitTest, LiftsAGridOntoNoisyPointsAndKeepsItFlat) {
                                static_cast<float>(noise)});
     }
   }
-  FitOptions options;
-  options.iterations = 6;
-  options.outside_weight = 0.5;
-  options.border_reach_edges = 0;  // the border pass would move the rim outward (next test)
-  FitReport report;
-  Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
-  ASSERT_TRUE(fitted.ok()) << fitted.status().message();
-  double lo = 1, hi = -1;
-  for (size_t v = 0; v < fitted->vertex_count(); ++v) {
-    lo = std::min<double>(lo, fitted->positions[3 * v + 2]);
-    hi = std::max<double>(hi, fitted->positions[3 * v + 2]);
-    EXPECT_NEAR(fitted->positions[3 * v], mesh.positions[3 * v], 1e-6);  // along the normal only
-    EXPECT_NEAR(fitted->normals[3 * v], std::sin(tilt), 5e-3);
-    EXPECT_NEAR(fitted->normals[3 * v + 2], std::cos(tilt), 5e-3);
+  for (const bool free : {false, true}) {
+    SCOPED_TRACE(free ? "free directions" : "along normals");
+    FitOptions options;
+    options.free_directions = free;
+    options.iterations = 6;
+    options.outside_weight = 0.5;
+    options.border_reach_edges = 0;  // the border pass would move the rim outward (next test)
+    FitReport report;
+    Expected<Mesh> fitted = FitMeshToPoints(mesh, points, options, &report);
+    ASSERT_TRUE(fitted.ok()) << fitted.status().message();
+    double lo = 1, hi = -1;
+    for (size_t v = 0; v < fitted->vertex_count(); ++v) {
+      lo = std::min<double>(lo, fitted->positions[3 * v + 2]);
+      hi = std::max<double>(hi, fitted->positions[3 * v + 2]);
+      // Along the vertex normal only; free, a vertex slides along the plane
+      // by a few micrometers of noise at most.
+      EXPECT_NEAR(fitted->positions[3 * v], mesh.positions[3 * v], free ? 2e-5 : 1e-6);
+      EXPECT_NEAR(fitted->positions[3 * v + 1], mesh.positions[3 * v + 1], free ? 2e-5 : 1e-6);
+      EXPECT_NEAR(fitted->normals[3 * v], std::sin(tilt), 5e-3);
+      EXPECT_NEAR(fitted->normals[3 * v + 2], std::cos(tilt), 5e-3);
+    }
+    EXPECT_GT(lo, -0.0015);
+    EXPECT_LT(hi, 0.0015);
+    EXPECT_LT(hi - lo, 0.0015);  // noise amplitude 4 mm
+    EXPECT_LT(report.mean_abs_distance_after_m, report.mean_abs_distance_before_m);
   }
-  EXPECT_GT(lo, -0.0015);
-  EXPECT_LT(hi, 0.0015);
-  EXPECT_LT(hi - lo, 0.0015);  // noise amplitude 4 mm
-  EXPECT_LT(report.mean_abs_distance_after_m, report.mean_abs_distance_before_m);
 }
 
 // True when (x, y) lies in the xy projection of one of the mesh's faces.
@@ -392,6 +424,114 @@ TEST(FitTest, NeverTurnsAFaceByMoreThanTheLimit) {
   EXPECT_NEAR(held->positions[3 * 12 + 2], 0.5 * edge, 1e-5);
 }
 
+// A right-angled edge along y, rounded off as a coarse Poisson solve and its
+// decimation leave it: the profile (x, z) runs along the top z = 0 from
+// x = -0.3 to a chamfer of legs `chamfer`, then down the side x = 0 to
+// z = -0.3, extruded over y in [0, 0.4] in 8 slices. The points lie on the
+// sharp edge's two faces every 3 mm, with their normals.
+struct Crease {
+  Mesh mesh;
+  PointCloud points;
+};
+Crease ChamferedCrease(double chamfer) {
+  const std::vector<std::array<double, 2>> profile = {
+      {-0.3, 0}, {-0.15, 0}, {-chamfer, 0}, {0, -chamfer}, {0, -0.15}, {0, -0.3}};
+  const int slices = 8;
+  Crease c;
+  for (int j = 0; j <= slices; ++j) {
+    for (const auto& [x, z] : profile) {
+      c.mesh.positions.insert(c.mesh.positions.end(),
+                              {static_cast<float>(x), static_cast<float>(0.4 * j / slices),
+                               static_cast<float>(z)});
+    }
+  }
+  const uint32_t n = static_cast<uint32_t>(profile.size());
+  for (uint32_t j = 0; j < static_cast<uint32_t>(slices); ++j) {
+    for (uint32_t i = 0; i + 1 < n; ++i) {
+      // Wound so that the normals face +z on the top and +x on the side.
+      const uint32_t a = j * n + i, b = a + 1, c2 = b + n, d = a + n;
+      c.mesh.indices.insert(c.mesh.indices.end(), {a, b, c2, a, c2, d});
+    }
+  }
+  for (double y = 0; y <= 0.4 + 1e-9; y += 0.003) {
+    for (double t = 0; t <= 0.3 + 1e-9; t += 0.003) {
+      c.points.positions.insert(c.points.positions.end(),
+                                {static_cast<float>(-t), static_cast<float>(y), 0.0f});
+      c.points.normals.insert(c.points.normals.end(), {0.0f, 0.0f, 1.0f});
+      if (t == 0) continue;
+      c.points.positions.insert(c.points.positions.end(),
+                                {0.0f, static_cast<float>(y), static_cast<float>(-t)});
+      c.points.normals.insert(c.points.normals.end(), {1.0f, 0.0f, 0.0f});
+    }
+  }
+  return c;
+}
+
+// Largest distance, over the inner slices, from the sharp edge (x = z = 0)
+// to the mesh's chamfer there (the segment of profile vertices 2 and 3).
+double ChamferInset(const Mesh& mesh) {
+  double worst = 0;
+  for (int j = 2; j <= 6; ++j) {
+    const float* c = &mesh.positions[3 * (6 * j + 2)];
+    const float* d = &mesh.positions[3 * (6 * j + 3)];
+    const double ux = d[0] - c[0], uz = d[2] - c[2];
+    const double length = std::hypot(ux, uz);
+    // Distance of the origin from the line through c and d, in (x, z).
+    const double inset = length > 1e-9 ? std::abs(c[0] * uz - c[2] * ux) / length
+                                       : std::hypot(c[0], c[2]);
+    worst = std::max(worst, inset);
+  }
+  return worst;
+}
+
+TEST(FitTest, FreeDirectionsMoveARoundedEdgeOutToTheCrease) {
+  const Crease crease = ChamferedCrease(0.012);
+  ASSERT_NEAR(ChamferInset(crease.mesh), 0.012 / std::sqrt(2.0), 1e-6);
+  FitOptions along_normals;
+  along_normals.free_directions = false;
+  FitReport report_normals;
+  Expected<Mesh> normals = FitMeshToPoints(crease.mesh, crease.points, along_normals,
+                                           &report_normals);
+  ASSERT_TRUE(normals.ok()) << normals.status().message();
+  FitOptions free = along_normals;
+  free.free_directions = true;  // the default
+  FitReport report_free;
+  Expected<Mesh> moved = FitMeshToPoints(crease.mesh, crease.points, free, &report_free);
+  ASSERT_TRUE(moved.ok()) << moved.status().message();
+  // Along the normals the chamfer's corners can only move diagonally, which
+  // bends both faces: the edge stays well inside (8.5 mm at the start).
+  EXPECT_GT(ChamferInset(*normals), 0.005);
+  // Free, they slide out along the faces to the crease.
+  EXPECT_LT(ChamferInset(*moved), 0.003);  // 1.8 mm; along the normals 6.8 mm
+  EXPECT_LT(report_free.mean_abs_distance_after_m, report_normals.mean_abs_distance_after_m);
+  // The flat parts stay on their planes and barely slide.
+  for (size_t v = 0; v < moved->vertex_count(); ++v) {
+    const int i = static_cast<int>(v % 6);
+    const float* p = &moved->positions[3 * v];
+    const float* p0 = &crease.mesh.positions[3 * v];
+    if (i <= 1) {
+      EXPECT_NEAR(p[2], 0.0, 0.001) << "top vertex " << v;
+    }
+    if (i >= 4) {
+      EXPECT_NEAR(p[0], 0.0, 0.001) << "side vertex " << v;
+    }
+    if (i == 0 || i == 5) {
+      EXPECT_LT(std::hypot(p[0] - p0[0], p[1] - p0[1], p[2] - p0[2]), 0.005) << "vertex " << v;
+    }
+  }
+  // Faces and their order are kept; none turned over.
+  EXPECT_EQ(moved->indices, crease.mesh.indices);
+
+  // The chamfer's faces turn about 40 degrees from its vertices' normals:
+  // with crease_deg above that no vertex is on a crease, all move along
+  // their normals, and the chamfer stays.
+  FitOptions gated = free;
+  gated.crease_deg = 60;
+  Expected<Mesh> held = FitMeshToPoints(crease.mesh, crease.points, gated, nullptr);
+  ASSERT_TRUE(held.ok());
+  EXPECT_GT(ChamferInset(*held), 0.005);
+}
+
 TEST(FitTest, RejectsBadInput) {
   const Mesh mesh = InscribedCylinder(0.1, 0.3, 8, 3);
   const PointCloud points = CylinderPoints(0.1, 0.3, 0.01);
@@ -406,6 +546,11 @@ TEST(FitTest, RejectsBadInput) {
   bad.damping = 0;
   EXPECT_NE(FitMeshToPoints(mesh, points, bad, nullptr).status().message().find("damping"),
             std::string::npos);
+  FitOptions no_tangent;
+  no_tangent.tangent_weight = 0;
+  EXPECT_NE(
+      FitMeshToPoints(mesh, points, no_tangent, nullptr).status().message().find("tangent_weight"),
+      std::string::npos);
   Mesh broken = mesh;
   broken.indices.push_back(1000);
   broken.indices.push_back(0);
