@@ -637,8 +637,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
       // Only a vertex on a crease moves freely: one with a face turned
       // more than crease_deg from its normal. Elsewhere the points pull
       // along the normals anyway, and a free vertex would only drift along
-      // the surface with the noise (on a single depth frame's jagged rims,
-      // a pixel of outline lost here and there).
+      // the surface with the noise.
       const double cos_crease = std::cos(options.crease_deg * std::numbers::pi / 180);
       std::vector<uint8_t> along_normal_only(on_border);
       for (size_t v = 0; v < nv; ++v) {

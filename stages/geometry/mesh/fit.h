@@ -63,9 +63,9 @@
 //    Free, each slides along its own face out to the crease. Only a vertex
 //    with a face turned more than `crease_deg` from its normal moves freely
 //    (elsewhere the points pull along the normals anyway, and a free vertex
-//    drifts along the surface with the noise: on the office's single depth
-//    frame, whose rims are jagged everywhere, free vertices everywhere
-//    doubled the hole pixels at its outline); border vertices keep moving
+//    drifts along the surface with the noise: on the statue stand-in of
+//    docs/mesh-real-scans.md every vertex free moved them 1.7 mm on
+//    average, against 1.2 mm along the normals); border vertices keep moving
 //    along their normals (the border pass moves them after the rounds):
 //    with half their neighbours missing, the faces' diagonals along a rim
 //    twist a free one by millimetres.
