@@ -203,16 +203,15 @@ void GuardFaceTurns(const Mesh& mesh, const std::vector<V3>& before,
 // their faces' planes so that every border edge passes border_margin_spacings
 // of a local spacing beyond the supported points whose closest point lies on
 // it. Returns the vertices moved.
-uint64_t ExtendBorders(const Mesh& mesh, std::vector<float>& positions,
-                       const std::vector<V3>& local, const std::vector<float>& spacing,
+uint64_t ExtendBorders(const Mesh& mesh, const std::vector<uint8_t>& border_corner,
+                       std::vector<float>& positions, const std::vector<V3>& local, const std::vector<float>& spacing,
                        const PointCloud& points, const FitOptions& options, double edge_floor_m,
                        std::vector<uint32_t>& nearest_face, const std::vector<double>& input_edge,
                        double cos_turn, const std::vector<V3>& input_crosses,
                        std::vector<Assignment>& assigned, FitReport& report) {
   const size_t nv = mesh.vertex_count(), nf = mesh.face_count();
-  // Border sides (corner k of face f to k + 1, alone on their edge) and
-  // each vertex's number of them (up to 3).
-  const std::vector<uint8_t> border_corner = BorderSides(mesh);
+  // Each vertex's number of border sides (`border_corner`: corner k of face
+  // f to k + 1, alone on their edge), up to 3.
   std::vector<uint8_t> border_count(nv, 0);
   for (size_t e = 0; e < border_corner.size(); ++e) {
     if (!border_corner[e]) continue;
@@ -514,7 +513,15 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
   std::vector<uint8_t> supported_before(points.size(), 0);
   std::vector<uint32_t> nearest_face(points.size(), UINT32_MAX);  // hints for the next round
   std::vector<Assignment> assigned;  // each assignment's, reused
-  std::vector<uint8_t> on_border;    // free directions: vertices on a border side
+  // Border sides (BorderSides: 3 f + k alone on its edge) and the vertices
+  // on them, for the free directions and the border pass.
+  const std::vector<uint8_t> border_sides = BorderSides(mesh);
+  std::vector<uint8_t> on_border(nv, 0);
+  for (size_t e = 0; e < border_sides.size(); ++e) {
+    if (!border_sides[e]) continue;
+    on_border[mesh.indices[e]] = 1;
+    on_border[mesh.indices[3 * (e / 3) + (e % 3 + 1) % 3]] = 1;
+  }
 
   for (int round = 0; round < options.iterations; ++round) {
     const std::vector<V3> crosses = FaceCrosses(mesh, positions);
@@ -582,9 +589,9 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
       const int lo = std::min(i, j), hi = std::max(i, j);
       return face_m[f][lo == 0 ? (hi == 1 ? 3 : 4) : 5];
     };
-    // Each vertex's step this round, a vector (along its normal unless
-    // free_directions).
-    std::vector<V3> step(nv, V3{0, 0, 0});
+    // Each vertex's solved displacement this round, a vector (along its
+    // normal unless free_directions).
+    std::vector<V3> d(nv, V3{0, 0, 0});
     if (!options.free_directions) {
       std::vector<double> u(nv, 0);
       for (int sweep = 0; sweep < options.sweeps; ++sweep) {
@@ -605,12 +612,8 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
           u[v] = denominator > 0 ? numerator / denominator : 0.0;
         }
       }
-      // Steps, clamped to a fraction of each vertex's mean edge.
       for (size_t v = 0; v < nv; ++v) {
-        if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
-        const double limit = options.max_step_edges * input_edge[v];
-        const double length = options.damping * std::clamp(u[v], -limit, limit);
-        for (int c = 0; c < 3; ++c) step[v][c] = length * vnormals[v][c];
+        for (int c = 0; c < 3; ++c) d[v][c] = u[v] * vnormals[v][c];
       }
     } else {
       // Free directions: the displacement D_v is a vector, a point's distance
@@ -625,15 +628,6 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
       // border pass moves them outward after the rounds): with half their
       // neighbours missing, the tie of a free one is too weak, and the
       // diagonals of the faces along a rim twist it a few millimeters.
-      if (on_border.empty()) {
-        on_border.assign(nv, 0);
-        const std::vector<uint8_t> sides = BorderSides(mesh);
-        for (size_t e = 0; e < sides.size(); ++e) {
-          if (!sides[e]) continue;
-          on_border[mesh.indices[e]] = 1;
-          on_border[mesh.indices[3 * (e / 3) + (e % 3 + 1) % 3]] = 1;
-        }
-      }
       // Only a vertex on a crease moves freely: one with a face turned
       // more than crease_deg from its normal. Elsewhere the points pull
       // along the normals anyway, and a free vertex would only drift along
@@ -648,7 +642,6 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
         }
         along_normal_only[v] = !crease;
       }
-      std::vector<V3> d(nv, V3{0, 0, 0});
       const double tangent_weight = options.tangent_weight;
       for (int sweep = 0; sweep < options.sweeps; ++sweep) {
         for (size_t v = 0; v < nv; ++v) {
@@ -703,13 +696,15 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
           }
         }
       }
-      for (size_t v = 0; v < nv; ++v) {
-        if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
-        const double limit = options.max_step_edges * input_edge[v];
-        const double length = Norm(d[v]);
-        const double take = options.damping * (length > limit ? limit / length : 1.0);
-        for (int c = 0; c < 3; ++c) step[v][c] = take * d[v][c];
-      }
+    }
+    // Steps, clamped to a fraction of each vertex's mean edge.
+    std::vector<V3> step(nv, V3{0, 0, 0});
+    for (size_t v = 0; v < nv; ++v) {
+      if (input_edge[v] == 0 || vnormals[v] == V3{0, 0, 0}) continue;
+      const double limit = options.max_step_edges * input_edge[v];
+      const double length = Norm(d[v]);
+      const double take = options.damping * (length > limit ? limit / length : 1.0);
+      for (int c = 0; c < 3; ++c) step[v][c] = take * d[v][c];
     }
     // The face-turn guard halves the steps of the vertices of faces that
     // turn too far (or lose their area), then drops them. A vertex never
@@ -738,7 +733,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
 
   if (options.border_reach_edges > 0) {
     report.border_vertices_moved =
-        ExtendBorders(mesh, positions, local, spacing, points, options, edge_floor, nearest_face,
+        ExtendBorders(mesh, border_sides, positions, local, spacing, points, options, edge_floor, nearest_face,
                       input_edge, cos_turn, input_crosses, assigned, report);
   }
 
