@@ -213,8 +213,9 @@ Status Run(StageContext& ctx) {
 StageType FitStage() {
   StageType type;
   type.id = kId;
-  // 2: outside_weight (0.75; version 1 was 0.5); 3: the border pass; 4: directions free.
-  type.version = 4;
+  // 2: outside_weight (0.75; version 1 was 0.5); 3: the border pass; 4: directions free;
+  // 5: in free mode a vertex held to its normal takes the block's exact minimizer along it.
+  type.version = 5;
   type.summary = "Moves a mesh's vertices so the surface fits the scan's points, out to its creases";
   type.doc =
       "A decimated mesh's vertices lie on the surface it was decimated from, so its chords cut "
@@ -240,7 +241,8 @@ StageType FitStage() {
       "that the coarse Poisson solve rounded off (a plinth's edge) moves out to the crease, "
       "where moving along its diagonal normal bent both faces (version 3, `directions: "
       "normals`, left the low mesh's outline a pixel inside a box's corners). Other vertices "
-      "and border vertices move along their normals. A move that would turn a face by more than `max_turn_deg` (from the "
+      "and border vertices move along their normals (version 5: by the block's exact minimizer "
+      "along the normal). A move that would turn a face by more than `max_turn_deg` (from the "
       "input or the round before) or collapse it is halved until none does. Then (version 3) "
       "a border pass moves border vertices outward in their faces' planes until each border "
       "edge passes `border_margin_spacings` local spacings beyond the points whose closest "

@@ -468,7 +468,7 @@ TEST_F(MeshStagesTest, TrimRemovesUnsupportedFacesAndCleanFillsPinHoles) {
 TEST_F(MeshStagesTest, FitLiftsAMeshOntoItsPoints) {
   const StageType* type = registry_.Find("mesh.fit");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 4);
+  EXPECT_EQ(type->version, 5);
   const nlohmann::json schema = CheckedSchema(*type, true);
   EXPECT_EQ(schema["properties"]["directions"]["default"], "free");
   EXPECT_EQ(schema["properties"]["tangent_weight"]["default"], 0.1);

@@ -680,6 +680,18 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
               a[3 * x + y] += lambda_w * count * (nn + 2 * tangent_weight * tangent);
             }
           }
+          if (along_normal_only[v]) {
+            // D_v = u N: the block's minimizer along the normal,
+            // u = (N . rhs) / (N^T A N) (projecting the 3 x 3 solution onto N
+            // would not be: the block couples u to the tangential terms).
+            double normal_block = 0;
+            for (int x = 0; x < 3; ++x) {
+              for (int y = 0; y < 3; ++y) normal_block += nv_v[x] * a[3 * x + y] * nv_v[y];
+            }
+            const double u = normal_block > 0 ? Dot(nv_v, rhs) / normal_block : 0.0;
+            for (int x = 0; x < 3; ++x) d[v][x] = u * nv_v[x];
+            continue;
+          }
           // A ridge of a thousandth of the block's trace across the normal,
           // so that without smoothness a flat vertex (data along n_f only)
           // still solves, moving along its normal.
@@ -690,10 +702,6 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
             }
           }
           d[v] = SolveSymmetric3(a, rhs);
-          if (along_normal_only[v]) {
-            const double along_normal = Dot(nv_v, d[v]);
-            for (int x = 0; x < 3; ++x) d[v][x] = along_normal * nv_v[x];
-          }
         }
       }
     }

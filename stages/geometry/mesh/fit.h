@@ -68,7 +68,9 @@
 //    average, against 1.2 mm along the normals); border vertices keep moving
 //    along their normals (the border pass moves them after the rounds):
 //    with half their neighbours missing, the faces' diagonals along a rim
-//    twist a free one by millimetres.
+//    twist a free one by millimetres. A vertex held to its normal takes the
+//    block's minimizer along it, (N . r) / (N^T A N) (the stage's version 5;
+//    version 4 projected the 3 x 3 solution onto N).
 //  * No face may turn by more than `max_turn_deg` from its normal before the
 //    step or in the input, nor lose its area: the steps of the vertices of
 //    such faces are halved (up to 6 times, then dropped) until none does.
