@@ -1,0 +1,86 @@
+#!/usr/bin/env python3
+"""A statue as it is often delivered, for ctest
+campaign_runs.scene_from_scan.statue (tests/statue_file.sh).
+
+  statue_file.py IN.ply OUT.ply
+
+IN is `synth.scan` preset `sculpture`'s points.ply (binary PLY: x y z in
+meters, z up, colors, a station per point and the stations in comments).
+OUT is the same scan as a photogrammetry or fused RGB-D export brings it:
+one file without scanner stations (neither the comments nor the per-point
+property), in millimetres, y up (x, y, z -> x, z, -y), and cropped to 1 m
+around the plinth's axis (the carved blob, its box and a disk of paving).
+Normals, if IN has them, are turned with the points.
+"""
+import struct
+import sys
+
+TYPES = {'char': 'b', 'uchar': 'B', 'short': 'h', 'ushort': 'H', 'int': 'i', 'uint': 'I',
+         'float': 'f', 'double': 'd'}
+
+
+def read_header(data, path):
+    end = data.find(b'end_header\n')
+    if not data.startswith(b'ply\n') or end < 0:
+        sys.exit(f'{path}: not a PLY file (no ply / end_header lines)')
+    lines = data[:end].decode('ascii').splitlines()
+    if 'format binary_little_endian 1.0' not in lines:
+        sys.exit(f'{path}: only binary little-endian PLY is read here')
+    count, names, fmt = None, [], '<'
+    for line in lines:
+        words = line.split()
+        if words[:2] == ['element', 'vertex']:
+            count = int(words[2])
+        elif words[:1] == ['element'] and count is not None:
+            sys.exit(f'{path}: an element after the vertices ({line}) is not read here')
+        elif words[:1] == ['property']:
+            if words[1] == 'list' or words[1] not in TYPES:
+                sys.exit(f'{path}: property {line!r} is not read here')
+            fmt += TYPES[words[1]]
+            names.append(words[2])
+    if count is None:
+        sys.exit(f'{path}: no vertex element')
+    return end + len(b'end_header\n'), count, names, struct.Struct(fmt)
+
+
+def main():
+    if len(sys.argv) != 3:
+        sys.exit(__doc__)
+    source, target = sys.argv[1], sys.argv[2]
+    with open(source, 'rb') as f:
+        data = f.read()
+    start, count, names, record = read_header(data, source)
+    if len(data) < start + count * record.size:
+        sys.exit(f'{source}: {count} vertices announced, the file ends before them')
+    for name in ('x', 'y', 'z', 'red', 'green', 'blue'):
+        if name not in names:
+            sys.exit(f'{source}: no {name} property')
+    ix, iy, iz = (names.index(n) for n in ('x', 'y', 'z'))
+    colors = [names.index(n) for n in ('red', 'green', 'blue')]
+    normals = [names.index(n) for n in ('nx', 'ny', 'nz')] if 'nx' in names else None
+    out = struct.Struct('<fffBBB' + ('fff' if normals else ''))
+    body = bytearray()
+    kept = 0
+    for r in record.iter_unpack(data[start:start + count * record.size]):
+        x, y, z = r[ix], r[iy], r[iz]
+        if x * x + y * y > 1.0:
+            continue
+        values = [1000 * x, 1000 * z, -1000 * y] + [r[i] for i in colors]
+        if normals:
+            values += [r[normals[0]], r[normals[2]], -r[normals[1]]]
+        body += out.pack(*values)
+        kept += 1
+    header = ['ply', 'format binary_little_endian 1.0', 'comment a statue export: no stations, mm, y up',
+              f'element vertex {kept}', 'property float x', 'property float y', 'property float z',
+              'property uchar red', 'property uchar green', 'property uchar blue']
+    if normals:
+        header += ['property float nx', 'property float ny', 'property float nz']
+    header.append('end_header')
+    with open(target, 'wb') as f:
+        f.write(('\n'.join(header) + '\n').encode('ascii'))
+        f.write(body)
+    print(f'{target}: {kept} of {count} points (mm, y up, no stations)')
+
+
+if __name__ == '__main__':
+    main()
