@@ -250,7 +250,11 @@ void InteriorViews(const PointCloud& cloud, const EnclosedSpace& space, const Ve
 // Three views of a scan without stations: face-on to its main plane (the
 // principal axis of least variance, from the side its normals face), then
 // that view turned 40° either way about the camera's up and raised 15°, each
-// at the distance that frames 98 % of the points.
+// at the distance that frames 98 % of the points. When the main plane is
+// level and something stands on it (a statue on its paving: the ground
+// holds most points), face-on is straight down onto the object's top; the
+// views then look as a visitor does, 30° down toward the scan's broad side
+// and turned 40° either way 45° down.
 void FaceOnViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1,
                  const SceneSurveyOptions& options, SceneSurvey* survey) {
   const size_t n = cloud.size();
@@ -288,10 +292,45 @@ void FaceOnViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1,
     side = cloud.has_normals() ? "its normals face all sides"
                                : "no normals to say which side is its front";
   }
+  // A level main plane (within 30° of it) seen from above, with something
+  // standing on it at least a fifth as tall as the plane is wide: looked at
+  // from the side. (Normals facing down along up: a ceiling, or an up
+  // written wrong, keep the face-on view from the side they face.)
+  const Vec3 e2 = Cross(up, e1);
+  bool level_ground = false;
+  if (Dot(toward_eye, up) > std::cos(30 * M_PI / 180)) {
+    // Extents from the 1st to the 99th percentile along up, e1 and e2.
+    std::vector<double> along[3];
+    for (size_t i = 0; i < n; i += step) {
+      const Vec3 p = point(i);
+      along[0].push_back(Dot(p, up));
+      along[1].push_back(Dot(p, e1));
+      along[2].push_back(Dot(p, e2));
+    }
+    double extent[3];
+    for (int c = 0; c < 3; ++c) extent[c] = Quantile(along[c], 0.99) - Quantile(along[c], 0.01);
+    level_ground = extent[0] >= 0.2 * std::max(extent[1], extent[2]);
+  }
   // The camera's up: `up` across the view, or, looking along it, the
   // principal axis of most variance.
   Vec3 camera_up = Sub(up, Scale(toward_eye, Dot(up, toward_eye)));
-  if (Dot(camera_up, camera_up) < 0.01) {
+  if (level_ground) {
+    // The heading: the level axis of least variance (the broad side faces
+    // the camera), on the side the normals lean to, if they do.
+    const Eigen::Vector3d a(e1[0], e1[1], e1[2]), b(e2[0], e2[1], e2[2]);
+    Eigen::Matrix2d level;
+    level << a.dot(covariance * a), a.dot(covariance * b), b.dot(covariance * a), b.dot(covariance * b);
+    const Eigen::SelfAdjointEigenSolver<Eigen::Matrix2d> level_solver(level);
+    const Eigen::Vector2d narrow = level_solver.eigenvectors().col(0);
+    Vec3 heading = Normalized(Add(Scale(e1, narrow[0]), Scale(e2, narrow[1])));
+    const double lean = cloud.has_normals() && std::abs(Dot(mean_normal, heading)) >= 0.1
+                            ? Dot(mean_normal, heading)
+                            : Dot(heading, std::abs(Dot(heading, e1)) > 1e-3 ? e1 : e2);
+    if (lean < 0) heading = Scale(heading, -1);
+    toward_eye = heading;
+    camera_up = up;
+    side = "something stands on it";
+  } else if (Dot(camera_up, camera_up) < 0.01) {
     const Eigen::Vector3d most = solver.eigenvectors().col(2);
     camera_up = Sub(Vec3{most[0], most[1], most[2]},
                     Scale(toward_eye, Dot(Vec3{most[0], most[1], most[2]}, toward_eye)));
@@ -299,10 +338,11 @@ void FaceOnViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1,
   camera_up = Normalized(camera_up);
   const double tan_half = std::tan(0.5 * options.fov_deg * M_PI / 180);
   const double turns[3] = {0.0, -40.0, 40.0};
+  const double raise_front = level_ground ? 30.0 : 0.0;
   for (int k = 0; k < 3; ++k) {
     // toward_eye turned about camera_up, then raised toward it.
     const Vec3 side_axis = Cross(camera_up, toward_eye);
-    const double a = turns[k] * M_PI / 180, b = (k == 0 ? 0.0 : 15.0) * M_PI / 180;
+    const double a = turns[k] * M_PI / 180, b = (raise_front + (k == 0 ? 0.0 : 15.0)) * M_PI / 180;
     const Vec3 turned = Add(Scale(toward_eye, std::cos(a)), Scale(side_axis, std::sin(a)));
     const Vec3 direction =
         Normalized(Add(Scale(turned, std::cos(b)), Scale(camera_up, std::sin(b))));
@@ -327,10 +367,17 @@ void FaceOnViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1,
                   ? up
                   : Normalized(Sub(camera_up, Scale(direction, Dot(camera_up, direction))));
     view.fov_deg = options.fov_deg;
-    view.why = k == 0 ? "face-on to the scan's main plane (no scanner stations; " + side +
-                            "), framing 98 % of its points"
-                      : "the front view turned " + std::to_string(int(std::abs(turns[k]))) +
-                            " degrees to the " + view.name + " and raised 15";
+    if (level_ground) {
+      view.why = k == 0 ? "30 degrees down toward the scan's broad side (no scanner stations; its "
+                          "main plane is level, " + side + "), framing 98 % of its points"
+                        : "the front view turned " + std::to_string(int(std::abs(turns[k]))) +
+                              " degrees to the " + view.name + " about the up axis, 45 degrees down";
+    } else {
+      view.why = k == 0 ? "face-on to the scan's main plane (no scanner stations; " + side +
+                              "), framing 98 % of its points"
+                        : "the front view turned " + std::to_string(int(std::abs(turns[k]))) +
+                              " degrees to the " + view.name + " and raised 15";
+    }
     survey->viewpoints.push_back(view);
   }
 }

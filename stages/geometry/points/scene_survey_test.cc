@@ -265,6 +265,45 @@ TEST(SceneSurveyTest, LookingAlongUpTakesTheLongestAxisAsTheCamerasUp) {
     for (double c : view.eye) EXPECT_TRUE(std::isfinite(c)) << view.name;
 }
 
+// A statue on its paving, delivered without stations: the paving (5 x 4 m)
+// holds most points, so the main plane is level, and face-on would look
+// straight down onto the statue's top. The views look as a visitor does:
+// 30 degrees down toward the broad side (along y, the paving's narrow
+// axis), then turned 40 degrees either way about up, 45 degrees down.
+TEST(SceneSurveyTest, AStatueOnItsGroundIsSeenFromTheSide) {
+  PointCloud site;
+  for (int i = 0; i <= 250; ++i)
+    for (int k = 0; k <= 200; ++k) AddPoint(&site, -2.5 + 0.02 * i, -2.0 + 0.02 * k, 0.0);
+  for (int k = 0; k <= 100; ++k)  // a 0.6 m square column 2 m tall
+    for (int i = 0; i < 30; ++i) {
+      const double t = -0.3 + 0.02 * i, z = 0.02 * k;
+      AddPoint(&site, t, -0.3, z);
+      AddPoint(&site, 0.3, t, z);
+      AddPoint(&site, -t, 0.3, z);
+      AddPoint(&site, -0.3, -t, z);
+    }
+  Expected<SceneSurvey> survey = SurveyScene(site);
+  ASSERT_TRUE(survey.ok()) << survey.status().message();
+  ASSERT_EQ(survey->viewpoints.size(), 3u);
+  const double sines[3] = {0.5, std::sqrt(0.5), std::sqrt(0.5)};
+  for (int k = 0; k < 3; ++k) {
+    const SurveyViewpoint& view = survey->viewpoints[k];
+    const Vec3 from = {view.eye[0] - view.target[0], view.eye[1] - view.target[1],
+                       view.eye[2] - view.target[2]};
+    const double d = Distance(view.eye, view.target);
+    EXPECT_NEAR(from[2] / d, sines[k], 1e-6) << view.name;  // looking down, not straight down
+    EXPECT_NEAR(view.up[2], 1.0, 1e-9) << view.name;
+  }
+  const SurveyViewpoint& front = survey->viewpoints[0];
+  EXPECT_NE(front.why.find("main plane is level"), std::string::npos) << front.why;
+  EXPECT_LT(std::abs(front.eye[0] - front.target[0]), 1e-6 * Distance(front.eye, front.target));
+  EXPECT_NEAR(survey->viewpoints[1].eye[0] - front.target[0], -(survey->viewpoints[2].eye[0] - front.target[0]),
+              1e-3);
+  EXPECT_GT(std::abs(survey->viewpoints[1].eye[0] - front.target[0]), 1.0);
+  // The same paving without the column is a floor: seen from above (the
+  // test below), as before.
+}
+
 TEST(SceneSurveyTest, BadInputIsNamed) {
   PointCloud few;
   for (int i = 0; i < 5; ++i) AddPoint(&few, i, 0, 0);
