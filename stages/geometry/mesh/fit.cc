@@ -643,8 +643,44 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
         along_normal_only[v] = !crease;
       }
       const double tangent_weight = options.tangent_weight;
+      // A face's data for corner c of the vertex: its weight m_cc and its
+      // residual with the other corners' displacements of this sweep.
+      const auto face_residual = [&](uint32_t f, int c) {
+        const V3& n = unit_normal[f];
+        double r = face_r[f][c];
+        for (int k = 0; k < 3; ++k) {
+          if (k != c) r -= m_at(f, c, k) * Dot(n, d[mesh.indices[3 * size_t{f} + k]]);
+        }
+        return r;
+      };
       for (int sweep = 0; sweep < options.sweeps; ++sweep) {
         for (size_t v = 0; v < nv; ++v) {
+          const uint32_t s = nb_start[v], e = nb_start[v + 1];
+          const V3& nv_v = vnormals[v];
+          const double count = static_cast<double>(e - s);
+          V3 sum{0, 0, 0};
+          for (uint32_t j = s; j < e; ++j) {
+            for (int x = 0; x < 3; ++x) sum[x] += d[nb[j]][x];
+          }
+          const double along = Dot(nv_v, sum);
+          if (along_normal_only[v]) {
+            // D_v = u N: the block below restricted to the normal,
+            // u = (N . rhs) / (N^T A N), with (N . n_f) for each face and
+            // only the smoothness's component along N (projecting the 3 x 3
+            // solution onto N would not be the minimizer: the block couples
+            // u to the tangential terms).
+            double numerator = lambda_w * along, denominator = lambda_w * count;
+            for (uint32_t j = vf_start[v]; j < vf_start[v + 1]; ++j) {
+              const uint32_t f = vf[j] / 3;
+              const int c = static_cast<int>(vf[j] % 3);
+              const double cosine = Dot(unit_normal[f], nv_v);
+              numerator += face_residual(f, c) * cosine;
+              denominator += m_at(f, c, c) * cosine * cosine;
+            }
+            const double u = denominator > 0 ? numerator / denominator : 0.0;
+            for (int x = 0; x < 3; ++x) d[v][x] = u * nv_v[x];
+            continue;
+          }
           std::array<double, 9> a{};  // row-major 3 x 3
           V3 rhs{0, 0, 0};
           for (uint32_t j = vf_start[v]; j < vf_start[v + 1]; ++j) {
@@ -652,10 +688,7 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
             const int c = static_cast<int>(vf[j] % 3);
             const V3& n = unit_normal[f];
             const double mcc = m_at(f, c, c);
-            double r = face_r[f][c];
-            for (int k = 0; k < 3; ++k) {
-              if (k != c) r -= m_at(f, c, k) * Dot(n, d[mesh.indices[3 * size_t{f} + k]]);
-            }
+            const double r = face_residual(f, c);
             for (int x = 0; x < 3; ++x) {
               rhs[x] += r * n[x];
               for (int y = 0; y < 3; ++y) a[3 * x + y] += mcc * n[x] * n[y];
@@ -664,14 +697,6 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
           // The smoothness, split along the vertex normal (weight lambda W
           // per neighbour) and across it (tangent_weight of that), plus a
           // tie of the tangential part to the vertex's place.
-          const uint32_t s = nb_start[v], e = nb_start[v + 1];
-          const V3& nv_v = vnormals[v];
-          V3 sum{0, 0, 0};
-          for (uint32_t j = s; j < e; ++j) {
-            for (int x = 0; x < 3; ++x) sum[x] += d[nb[j]][x];
-          }
-          const double along = Dot(nv_v, sum);
-          const double count = static_cast<double>(e - s);
           for (int x = 0; x < 3; ++x) {
             rhs[x] += lambda_w * (along * nv_v[x] + tangent_weight * (sum[x] - along * nv_v[x]));
             for (int y = 0; y < 3; ++y) {
@@ -679,18 +704,6 @@ Expected<Mesh> Fit(const Mesh& mesh, const PointCloud& points, const FitOptions&
               const double tangent = (x == y ? 1.0 : 0.0) - nn;
               a[3 * x + y] += lambda_w * count * (nn + 2 * tangent_weight * tangent);
             }
-          }
-          if (along_normal_only[v]) {
-            // D_v = u N: the block's minimizer along the normal,
-            // u = (N . rhs) / (N^T A N) (projecting the 3 x 3 solution onto N
-            // would not be: the block couples u to the tangential terms).
-            double normal_block = 0;
-            for (int x = 0; x < 3; ++x) {
-              for (int y = 0; y < 3; ++y) normal_block += nv_v[x] * a[3 * x + y] * nv_v[y];
-            }
-            const double u = normal_block > 0 ? Dot(nv_v, rhs) / normal_block : 0.0;
-            for (int x = 0; x < 3; ++x) d[v][x] = u * nv_v[x];
-            continue;
           }
           // A ridge of a thousandth of the block's trace across the normal,
           // so that without smoothness a flat vertex (data along n_f only)

@@ -255,7 +255,7 @@ void InteriorViews(const PointCloud& cloud, const EnclosedSpace& space, const Ve
 // holds most points), face-on is straight down onto the object's top; the
 // views then look as a visitor does, 30° down toward the scan's broad side
 // and turned 40° either way 45° down.
-void FaceOnViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1,
+void FaceOnViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1, const Vec3& e2,
                  const SceneSurveyOptions& options, SceneSurvey* survey) {
   const size_t n = cloud.size();
   const size_t step = std::max<size_t>(1, n / 1000000);
@@ -296,7 +296,6 @@ void FaceOnViews(const PointCloud& cloud, const Vec3& up, const Vec3& e1,
   // standing on it at least a fifth as tall as the plane is wide: looked at
   // from the side. (Normals facing down along up: a ceiling, or an up
   // written wrong, keep the face-on view from the side they face.)
-  const Vec3 e2 = Cross(up, e1);
   bool level_ground = false;
   if (Dot(toward_eye, up) > std::cos(30 * M_PI / 180)) {
     // Extents from the 1st to the 99th percentile along up, e1 and e2.
@@ -437,7 +436,7 @@ Expected<SceneSurvey> SurveyScene(const PointCloud& cloud, const SceneSurveyOpti
     survey.enclosed_volume_m3 = space.volume_m3();
     if (!space.empty()) InteriorViews(cloud, space, up, e1, e2, options, &survey);
   }
-  if (survey.viewpoints.empty()) FaceOnViews(cloud, up, e1, options, &survey);
+  if (survey.viewpoints.empty()) FaceOnViews(cloud, up, e1, e2, options, &survey);
   return survey;
 }
 
