@@ -1,5 +1,5 @@
 // points.normals: k-NN PCA normals with orientation (stages/geometry/points/normals.h).
-#include <initializer_list>
+#include <cstddef>
 #include <string>
 #include <utility>
 
@@ -47,9 +47,9 @@ constexpr const char* kSchema = R"({
 
 // The value named `value` of the choice parameter `name`, or Status::Invalid
 // listing the names.
-template <typename T>
+template <typename T, size_t N>
 Expected<T> Choice(const char* name, const std::string& value,
-                   std::initializer_list<std::pair<const char*, T>> choices) {
+                   const std::pair<const char*, T> (&choices)[N]) {
   std::string names;
   for (const auto& [text, choice] : choices) {
     if (value == text) return choice;
@@ -59,13 +59,17 @@ Expected<T> Choice(const char* name, const std::string& value,
                          "; got '" + value + "'");
 }
 
+// The orientation parameter's names, for parsing and for the output's meta.
+constexpr std::pair<const char*, NormalOrientation> kOrientations[] = {
+    {"auto", NormalOrientation::kAuto},
+    {"stations", NormalOrientation::kStations},
+    {"input", NormalOrientation::kInput},
+    {"propagate", NormalOrientation::kPropagate},
+    {"none", NormalOrientation::kNone}};
+
 const char* OrientationName(NormalOrientation orientation) {
-  switch (orientation) {
-    case NormalOrientation::kAuto: return "auto";
-    case NormalOrientation::kStations: return "stations";
-    case NormalOrientation::kInput: return "input";
-    case NormalOrientation::kPropagate: return "propagate";
-    case NormalOrientation::kNone: return "none";
+  for (const auto& [name, value] : kOrientations) {
+    if (value == orientation) return name;
   }
   return "none";
 }
@@ -74,12 +78,7 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {3, 100}));
   PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation"));
   PB_ASSIGN_OR_RETURN(const NormalOrientation orientation,
-                      Choice<NormalOrientation>("orientation", orientation_name,
-                                                {{"auto", NormalOrientation::kAuto},
-                                                 {"stations", NormalOrientation::kStations},
-                                                 {"input", NormalOrientation::kInput},
-                                                 {"propagate", NormalOrientation::kPropagate},
-                                                 {"none", NormalOrientation::kNone}}));
+                      Choice<NormalOrientation>("orientation", orientation_name, kOrientations));
   PB_ASSIGN_OR_RETURN(const std::string interior_name, StringParam(ctx, kId, "interior"));
   PB_ASSIGN_OR_RETURN(const NormalInterior interior,
                       Choice<NormalInterior>("interior", interior_name,

@@ -660,6 +660,11 @@ TEST_F(PointsStagesTest, NormalsRejectsBadParameters) {
   EXPECT_EQ(status.code(), Status::Code::kInvalid);
   EXPECT_THAT(status.message(), HasSubstr("orientation 'stations' needs per-point station ids"));
   EXPECT_TRUE(stations.meta_.empty());
+  FakeContext sideways(dir_ / "c", {{"orientation", "sideways"}});
+  sideways.AddInput("points", "points", input);
+  EXPECT_THAT(Run("points.normals", sideways).message(),
+              HasSubstr("parameter 'orientation' must be one of auto, stations, input, propagate, none; "
+                        "got 'sideways'"));
 }
 
 TEST_F(PointsStagesTest, SpacingOfTwoMillimeterGrid) {

@@ -14,6 +14,11 @@ struct Grid {
   size_t Index(int x, int y, int z) const {
     return (size_t(z) * size_t(dims[1]) + size_t(y)) * size_t(dims[0]) + size_t(x);
   }
+  // The voxel coordinates of index i (Index's inverse).
+  std::array<int, 3> Coords(size_t i) const {
+    return {int(i % size_t(dims[0])), int((i / size_t(dims[0])) % size_t(dims[1])),
+            int(i / (size_t(dims[0]) * size_t(dims[1])))};
+  }
   size_t size() const { return size_t(dims[0]) * size_t(dims[1]) * size_t(dims[2]); }
   size_t Stride(int axis) const {
     return axis == 0 ? 1 : axis == 1 ? size_t(dims[0]) : size_t(dims[0]) * size_t(dims[1]);
@@ -61,10 +66,7 @@ size_t Fill(const Grid& grid, uint8_t from, uint8_t to, std::vector<uint32_t>& q
   size_t head = 0;
   while (head < queue.size()) {
     const uint32_t i = queue[head++];
-    const int x = int(i % uint32_t(grid.dims[0]));
-    const int y = int((i / uint32_t(grid.dims[0])) % uint32_t(grid.dims[1]));
-    const int z = int(i / (uint32_t(grid.dims[0]) * uint32_t(grid.dims[1])));
-    const int coords[3] = {x, y, z};
+    const std::array<int, 3> coords = grid.Coords(i);
     for (int axis = 0; axis < 3; ++axis) {
       for (int step : {-1, 1}) {
         const int c = coords[axis] + step;
@@ -188,8 +190,7 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
   // nearest their centroid.
   const uint16_t most = *std::max_element(depth.begin(), depth.end());
   auto center_of = [&](size_t i) {
-    const size_t coords[3] = {i % size_t(grid.dims[0]), (i / size_t(grid.dims[0])) % size_t(grid.dims[1]),
-                              i / (size_t(grid.dims[0]) * size_t(grid.dims[1]))};
+    const std::array<int, 3> coords = grid.Coords(i);
     std::array<double, 3> c{};
     for (int axis = 0; axis < 3; ++axis) c[axis] = space.min_[axis] + (double(coords[axis]) + 0.5) * voxel;
     return c;
@@ -244,7 +245,7 @@ bool EnclosedSpace::Contains(const float p[3]) const {
     if (!(f >= 0 && f < dims_[axis])) return false;
     c[axis] = int(f);
   }
-  return inside_[(size_t(c[2]) * size_t(dims_[1]) + size_t(c[1])) * size_t(dims_[0]) + size_t(c[0])] != 0;
+  return inside_[Grid{dims_}.Index(c[0], c[1], c[2])] != 0;
 }
 
 }  // namespace pb
