@@ -288,8 +288,8 @@ std::string ParamsSchema() {
              {"description",
               "Where the scanner stood, which orients normals toward it (points.normals) and "
               "gives mesh.decimate its lines of sight: 'file' takes the file's stations (poses, "
-              "VIEWPOINT, PTX positions, PLY station comments; an unposed E57 grid or organized "
-              "PCD swept from its origin has it there); 'none' drops them; [x, y, z] (or "
+              "VIEWPOINT, PTX positions, PLY station comments; an unposed E57 grid, a PLY's "
+              "row/col grid or an organized PCD swept from its origin has it there); 'none' drops them; [x, y, z] (or "
               "\"x,y,z\", the form --set gives) declares one station for every point, in the "
               "coordinates of the points as the file gives them (after its own pose, e.g. a PCD "
               "VIEWPOINT) and in `units`, replacing the file's: a one-station scan exported "
@@ -380,15 +380,17 @@ Status Run(StageContext& ctx) {
 StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
-  type.version = 5;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57
-                     // invalid colors filled
+  type.version = 6;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57
+                     // invalid colors filled; 6: the same for a PLY's row/col grid
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters (a file in "
       "millimeters, centimeters, feet or inches says so with `units`), and normals "
       "and 8-bit sRGB colors, intensities and scanner stations when the file has them.\n\n"
       "Formats (chosen by extension, or `format:`): PLY (ascii, binary little and big endian; "
-      "any scalar types; unknown elements and properties ignored); PCD v0.6/0.7 (ascii, binary, "
+      "any scalar types; unknown elements and properties ignored; a structured scan's `row` and "
+      "`col` per point, with no station in the file, put its scanner at the origin when its grid "
+      "was swept from there, as for an E57 without a pose); PCD v0.6/0.7 (ascii, binary, "
       "binary_compressed; VIEWPOINT applied and kept as the station; an organized cloud without "
       "a VIEWPOINT pose has its sensor at the origin when its pixel grid was swept from there); "
       "XYZ/TXT/CSV/PTS (columns "
@@ -405,8 +407,9 @@ StageType ReadPointsStage() {
       "origin at the scan's bounding-box center rounded to 1 m, which keeps float32 precision "
       "(about 1e-7 of the scan's extent) for any location on Earth; the "
       "origin travels in the artifact.\n\n"
-      "Scanner stations come from the file (or, for an unposed structured E57 scan or "
-      "organized PCD frame, from its grid); `station` declares one where the file does not say "
+      "Scanner stations come from the file (or, for an unposed structured E57 scan, a PLY "
+      "with a row and column per point and no station, or an organized PCD frame, from its "
+      "grid); `station` declares one where the file does not say "
       "(a one-station PTS/XYZ/PLY/LAS export) or drops them; the meta's `stations_from` says "
       "`file`, `declared` or `none`.\n\n"
       "A scan without colors is painted grey (`uncolored`: by intensity, else uniformly) so "

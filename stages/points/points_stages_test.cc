@@ -442,6 +442,24 @@ TEST_F(PointsStagesTest, ReadPointsPassesReaderWarningsOn) {
   EXPECT_EQ(ctx.counters_["warnings"], 1);
 }
 
+// The pump's decoded PLY (row and col per point, no station): the stage says
+// where it took the scanner, and the station is the file's.
+TEST_F(PointsStagesTest, ReadPointsFindsTheScannerOfAPlysGrid) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  const std::string path = data + "/pump_e57/pumpA.ply";
+  if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
+  FakeContext ctx(dir_, {{"path", path}});
+  const Status status = Run("io.read_points", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  ASSERT_EQ(ctx.warnings_.size(), 1u);
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr(path + ": structured scan (row and column per point) "
+                                                 "without a station: its scanner taken at its "
+                                                 "frame's origin"));
+  EXPECT_EQ(ctx.meta_["points"]["stations"], 1);
+  EXPECT_EQ(ctx.meta_["points"]["stations_from"], "file");
+}
+
 TEST_F(PointsStagesTest, ReadPointsUnsupportedExtension) {
   FakeContext ctx(dir_, {{"path", (dir_ / "foo.obj").string()}, {"format", "auto"}});
   const Status status = Run("io.read_points", ctx);

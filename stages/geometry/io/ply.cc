@@ -19,6 +19,7 @@
 
 #include "stages/geometry/core/buffered_input.h"
 #include "stages/geometry/core/text_parse.h"
+#include "stages/geometry/io/grid_station.h"
 
 namespace pb {
 namespace {
@@ -71,7 +72,7 @@ const char* FormatName(Format format) {
 // What a property means to us; kSkip for everything we do not read.
 enum Role : uint8_t {
   kSkip, kX, kY, kZ, kNx, kNy, kNz, kRed, kGreen, kBlue, kU, kV, kTx, kTy, kTz, kTw,
-  kIntensity, kStation, kFaceIndices, kRoleCount
+  kIntensity, kStation, kRow, kColumn, kFaceIndices, kRoleCount
 };
 
 struct RoleName {
@@ -89,6 +90,11 @@ constexpr RoleName kVertexRoles[] = {
     {"ty", kTy},         {"tz", kTz},         {"tw", kTw},
     {"intensity", kIntensity}, {"scalar_intensity", kIntensity}, {"scalar_Intensity", kIntensity},
     {"station", kStation},
+    // A structured scan's grid cell (E57's rowIndex / columnIndex, as
+    // converters name them): only for GridStationTest.
+    {"row", kRow},       {"col", kColumn},    {"column", kColumn},
+    {"rowIndex", kRow},  {"columnIndex", kColumn},
+    {"row_index", kRow}, {"column_index", kColumn},
 };
 
 struct Property {
@@ -446,6 +452,10 @@ class PlyParser {
     if (has_stations_ && stations_.empty())
       return Status::Corrupt(path_ + ": vertices have a 'station' property but the header "
                                      "names no 'comment station I X Y Z'");
+    // A structured scan's grid (row and column per point) and no station
+    // named: its scanner at the origin of the file's frame when the grid was
+    // swept from there (grid_station.h), as for an E57 without a pose.
+    if (!keep_faces_ && stations_.empty() && present[kRow] && present[kColumn]) grid_.emplace();
     vertex_count_ = vertex->count;
     report_.vertices_in_file = vertex->count;
     for (const Element& element : elements_) {
@@ -623,6 +633,7 @@ class PlyParser {
     std::vector<double> stations(has_stations_ ? block_records : 0);
     std::vector<uint16_t> station_ids(has_stations_ ? block_records : 0);
     std::vector<double> scratch(block_records);
+    std::vector<double> grid_cells(grid_ ? 2 * block_records : 0);  // row, column per record
     const double station_limit = static_cast<double>(stations_.size());
 
     std::vector<uint8_t> records(block_records * record_bytes);
@@ -677,6 +688,12 @@ class PlyParser {
         DecodeColumn(field[kStation]->type, swap_, records.data() + field[kStation]->offset,
                      record_bytes, n, stations.data(), 1);
       }
+      if (grid_) {
+        for (Role role : {kRow, kColumn}) {
+          DecodeColumn(field[role]->type, swap_, records.data() + field[role]->offset,
+                       record_bytes, n, grid_cells.data() + (role - kRow), 2);
+        }
+      }
 
       // Check the records in order. The leading run of good records needs no
       // moving; after the first bad one, record j moves to slot kept < j.
@@ -722,12 +739,22 @@ class PlyParser {
         }
         if (recenter_) std::copy_n(&xyz[3 * j], 3, &xyz[3 * kept]);
         if (has_colors_) std::copy_n(&colors[3 * j], 3, &colors[3 * kept]);
+        if (grid_) std::copy_n(&grid_cells[2 * j], 2, &grid_cells[2 * kept]);
         for (FloatArray& array : arrays) {
           std::copy_n(&array.block[array.width * j], array.width, &array.block[array.width * kept]);
         }
         ++kept;
       }
 
+      if (grid_) {
+        for (size_t j = 0; j < kept; ++j) {
+          const double position[3] = {
+              recenter_ ? xyz[3 * j] : arrays[0].block[3 * j],
+              recenter_ ? xyz[3 * j + 1] : arrays[0].block[3 * j + 1],
+              recenter_ ? xyz[3 * j + 2] : arrays[0].block[3 * j + 2]};
+          grid_->Add(grid_cells[2 * j], grid_cells[2 * j + 1], position);
+        }
+      }
       if (recenter_) {
         for (size_t j = 0; j < kept; ++j) StoreRecentered(&xyz[3 * j], &recentered[3 * j]);
         mesh_.positions.insert(mesh_.positions.end(), recentered.begin(),
@@ -903,6 +930,7 @@ class PlyParser {
         return StationError(index, place, station);
     }
     if (!remap_.empty()) remap_[index] = static_cast<uint32_t>(mesh_.positions.size() / 3);
+    if (grid_) grid_->Add(values_[kRow], values_[kColumn], position);  // the file's frame
     if (recenter_) {
       float stored[3];
       StoreRecentered(position, stored);
@@ -956,6 +984,7 @@ class PlyParser {
   }
 
   Status Finish() {
+    if (grid_) DecideGridStation();
     if (!remap_.empty()) {
       size_t kept = 0;
       for (size_t t = 0; t + 2 < mesh_.indices.size(); t += 3) {
@@ -998,6 +1027,26 @@ class PlyParser {
     return Status::Ok();
   }
 
+  // The scanner of a structured scan without a station: at the origin of the
+  // file's frame ("comment origin", else 0 0 0) when its grid says so.
+  void DecideGridStation() {
+    const GridStationTest::Verdict verdict = grid_->Decide();
+    if (verdict.at_origin) {
+      stations_ = {origin_};
+      station_ids_.assign(mesh_.positions.size() / 3, 0);
+      report_.warnings.push_back("structured scan (row and column per point) without a station: "
+                                 "its scanner taken at its frame's origin (" +
+                                 verdict.Describe() + ")");
+    } else {
+      report_.warnings.push_back(
+          std::string("no scanner station: structured scan (row and column per point) without a "
+                      "station, and ") +
+          (verdict.decided ? "its grid does not show its frame's origin as its scanner's ("
+                           : "its grid cannot tell whether its frame's origin is its scanner's (") +
+          verdict.Describe() + "); io.read_points `station` can declare where it stood");
+    }
+  }
+
   static constexpr uint32_t kDropped = std::numeric_limits<uint32_t>::max();
 
   const std::string path_;
@@ -1017,6 +1066,7 @@ class PlyParser {
   std::vector<float> intensities_;
   std::vector<uint16_t> station_ids_;
   std::vector<std::array<double, 3>> stations_;
+  std::optional<GridStationTest> grid_;  // row and column per point, no station named
   bool has_face_indices_ = false;
   Scalar color_types_[3] = {Scalar::kUint8, Scalar::kUint8, Scalar::kUint8};
   uint64_t vertex_count_ = 0;

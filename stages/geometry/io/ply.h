@@ -55,7 +55,11 @@
 //           rounded to 1 m), nx ny nz, red green blue (or diffuse_red ...;
 //           uchar as is, ushort scaled to 8 bit, float/double in [0,1]; alpha
 //           ignored), s t | u v | texture_u texture_v, tx ty tz tw,
-//           intensity (or scalar_intensity), station (with the comments);
+//           intensity (or scalar_intensity), station (with the comments),
+//           row and col (or column, rowIndex / columnIndex, row_index /
+//           column_index: a structured scan's grid cell; with no station in
+//           the file, its scanner is taken at the frame's origin when the
+//           grid was swept from there, grid_station.h, with a warning);
 //   face:   vertex_indices or vertex_index (polygons are fan-triangulated).
 // It streams the file through a 1 MiB buffer: memory is the decoded arrays,
 // never a copy of the file. `comment origin` restores the origin.
@@ -99,6 +103,8 @@ struct PlyReadReport {
   std::string pointbake_kind;      // "points" or "mesh" if written by pointbake, else ""
   int pointbake_version = 0;       // 0 if not written by pointbake
   std::vector<std::string> comments;  // header comment and obj_info lines, without keyword
+  // For the user, e.g. where a structured scan's scanner was taken to stand.
+  std::vector<std::string> warnings;
 };
 
 struct PlyPoints {

@@ -554,6 +554,122 @@ std::string FastPathFile(const std::string& format, const std::vector<TestProper
   return data;
 }
 
+// A structured scan as converters write it (row and col per point, no
+// station): a sweep of boxes at different depths from `station`, 60 rows by
+// 40 columns, column-major; float, double (re-centred) or ascii.
+std::string SweptGridFile(const std::string& format, const std::string& coordinate,
+                          const double station[3]) {
+  const int rows = 60, columns = 40;
+  std::string data = "ply\nformat " + format + " 1.0\ncomment converted from E57\nelement vertex " +
+                     std::to_string(rows * columns) + "\nproperty " + coordinate + " x\nproperty " +
+                     coordinate + " y\nproperty " + coordinate + " z\nproperty uchar red\n" +
+                     "property uchar green\nproperty uchar blue\nproperty float intensity\n" +
+                     "property int row\nproperty int col\nend_header\n";
+  for (int column = 0; column < columns; ++column) {
+    for (int row = 0; row < rows; ++row) {
+      const double range = 2.0 + 2.5 * ((row / 10 + column / 15) % 3);
+      const double elevation = 0.4 - 0.01 * row, azimuth = 0.02 * column;
+      const double p[3] = {station[0] + range * std::cos(elevation) * std::cos(azimuth),
+                           station[1] + range * std::cos(elevation) * std::sin(azimuth),
+                           station[2] + range * std::sin(elevation)};
+      if (format == "ascii") {
+        char text[160];
+        std::snprintf(text, sizeof text, "%.9g %.9g %.9g 10 20 30 0.5 %d %d\n", p[0], p[1], p[2],
+                      row, column);
+        data += text;
+        continue;
+      }
+      for (double v : p) AppendValue(&data, coordinate, v, /*big_endian=*/false);
+      data += std::string("\x0a\x14\x1e", 3);
+      AppendRaw<float>(&data, 0.5f, false);
+      AppendRaw<int32_t>(&data, row, false);
+      AppendRaw<int32_t>(&data, column, false);
+    }
+  }
+  return data;
+}
+
+TEST(PlyStationsTest, AStructuredScanSweptFromItsOriginGetsItsScannerThere) {
+  testing::TempDir dir;
+  const double origin[3] = {0, 0, 0};
+  for (const auto& [format, coordinate] :
+       {std::pair<std::string, std::string>{"binary_little_endian", "float"},
+        {"binary_little_endian", "double"},
+        {"ascii", "float"}}) {
+    SCOPED_TRACE(format + " " + coordinate);
+    const std::string path = dir.Path("grid.ply");
+    std::ofstream(path, std::ios::binary) << SweptGridFile(format, coordinate, origin);
+    auto read = ReadPlyPoints(path);
+    ASSERT_TRUE(read.ok()) << read.status().message();
+    EXPECT_EQ(read->points.size(), 2400u);
+    EXPECT_EQ(read->points.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+    EXPECT_EQ(read->points.station_ids, std::vector<uint16_t>(2400, 0));
+    EXPECT_TRUE(Validate(read->points).ok());
+    ASSERT_EQ(read->report.warnings.size(), 1u);
+    EXPECT_THAT(read->report.warnings[0],
+                HasSubstr("structured scan (row and column per point) without a station: its "
+                          "scanner taken at its frame's origin (seen from there, 100.0 % of the"));
+  }
+  // The same sweep with its registration baked in (the scanner 40 cm off):
+  // no station, and the warning says how to give one.
+  const double moved[3] = {0.4, -0.2, 0.1};
+  const std::string path = dir.Path("moved.ply");
+  std::ofstream(path, std::ios::binary) << SweptGridFile("binary_little_endian", "float", moved);
+  auto read = ReadPlyPoints(path);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  EXPECT_FALSE(read->points.has_stations());
+  ASSERT_EQ(read->report.warnings.size(), 1u);
+  EXPECT_THAT(read->report.warnings[0],
+              HasSubstr("no scanner station: structured scan (row and column per point) without "
+                        "a station, and its grid does not show its frame's origin as its "
+                        "scanner's"));
+  EXPECT_THAT(read->report.warnings[0], HasSubstr("io.read_points `station` can declare"));
+  // Stations named in the file win: no grid test, no warning.
+  std::string named = SweptGridFile("ascii", "float", moved);
+  named.replace(named.find("element vertex"), 0, "comment station 0 0.4 -0.2 0.1\n");
+  named.replace(named.find("property int row"), 0, "property ushort station\n");
+  std::string body;
+  for (size_t line = named.find("end_header\n") + 11; line < named.size();) {
+    const size_t end = named.find('\n', line);
+    const std::string record = named.substr(line, end - line);
+    const size_t cells = record.rfind(' ', record.rfind(' ') - 1);
+    body += record.substr(0, cells) + " 0" + record.substr(cells) + "\n";
+    line = end + 1;
+  }
+  named = named.substr(0, named.find("end_header\n") + 11) + body;
+  std::ofstream(path, std::ios::binary) << named;
+  auto declared = ReadPlyPoints(path);
+  ASSERT_TRUE(declared.ok()) << declared.status().message();
+  EXPECT_EQ(declared->points.stations, (std::vector<std::array<double, 3>>{{0.4, -0.2, 0.1}}));
+  EXPECT_TRUE(declared->report.warnings.empty());
+  // A mesh's reader does not look for a scanner.
+  std::ofstream(path, std::ios::binary) << SweptGridFile("binary_little_endian", "float", origin);
+  auto mesh = ReadPlyMesh(path);
+  ASSERT_TRUE(mesh.ok()) << mesh.status().message();
+  EXPECT_TRUE(mesh->report.warnings.empty());
+}
+
+// The shared pump scan as its decoded PLY (row and col, no pose): its
+// scanner at the origin, as the E57 reader finds from the same grid.
+TEST(PlyStationsTest, ThePumpScansGridPutsItsScannerAtItsOrigin) {
+  const std::string data = SharedData();
+  const std::string path = data + "/pump_e57/pumpA.ply";
+  if (data.empty() || !std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
+  auto read = ReadPlyPoints(path);
+  ASSERT_TRUE(read.ok()) << read.status().message();
+  const PointCloud& cloud = read->points;
+  EXPECT_EQ(cloud.size(), 155201u);
+  EXPECT_TRUE(cloud.has_colors());
+  ASSERT_TRUE(cloud.has_intensities());
+  EXPECT_EQ(cloud.stations, (std::vector<std::array<double, 3>>{{0, 0, 0}}));
+  EXPECT_EQ(cloud.station_ids, std::vector<uint16_t>(cloud.size(), 0));
+  ASSERT_EQ(read->report.warnings.size(), 1u);
+  EXPECT_THAT(read->report.warnings[0],
+              HasSubstr("its scanner taken at its frame's origin (seen from there, 99.9 % of the "
+                        "303204 steps"));
+  EXPECT_TRUE(Validate(cloud).ok());
+}
+
 // Every scalar type, both byte orders, an unread property, a role given twice
 // (the last wins), NaN coordinates in several blocks: the binary fast path
 // must give exactly what the generic ascii path gives.

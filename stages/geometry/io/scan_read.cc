@@ -21,6 +21,7 @@ Expected<ScanReadResult> ReadPlyScan(const std::string& path, const ScanReadOpti
   result.points = std::move(ply.points);
   result.dropped_points = ply.report.dropped_points;
   result.format = "ply " + ply.report.format;
+  result.warnings = std::move(ply.report.warnings);
   return result;
 }
 
