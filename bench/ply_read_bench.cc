@@ -2,8 +2,13 @@
 // pointbake points layout (float xyz + uchar rgb + ushort station, 17 bytes
 // a point). Writes a 10^7-point file (~170 MB) into FOLDER once, then reads
 // it three times and prints the best time in MB/s (10^6 bytes per second).
+// Given PLY files instead, reads each of them the same way, in turns, so
+// their times are comparable as ratios within one run (e.g. a structured
+// scan with its row/col grid, which is tested for the scanner's place, and
+// the same file with those properties renamed).
 //
 //   ply_read_bench [FOLDER=/tmp] [POINTS=10000000]
+//   ply_read_bench FILE.ply...
 #include <algorithm>
 #include <cstdio>
 #include <cstdlib>
@@ -13,8 +18,44 @@
 #include "bench/bench_clock.h"
 #include "stages/geometry/io/ply.h"
 
+namespace {
+
+// Best of three reads of `path`, in seconds; < 0 if a read failed.
+double BestRead(const std::string& path, size_t expected_points) {
+  double best = 1e30;
+  for (int run = 0; run < 3; ++run) {
+    const auto start = pb::bench::Clock::now();
+    auto read = pb::ReadPlyPoints(path);
+    const double seconds = pb::bench::Seconds(start);
+    if (!read.ok() || (expected_points != 0 && read->points.size() != expected_points)) {
+      std::fprintf(stderr, "%s: read failed: %s\n", path.c_str(),
+                   read.ok() ? "wrong point count" : read.status().message().c_str());
+      return -1;
+    }
+    best = std::min(best, seconds);
+  }
+  return best;
+}
+
+bool IsPly(const char* arg) {
+  const std::string name = arg;
+  return name.size() > 4 && name.substr(name.size() - 4) == ".ply" && std::filesystem::exists(name);
+}
+
+}  // namespace
+
 int main(int argc, char** argv) {
   using namespace pb;
+  if (argc > 1 && IsPly(argv[1])) {
+    for (int i = 1; i < argc; ++i) {
+      const double bytes = static_cast<double>(std::filesystem::file_size(argv[i]));
+      const double best = BestRead(argv[i], 0);
+      if (best < 0) return 1;
+      std::printf("ReadPlyPoints %s, %.0f MB: best %.3f s = %.0f MB/s\n", argv[i], bytes / 1e6,
+                  best, bytes / 1e6 / best);
+    }
+    return 0;
+  }
   const std::string folder = argc > 1 ? argv[1] : "/tmp";
   const size_t n = argc > 2 ? std::strtoull(argv[2], nullptr, 10) : 10'000'000;
   const std::string path = folder + "/pb_ply_read_bench_" + std::to_string(n) + ".ply";
@@ -36,18 +77,8 @@ int main(int argc, char** argv) {
     }
   }
   const double bytes = static_cast<double>(std::filesystem::file_size(path));
-  double best = 1e30;
-  for (int run = 0; run < 3; ++run) {
-    const auto start = bench::Clock::now();
-    auto read = ReadPlyPoints(path);
-    const double seconds = bench::Seconds(start);
-    if (!read.ok() || read->points.size() != n) {
-      std::fprintf(stderr, "%s: read failed: %s\n", path.c_str(),
-                   read.ok() ? "wrong point count" : read.status().message().c_str());
-      return 1;
-    }
-    best = std::min(best, seconds);
-  }
+  const double best = BestRead(path, n);
+  if (best < 0) return 1;
   std::printf("ReadPlyPoints %zu points, %.0f MB: best %.3f s = %.0f MB/s (file %s kept)\n", n,
               bytes / 1e6, best, bytes / 1e6 / best, path.c_str());
   return 0;

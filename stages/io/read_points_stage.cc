@@ -381,7 +381,8 @@ StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
   type.version = 6;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57
-                     // invalid colors filled; 6: the same for a PLY's row/col grid
+                     // invalid colors filled; 6: the same for a PLY's row/col grid, and
+                     // the grid test's angles from the chord's series
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters (a file in "

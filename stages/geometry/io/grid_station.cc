@@ -7,6 +7,18 @@
 
 namespace pb {
 
+double GridStationTest::Angle(const float a[3], const float b[3]) {
+  const double d[3] = {double(a[0]) - b[0], double(a[1]) - b[1], double(a[2]) - b[2]};
+  const double chord = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+  if (chord < 0.1) return chord + chord * chord * chord / 24;
+  const double cross[3] = {double(a[1]) * b[2] - double(a[2]) * b[1],
+                           double(a[2]) * b[0] - double(a[0]) * b[2],
+                           double(a[0]) * b[1] - double(a[1]) * b[0]};
+  const double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
+  const double cosine = double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
+  return std::atan2(sine, cosine);
+}
+
 void GridStationTest::Step(std::unordered_map<int64_t, Last>& lines, int64_t line, int64_t cell,
                            const float direction[3], Count& count) {
   auto found = lines.find(line);
@@ -21,14 +33,7 @@ void GridStationTest::Step(std::unordered_map<int64_t, Last>& lines, int64_t lin
   const int64_t cells = std::abs(cell - last.cell);
   float step = 0;
   if (cells >= 1 && cells <= 4) {
-    const float* a = last.direction;
-    const double cross[3] = {double(a[1]) * direction[2] - double(a[2]) * direction[1],
-                             double(a[2]) * direction[0] - double(a[0]) * direction[2],
-                             double(a[0]) * direction[1] - double(a[1]) * direction[0]};
-    const double sine = std::sqrt(cross[0] * cross[0] + cross[1] * cross[1] + cross[2] * cross[2]);
-    const double cosine =
-        double(a[0]) * direction[0] + double(a[1]) * direction[1] + double(a[2]) * direction[2];
-    step = static_cast<float>(std::atan2(sine, cosine) / double(cells));
+    step = static_cast<float>(Angle(last.direction, direction) / double(cells));
     if (last.step > 0) {
       ++count.steps;
       count.regular += step >= last.step / kFactor && step <= last.step * kFactor;

@@ -61,6 +61,14 @@ class GridStationTest {
   };
   Verdict Decide() const;
 
+  // The angle between two unit directions, in radians. A scanner's steps
+  // are small, and for a chord c = |a - b| below 0.1 the angle 2 asin(c / 2)
+  // is c + c^3 / 24 to a relative 5e-7 at most (the next term, 3 c^5 / 640),
+  // about what the directions' float rounding leaves of c; larger ones take
+  // an arctangent, which per record and direction was most of a structured
+  // PLY's read (bench/ply_read_bench).
+  static double Angle(const float a[3], const float b[3]);
+
  private:
   // The last record of a row or column is remembered for at most this many
   // rows and columns (a grid has far fewer; garbage indices stop here).

@@ -23,13 +23,13 @@ double Range(int64_t row, int64_t column) {
 // skip-th record out (not recorded, or invalid and not added: its
 // neighbours are then two cells apart).
 GridStationTest::Verdict Sweep(const double station[3], int64_t rows, int64_t columns,
-                               int skip = 0) {
+                               int skip = 0, double azimuth_step = 0.02) {
   GridStationTest test;
   int64_t record = 0;
   for (int64_t column = 0; column < columns; ++column) {
     for (int64_t row = 0; row < rows; ++row, ++record) {
       if (skip > 0 && record % skip == 0) continue;
-      const double elevation = 0.4 - 0.01 * double(row), azimuth = 0.02 * double(column);
+      const double elevation = 0.4 - 0.01 * double(row), azimuth = azimuth_step * double(column);
       const double r = Range(row, column);
       const double p[3] = {station[0] + r * std::cos(elevation) * std::cos(azimuth),
                            station[1] + r * std::cos(elevation) * std::sin(azimuth),
@@ -63,6 +63,46 @@ TEST(GridStationTest, AGridSweptFromElsewhereFails) {
   // Far away, as a site frame's origin usually is.
   const double far[3] = {250, 1200, 30};
   EXPECT_FALSE(Sweep(far, 80, 120).at_origin);
+}
+
+// The angle between directions: from the chord's series below a chord of
+// 0.1, from the arctangent above, both the angle to float precision.
+TEST(GridStationTest, AngleIsTheAngleOnBothSidesOfTheSeries) {
+  for (double angle : {1e-4, 0.003, 0.05, 0.0999, 0.1, 0.10005, 0.2, 1.0, 2.5, 3.1}) {
+    SCOPED_TRACE(angle);
+    // Two directions `angle` apart, tilted out of any axis plane.
+    const float a[3] = {float(std::cos(0.3) * std::cos(0.2)), float(std::sin(0.3) * std::cos(0.2)),
+                        float(std::sin(0.2))};
+    const double azimuth = 0.3 + angle / std::cos(0.2);  // not exactly `angle`: measure it in double
+    const float b[3] = {float(std::cos(azimuth) * std::cos(0.2)),
+                        float(std::sin(azimuth) * std::cos(0.2)), float(std::sin(0.2))};
+    const double dot = double(a[0]) * b[0] + double(a[1]) * b[1] + double(a[2]) * b[2];
+    const double cross = std::sqrt(std::pow(double(a[1]) * b[2] - double(a[2]) * b[1], 2) +
+                                   std::pow(double(a[2]) * b[0] - double(a[0]) * b[2], 2) +
+                                   std::pow(double(a[0]) * b[1] - double(a[1]) * b[0], 2));
+    const double exact = std::atan2(cross, dot);
+    EXPECT_NEAR(GridStationTest::Angle(a, b), exact, 1e-6 * exact + 1e-7);
+    EXPECT_DOUBLE_EQ(GridStationTest::Angle(a, b), GridStationTest::Angle(b, a));
+  }
+  const float same[3] = {0, 0, 1};
+  EXPECT_EQ(GridStationTest::Angle(same, same), 0);
+}
+
+// Steps of 0.15 rad along the rows (a coarse sweep: their angle from the
+// arctangent) and 0.01 rad down the columns (from the chord's series): both
+// regular seen from the origin, and neither from 40 cm off.
+TEST(GridStationTest, CoarseAndFineStepsAreMeasuredAlike) {
+  const double origin[3] = {0, 0, 0};
+  const GridStationTest::Verdict coarse = Sweep(origin, 80, 40, 0, /*azimuth_step=*/0.15);
+  EXPECT_TRUE(coarse.at_origin);
+  EXPECT_GT(coarse.regular, 0.999);
+  // With every 3rd record left out, steps of one and two cells (0.15 and
+  // 0.30 rad, 0.01 and 0.02 rad) are divided by their cells alike.
+  const GridStationTest::Verdict skipped = Sweep(origin, 80, 40, 3, /*azimuth_step=*/0.15);
+  EXPECT_TRUE(skipped.at_origin);
+  EXPECT_GT(skipped.regular, 0.999);
+  const double station[3] = {0.4, -0.2, 0.1};
+  EXPECT_FALSE(Sweep(station, 80, 40, 0, /*azimuth_step=*/0.15).at_origin);
 }
 
 TEST(GridStationTest, MissingRecordsMakeLongerSteps) {
