@@ -289,11 +289,11 @@ std::string ParamsSchema() {
               "Where the scanner stood, which orients normals toward it (points.normals) and "
               "gives mesh.decimate its lines of sight: 'file' takes the file's stations (poses, "
               "VIEWPOINT, PTX positions, PLY station comments; an unposed E57 grid, a PLY's "
-              "row/col grid or an organized PCD swept from its origin has it there); 'none' drops them; [x, y, z] (or "
-              "\"x,y,z\", the form --set gives) declares one station for every point, in the "
-              "coordinates of the points as the file gives them (after its own pose, e.g. a PCD "
-              "VIEWPOINT) and in `units`, replacing the file's: a one-station scan exported "
-              "without its pose (PTS, XYZ, PLY, LAS)."}}},
+              "row/col grid or an organized PCD swept from its origin has it there); 'none' "
+              "drops them; [x, y, z] (or \"x,y,z\", the form --set gives) declares one station "
+              "for every point, in the coordinates of the points as the file gives them (after "
+              "its own pose, e.g. a PCD VIEWPOINT) and in `units`, replacing the file's: a "
+              "one-station scan exported without its pose (PTS, XYZ, PLY, LAS)."}}},
            {"uncolored",
             {{"type", "string"},
              {"enum", {"intensity", "grey", "none"}},
