@@ -2,7 +2,7 @@
 // pointbake points layout (float xyz + uchar rgb + ushort station, 17 bytes
 // a point). Writes a 10^7-point file (~170 MB) into FOLDER once, then reads
 // it three times and prints the best time in MB/s (10^6 bytes per second).
-// Given PLY files instead, reads each of them the same way, in turns, so
+// Given PLY files instead, reads each of them the same way, in turn, so
 // their times are comparable as ratios within one run (e.g. a structured
 // scan with its row/col grid, which is tested for the scanner's place, and
 // the same file with those properties renamed).

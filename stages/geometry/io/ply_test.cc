@@ -556,14 +556,22 @@ std::string FastPathFile(const std::string& format, const std::vector<TestProper
 
 // A structured scan as converters write it (row and col per point, no
 // station): a sweep of boxes at different depths from `station`, 60 rows by
-// 40 columns, column-major; float, double (re-centred) or ascii.
+// 40 columns, column-major; float, double (re-centred) or ascii. With
+// `named`, the file also names that station (a comment and a ushort
+// `station` 0 per point).
 std::string SweptGridFile(const std::string& format, const std::string& coordinate,
-                          const double station[3]) {
+                          const double station[3], bool named = false) {
   const int rows = 60, columns = 40;
-  std::string data = "ply\nformat " + format + " 1.0\ncomment converted from E57\nelement vertex " +
-                     std::to_string(rows * columns) + "\nproperty " + coordinate + " x\nproperty " +
-                     coordinate + " y\nproperty " + coordinate + " z\nproperty uchar red\n" +
-                     "property uchar green\nproperty uchar blue\nproperty float intensity\n" +
+  char comment[120] = "";
+  if (named) {
+    std::snprintf(comment, sizeof comment, "comment station 0 %.17g %.17g %.17g\n", station[0],
+                  station[1], station[2]);
+  }
+  std::string data = "ply\nformat " + format + " 1.0\ncomment converted from E57\n" + comment +
+                     "element vertex " + std::to_string(rows * columns) + "\nproperty " +
+                     coordinate + " x\nproperty " + coordinate + " y\nproperty " + coordinate +
+                     " z\nproperty uchar red\nproperty uchar green\nproperty uchar blue\n" +
+                     "property float intensity\n" + (named ? "property ushort station\n" : "") +
                      "property int row\nproperty int col\nend_header\n";
   for (int column = 0; column < columns; ++column) {
     for (int row = 0; row < rows; ++row) {
@@ -574,14 +582,15 @@ std::string SweptGridFile(const std::string& format, const std::string& coordina
                            station[2] + range * std::sin(elevation)};
       if (format == "ascii") {
         char text[160];
-        std::snprintf(text, sizeof text, "%.9g %.9g %.9g 10 20 30 0.5 %d %d\n", p[0], p[1], p[2],
-                      row, column);
+        std::snprintf(text, sizeof text, "%.9g %.9g %.9g 10 20 30 0.5 %s%d %d\n", p[0], p[1],
+                      p[2], named ? "0 " : "", row, column);
         data += text;
         continue;
       }
       for (double v : p) AppendValue(&data, coordinate, v, /*big_endian=*/false);
       data += std::string("\x0a\x14\x1e", 3);
       AppendRaw<float>(&data, 0.5f, false);
+      if (named) AppendRaw<uint16_t>(&data, 0, false);
       AppendRaw<int32_t>(&data, row, false);
       AppendRaw<int32_t>(&data, column, false);
     }
@@ -625,23 +634,14 @@ TEST(PlyStationsTest, AStructuredScanSweptFromItsOriginGetsItsScannerThere) {
                         "scanner's"));
   EXPECT_THAT(read->report.warnings[0], HasSubstr("io.read_points `station` can declare"));
   // Stations named in the file win: no grid test, no warning.
-  std::string named = SweptGridFile("ascii", "float", moved);
-  named.replace(named.find("element vertex"), 0, "comment station 0 0.4 -0.2 0.1\n");
-  named.replace(named.find("property int row"), 0, "property ushort station\n");
-  std::string body;
-  for (size_t line = named.find("end_header\n") + 11; line < named.size();) {
-    const size_t end = named.find('\n', line);
-    const std::string record = named.substr(line, end - line);
-    const size_t cells = record.rfind(' ', record.rfind(' ') - 1);
-    body += record.substr(0, cells) + " 0" + record.substr(cells) + "\n";
-    line = end + 1;
+  for (const std::string format : {"ascii", "binary_little_endian"}) {
+    SCOPED_TRACE(format);
+    std::ofstream(path, std::ios::binary) << SweptGridFile(format, "float", moved, /*named=*/true);
+    auto declared = ReadPlyPoints(path);
+    ASSERT_TRUE(declared.ok()) << declared.status().message();
+    EXPECT_EQ(declared->points.stations, (std::vector<std::array<double, 3>>{{0.4, -0.2, 0.1}}));
+    EXPECT_TRUE(declared->report.warnings.empty());
   }
-  named = named.substr(0, named.find("end_header\n") + 11) + body;
-  std::ofstream(path, std::ios::binary) << named;
-  auto declared = ReadPlyPoints(path);
-  ASSERT_TRUE(declared.ok()) << declared.status().message();
-  EXPECT_EQ(declared->points.stations, (std::vector<std::array<double, 3>>{{0.4, -0.2, 0.1}}));
-  EXPECT_TRUE(declared->report.warnings.empty());
   // A mesh's reader does not look for a scanner.
   std::ofstream(path, std::ios::binary) << SweptGridFile("binary_little_endian", "float", origin);
   auto mesh = ReadPlyMesh(path);
