@@ -293,7 +293,9 @@ std::string ParamsSchema() {
               "drops them; [x, y, z] (or \"x,y,z\", the form --set gives) declares one station "
               "for every point, in the coordinates of the points as the file gives them (after "
               "its own pose, e.g. a PCD VIEWPOINT) and in `units`, replacing the file's: a "
-              "one-station scan exported without its pose (PTS, XYZ, PLY, LAS)."}}},
+              "one-station scan exported without its pose (PTS, XYZ, PLY, LAS). With 'none' or "
+              "a position the file's grid is not tested and its stations are not warned "
+              "about."}}},
            {"uncolored",
             {{"type", "string"},
              {"enum", {"intensity", "grey", "none"}},
@@ -327,6 +329,8 @@ Status Run(StageContext& ctx) {
   ScanReadOptions options;
   options.drop_invalid_points = drop_invalid;
   options.columns = columns;
+  // A declared or dropped station replaces whatever the file's grid shows.
+  options.infer_stations = station.kind == StationChoice::Kind::kFile;
   options.progress = [&ctx](double fraction) { ctx.progress(0.9 * fraction); };
   ctx.begin_phase("read");
   Expected<ScanReadResult> read = format->read(path, options);
@@ -380,9 +384,10 @@ Status Run(StageContext& ctx) {
 StageType ReadPointsStage() {
   StageType type;
   type.id = kId;
-  type.version = 6;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57
+  type.version = 7;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57
                      // invalid colors filled; 6: the same for a PLY's row/col grid, and
-                     // the grid test's angles from the chord's series
+                     // the grid test's angles from the chord's series; 7: a declared
+                     // `station` skips the grid test and its warnings (the same points)
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters (a file in "

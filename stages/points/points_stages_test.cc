@@ -460,6 +460,40 @@ TEST_F(PointsStagesTest, ReadPointsFindsTheScannerOfAPlysGrid) {
   EXPECT_EQ(ctx.meta_["points"]["stations_from"], "file");
 }
 
+// With `station` set the file's grid is not tested: no warning says where the
+// scanner was taken to be, or that it could not be found.
+TEST_F(PointsStagesTest, ReadPointsSaysNothingOfTheFilesStationsWhenOneIsDeclared) {
+  const std::string data = SharedData();
+  if (data.empty()) GTEST_SKIP() << "shared data not found";
+  const auto about_stations = [](const std::vector<std::string>& warnings) {
+    int count = 0;
+    for (const std::string& warning : warnings) {
+      count += warning.find("scanner") != std::string::npos ||
+               warning.find("sensor") != std::string::npos ||
+               warning.find("station") != std::string::npos;
+    }
+    return count;
+  };
+  int i = 0;
+  for (const char* file : {"pump_e57/pumpAVisualReferenceImage.e57", "pump_e57/pumpA.ply"}) {
+    const std::string path = data + "/" + file;
+    if (!std::filesystem::exists(path)) GTEST_SKIP() << path << " not found";
+    FakeContext found(dir_ / std::to_string(i++), {{"path", path}});
+    ASSERT_TRUE(Run("io.read_points", found).ok()) << file;
+    EXPECT_EQ(about_stations(found.warnings_), 1) << file;
+    EXPECT_EQ(found.meta_["points"]["stations_from"], "file") << file;
+    for (const nlohmann::json& station : {nlohmann::json("none"), nlohmann::json("0,0,0.5")}) {
+      FakeContext ctx(dir_ / std::to_string(i++), {{"path", path}, {"station", station}});
+      const Status status = Run("io.read_points", ctx);
+      ASSERT_TRUE(status.ok()) << file << ": " << status.message();
+      EXPECT_EQ(about_stations(ctx.warnings_), 0) << file << " " << station;
+      EXPECT_EQ(ctx.meta_["points"]["stations_from"], station == "none" ? "none" : "declared")
+          << file;
+      EXPECT_EQ(ctx.counters_["points"], found.counters_["points"]) << file;
+    }
+  }
+}
+
 TEST_F(PointsStagesTest, ReadPointsUnsupportedExtension) {
   FakeContext ctx(dir_, {{"path", (dir_ / "foo.obj").string()}, {"format", "auto"}});
   const Status status = Run("io.read_points", ctx);

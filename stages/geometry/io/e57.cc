@@ -596,8 +596,8 @@ Expected<ScanReadResult> E57Reader::Read() {
   bool worth_saying = false;         // a scan's station is known, or a grid failed the test
   for (const ScanSpec& scan : scans) {
     const std::string name = "data3D scan " + std::to_string(scan.index);
-    const bool grid = !scan.has_pose && !scan.spherical && scan.field[kRowIndex] >= 0 &&
-                      scan.field[kColumnIndex] >= 0;
+    const bool grid = options_.infer_stations && !scan.has_pose && !scan.spherical &&
+                      scan.field[kRowIndex] >= 0 && scan.field[kColumnIndex] >= 0;
     GridStationTest test;
     first_point[scan.index] = cloud.size();
     PB_RETURN_IF_ERROR(DecodeScan(scan, all_colors, all_intensity, grid ? &test : nullptr));
@@ -629,6 +629,11 @@ Expected<ScanReadResult> E57Reader::Read() {
     }
   }
   first_point[scans.size()] = cloud.size();
+  // The caller sets the stations itself: nothing to say about the file's.
+  if (!options_.infer_stations) {
+    inferred.clear();
+    worth_saying = false;
+  }
   if (unknown.empty()) {
     // How the poseless scans' scanners were found: one line per scan, the
     // third for the rest of a file of many.

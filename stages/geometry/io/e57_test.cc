@@ -347,6 +347,16 @@ TEST_F(E57Test, APoselessGridScanSweptFromElsewhereHasNoStation) {
   EXPECT_THAT(small->warnings,
               ::testing::Contains(HasSubstr("data3D scan 0 has no pose, and its grid cannot tell "
                                             "whether its frame's origin is its scanner's (")));
+  // The caller sets the stations itself: no test, no station, no word of them.
+  ScanReadOptions declared;
+  declared.infer_stations = false;
+  for (const std::array<double, 3> station : {std::array<double, 3>{0.3, 0, 0}, {0, 0, 0}}) {
+    auto caller = ReadE57(WriteScans({GridScan(30, 25, station)}), declared);
+    ASSERT_TRUE(caller.ok()) << caller.status().message();
+    EXPECT_FALSE(caller->points.has_stations());
+    EXPECT_TRUE(caller->warnings.empty());
+    EXPECT_EQ(caller->points.size(), 750u);
+  }
 }
 
 TEST_F(E57Test, APoselessSphericalScanHasItsScannerAtItsOrigin) {

@@ -393,7 +393,7 @@ class PcdReader {
     // An organized cloud in its sensor's frame (no VIEWPOINT, or the
     // identity): the sensor stands at the origin if the image grid was
     // swept from there.
-    if (organized_ && !rotate_ && !translate_) grid_.emplace();
+    if (organized_ && !rotate_ && !translate_ && options_.infer_stations) grid_.emplace();
 
     // Reserve, but never more than the bytes left in the file could hold, so a
     // corrupt POINTS fails as truncation instead of exhausting memory.

@@ -634,6 +634,16 @@ TEST_F(PcdTest, AnOrganizedFrameInItsSensorsFrameHasItsSensorAtTheOrigin) {
     EXPECT_THAT(moved->warnings,
                 ::testing::Contains(HasSubstr("no sensor station: organized cloud without a "
                                               "VIEWPOINT pose, and its grid does not show")));
+    // The caller sets the stations itself: no test, no station, no warning.
+    ScanReadOptions declared;
+    declared.infer_stations = false;
+    for (const char* file : {"scan.pcd", "moved.pcd"}) {
+      const auto read_declared = ReadPcd((dir_ / file).string(), declared);
+      ASSERT_TRUE(read_declared.ok()) << read_declared.status().message();
+      EXPECT_TRUE(read_declared->points.stations.empty()) << file;
+      EXPECT_TRUE(read_declared->warnings.empty()) << file;
+      EXPECT_EQ(read_declared->points.size(), 1200u - 133u) << file;
+    }
   }
 }
 

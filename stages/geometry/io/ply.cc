@@ -455,7 +455,10 @@ class PlyParser {
     // A structured scan's grid (row and column per point) and no station
     // named: its scanner at the origin of the file's frame when the grid was
     // swept from there (grid_station.h), as for an E57 without a pose.
-    if (!keep_faces_ && stations_.empty() && present[kRow] && present[kColumn]) grid_.emplace();
+    if (!keep_faces_ && options_.infer_stations && stations_.empty() && present[kRow] &&
+        present[kColumn]) {
+      grid_.emplace();
+    }
     vertex_count_ = vertex->count;
     report_.vertices_in_file = vertex->count;
     for (const Element& element : elements_) {

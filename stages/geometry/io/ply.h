@@ -92,6 +92,9 @@ struct PlyReadOptions {
   bool drop_invalid_points = false;
   // Called with the fraction of the file read, in [0,1], about once per MiB.
   std::function<void(double fraction)> progress;
+  // ScanReadOptions::infer_stations: false skips the grid test of a
+  // structured scan without a station (its warning with it).
+  bool infer_stations = true;
 };
 
 struct PlyReadReport {

@@ -633,6 +633,16 @@ TEST(PlyStationsTest, AStructuredScanSweptFromItsOriginGetsItsScannerThere) {
                         "a station, and its grid does not show its frame's origin as its "
                         "scanner's"));
   EXPECT_THAT(read->report.warnings[0], HasSubstr("io.read_points `station` can declare"));
+  // The caller sets the stations itself: no test, no station, no warning.
+  PlyReadOptions declared_by_caller;
+  declared_by_caller.infer_stations = false;
+  for (const char* file : {"grid.ply", "moved.ply"}) {
+    auto caller = ReadPlyPoints(dir.Path(file), declared_by_caller);
+    ASSERT_TRUE(caller.ok()) << caller.status().message();
+    EXPECT_FALSE(caller->points.has_stations()) << file;
+    EXPECT_TRUE(caller->report.warnings.empty()) << file;
+    EXPECT_EQ(caller->points.size(), 2400u) << file;
+  }
   // Stations named in the file win: no grid test, no warning.
   for (const std::string format : {"ascii", "binary_little_endian"}) {
     SCOPED_TRACE(format);

@@ -16,6 +16,7 @@ Expected<ScanReadResult> ReadPlyScan(const std::string& path, const ScanReadOpti
   PlyReadOptions ply_options;
   ply_options.drop_invalid_points = options.drop_invalid_points;
   ply_options.progress = options.progress;
+  ply_options.infer_stations = options.infer_stations;
   PB_ASSIGN_OR_RETURN(PlyPoints ply, ReadPlyPoints(path, ply_options));
   ScanReadResult result;
   result.points = std::move(ply.points);

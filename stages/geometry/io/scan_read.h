@@ -27,6 +27,11 @@ struct ScanReadOptions {
   // XYZ/TXT/PTS only: column names in order, e.g. "x y z r g b" or
   // "x y z i r g b nx ny nz"; empty = the format's default / auto-detect.
   std::string columns;
+  // False when the caller sets the stations itself (io.read_points
+  // `station: none` or a declared position): the readers then skip the grid
+  // test that finds an unposed scan's scanner (grid_station.h) and say
+  // nothing about stations. A file's poses still move its points.
+  bool infer_stations = true;
 };
 
 struct ScanReadResult {
