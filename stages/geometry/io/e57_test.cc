@@ -20,6 +20,7 @@
 #include "stages/geometry/io/e57_xml.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/io/e57_test_writer.h"
+#include "stages/geometry/io/grid_sweep_test_util.h"
 #include "stages/geometry/testing/test_data.h"
 
 namespace pb {
@@ -287,17 +288,15 @@ TEST_F(E57Test, TwoScansWithPosesMerge) {
 }
 
 // A structured scan without a pose: a grid of `rows` x `columns` records,
-// column after column, swept from `station` (0.01 rad down a column, 0.02
-// rad along a row) over surfaces at two depths.
+// column after column, grid_sweep_test_util.h's sweep from `station`.
 TestScan GridScan(int rows, int columns, const std::array<double, 3>& station) {
   std::vector<double> x, y, z, row_index, column_index;
   for (int column = 0; column < columns; ++column) {
     for (int row = 0; row < rows; ++row) {
-      const double elevation = 0.3 - 0.01 * row, azimuth = 0.02 * column;
-      const double range = (row / 8 + column / 6) % 2 == 0 ? 2.0 : 5.5;
-      x.push_back(station[0] + range * std::cos(elevation) * std::cos(azimuth));
-      y.push_back(station[1] + range * std::cos(elevation) * std::sin(azimuth));
-      z.push_back(station[2] + range * std::sin(elevation));
+      const std::array<double, 3> p = pb::testing::SweptPoint(station.data(), row, column);
+      x.push_back(p[0]);
+      y.push_back(p[1]);
+      z.push_back(p[2]);
       row_index.push_back(row);
       column_index.push_back(column);
     }

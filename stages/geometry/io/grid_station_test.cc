@@ -6,20 +6,18 @@
 #include <cmath>
 #include <cstdint>
 
+#include "stages/geometry/io/grid_sweep_test_util.h"
+
 namespace pb {
 namespace {
 
 using ::testing::HasSubstr;
 
-// A scene of boxes at different depths: the range of grid cell (row,
-// column) jumps every few cells, as at the edges of real objects.
-double Range(int64_t row, int64_t column) {
-  return 2.0 + 2.5 * double((row / 10 + column / 15) % 3) + 0.01 * std::sin(0.3 * double(row));
-}
+using pb::testing::SweepRange;
+using pb::testing::SweptPoint;
 
-// A terrestrial scanner's sweep from `station`: column-major records (a
-// vertical line per azimuth step), 0.01 rad down a column, 0.02 rad along a
-// row; positions relative to the frame's origin. `skip` > 0 leaves every
+// The sweep of grid_sweep_test_util.h from `station`, column-major records
+// (a vertical line per azimuth step), as a verdict. `skip` > 0 leaves every
 // skip-th record out (not recorded, or invalid and not added: its
 // neighbours are then two cells apart).
 GridStationTest::Verdict Sweep(const double station[3], int64_t rows, int64_t columns,
@@ -29,12 +27,7 @@ GridStationTest::Verdict Sweep(const double station[3], int64_t rows, int64_t co
   for (int64_t column = 0; column < columns; ++column) {
     for (int64_t row = 0; row < rows; ++row, ++record) {
       if (skip > 0 && record % skip == 0) continue;
-      const double elevation = 0.4 - 0.01 * double(row), azimuth = azimuth_step * double(column);
-      const double r = Range(row, column);
-      const double p[3] = {station[0] + r * std::cos(elevation) * std::cos(azimuth),
-                           station[1] + r * std::cos(elevation) * std::sin(azimuth),
-                           station[2] + r * std::sin(elevation)};
-      test.Add(double(row), double(column), p);
+      test.Add(double(row), double(column), SweptPoint(station, row, column, azimuth_step).data());
     }
   }
   return test.Decide();
@@ -143,7 +136,7 @@ TEST(GridStationTest, ACamerasPixelGridPasses) {
   for (int64_t row = 0; row < 120; ++row) {
     for (int64_t column = 0; column < 160; ++column) {
       const double x = (double(column) - 79.5) / focal, y = (double(row) - 59.5) / focal;
-      const double depth = Range(row, column);
+      const double depth = SweepRange(row, column);
       const double p[3] = {x * depth, y * depth, -depth};
       test.Add(double(row), double(column), p);
     }

@@ -1,5 +1,6 @@
 #include "stages/geometry/io/ply.h"
 
+#include "stages/geometry/io/grid_sweep_test_util.h"
 #include "stages/geometry/testing/test_data.h"
 #include "base/testing/durable_write_check.h"
 #include <gmock/gmock.h>
@@ -555,8 +556,8 @@ std::string FastPathFile(const std::string& format, const std::vector<TestProper
 }
 
 // A structured scan as converters write it (row and col per point, no
-// station): a sweep of boxes at different depths from `station`, 60 rows by
-// 40 columns, column-major; float, double (re-centred) or ascii. With
+// station): grid_sweep_test_util.h's sweep from `station`, 60 rows by 40
+// columns, column-major; float, double (re-centred) or ascii. With
 // `named`, the file also names that station (a comment and a ushort
 // `station` 0 per point).
 std::string SweptGridFile(const std::string& format, const std::string& coordinate,
@@ -575,11 +576,7 @@ std::string SweptGridFile(const std::string& format, const std::string& coordina
                      "property int row\nproperty int col\nend_header\n";
   for (int column = 0; column < columns; ++column) {
     for (int row = 0; row < rows; ++row) {
-      const double range = 2.0 + 2.5 * ((row / 10 + column / 15) % 3);
-      const double elevation = 0.4 - 0.01 * row, azimuth = 0.02 * column;
-      const double p[3] = {station[0] + range * std::cos(elevation) * std::cos(azimuth),
-                           station[1] + range * std::cos(elevation) * std::sin(azimuth),
-                           station[2] + range * std::sin(elevation)};
+      const std::array<double, 3> p = pb::testing::SweptPoint(station, row, column);
       if (format == "ascii") {
         char text[160];
         std::snprintf(text, sizeof text, "%.9g %.9g %.9g 10 20 30 0.5 %s%d %d\n", p[0], p[1],
