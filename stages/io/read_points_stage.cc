@@ -387,7 +387,8 @@ StageType ReadPointsStage() {
   type.version = 7;  // 4: units; 5: stations of unposed grids (grid_station.h), `station`, E57
                      // invalid colors filled; 6: the same for a PLY's row/col grid, and
                      // the grid test's angles from the chord's series; 7: a declared
-                     // `station` skips the grid test and its warnings (the same points)
+                     // `station` skips the grid test and its warnings, and the E57, PCD
+                     // and PLY readers word its verdict alike (the same points)
   type.summary = "Read a scan file (PLY, PCD, XYZ/TXT/PTS, PTX, E57, LAS/LAZ) into points";
   type.doc =
       "Reads a colored laser scan into the `points` artifact: positions in meters (a file in "

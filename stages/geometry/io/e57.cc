@@ -614,18 +614,10 @@ Expected<ScanReadResult> E57Reader::Read() {
       unknown.push_back(name + " has no pose and no row/column grid");
     } else if (const GridStationTest::Verdict verdict = test.Decide(); verdict.at_origin) {
       worth_saying = true;
-      inferred.push_back(name + " has no pose: its scanner taken at its frame's origin (" +
-                         verdict.Describe() + ")");
-    } else if (verdict.decided) {
-      worth_saying = true;
-      unknown.push_back(name + " has no pose, and its frame's origin is not its scanner's (" +
-                        verdict.Describe() + ")");
+      inferred.push_back(name + " has no pose: " + verdict.Finding("scanner"));
     } else {
       worth_saying = true;
-      unknown.push_back(name +
-                        " has no pose, and its grid cannot tell whether its frame's origin "
-                        "is its scanner's (" +
-                        verdict.Describe() + ")");
+      unknown.push_back(name + " has no pose, and " + verdict.Finding("scanner"));
     }
   }
   first_point[scans.size()] = cloud.size();

@@ -338,7 +338,8 @@ TEST_F(E57Test, APoselessGridScanSweptFromElsewhereHasNoStation) {
   EXPECT_TRUE(read->points.stations.empty());
   EXPECT_THAT(read->warnings,
               ::testing::Contains(HasSubstr("no scanner stations: data3D scan 0 has no pose, and "
-                                            "its frame's origin is not its scanner's")));
+                                            "its grid does not show its frame's origin as its "
+                                            "scanner's (seen from there")));
   // Too small a grid to tell: no station either.
   auto small = ReadE57(WriteScans({GridScan(10, 10, {0, 0, 0})}), {});
   ASSERT_TRUE(small.ok()) << small.status().message();

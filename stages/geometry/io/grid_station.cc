@@ -86,4 +86,11 @@ std::string GridStationTest::Verdict::Describe() const {
   return text;
 }
 
+std::string GridStationTest::Verdict::Finding(const std::string& device) const {
+  if (at_origin) return "its " + device + " taken at its frame's origin (" + Describe() + ")";
+  return (decided ? "its grid does not show its frame's origin as its " + device + "'s ("
+                  : "its grid cannot tell whether its frame's origin is its " + device + "'s (") +
+         Describe() + ")";
+}
+
 }  // namespace pb

@@ -58,6 +58,12 @@ class GridStationTest {
     size_t steps = 0;              // successive steps compared (both directions)
     double regular = 0;            // the lower regular fraction of the decided directions
     std::string Describe() const;  // "seen from there, 99.9 % of the 306000 ...", or too few
+    // The verdict as the readers' warnings say it, for the `device` that
+    // swept the grid ("scanner", "sensor"): "its scanner taken at its
+    // frame's origin (...)", "its grid does not show its frame's origin as
+    // its scanner's (...)" or "its grid cannot tell whether its frame's
+    // origin is its scanner's (...)", the brackets Describe().
+    std::string Finding(const std::string& device) const;
   };
   Verdict Decide() const;
 

@@ -159,6 +159,22 @@ TEST(GridStationTest, TooFewStepsDecideNothing) {
   EXPECT_EQ(test.Decide().steps, 0u);
 }
 
+// The three verdicts as every reader's warning words them.
+TEST(GridStationTest, AFindingSaysTheVerdictForTheDevice) {
+  const double origin[3] = {0, 0, 0}, station[3] = {0.4, -0.2, 0.1};
+  const GridStationTest::Verdict there = Sweep(origin, 80, 120);
+  EXPECT_EQ(there.Finding("scanner"), "its scanner taken at its frame's origin (" +
+                                          there.Describe() + ")");
+  const GridStationTest::Verdict elsewhere = Sweep(station, 80, 120);
+  EXPECT_EQ(elsewhere.Finding("sensor"),
+            "its grid does not show its frame's origin as its sensor's (" +
+                elsewhere.Describe() + ")");
+  const GridStationTest::Verdict small = Sweep(origin, 20, 20);
+  EXPECT_EQ(small.Finding("scanner"),
+            "its grid cannot tell whether its frame's origin is its scanner's (" +
+                small.Describe() + ")");
+}
+
 TEST(GridStationTest, AScanOfMillionsIsCountedWhole) {
   // Only counts and one record per row and column are kept. Its rows wrap
   // past the zenith: along a row the step shrinks with the cosine of the

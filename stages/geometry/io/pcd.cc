@@ -511,14 +511,12 @@ class PcdReader {
       if (verdict.at_origin) {
         cloud.stations = {{0.0, 0.0, 0.0}};
         cloud.station_ids.assign(cloud.size(), 0);
-        result_.warnings.push_back(
-            "organized cloud without a VIEWPOINT pose: its sensor taken at the origin (" +
-            verdict.Describe() + ")");
+        result_.warnings.push_back("organized cloud without a VIEWPOINT pose: " +
+                                   verdict.Finding("sensor"));
       } else {
         result_.warnings.push_back(
-            "no sensor station: organized cloud without a VIEWPOINT pose, and its grid does not "
-            "show the origin as its sensor's (" +
-            verdict.Describe() + "); io.read_points `station` can declare where it stood");
+            "no sensor station: organized cloud without a VIEWPOINT pose, and " +
+            verdict.Finding("sensor") + "; io.read_points `station` can declare where it stood");
       }
     }
     if (!recenter_ || cloud.empty()) return;

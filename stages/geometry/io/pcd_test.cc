@@ -624,7 +624,7 @@ TEST_F(PcdTest, AnOrganizedFrameInItsSensorsFrameHasItsSensorAtTheOrigin) {
     EXPECT_EQ(read->points.station_ids, std::vector<uint16_t>(1200 - 133, 0));
     EXPECT_THAT(read->warnings, ::testing::Contains(HasSubstr(
                                     "organized cloud without a VIEWPOINT pose: its sensor "
-                                    "taken at the origin (seen from there")));
+                                    "taken at its frame's origin (seen from there")));
     // The same frame moved 25 cm: the origin is not the sensor's.
     const auto moved = ReadPcd(
         Write(OrganizedFrame(data, {0.25f, 0, 0}, c.doubles, c.viewpoint), "moved.pcd"), {});
@@ -633,7 +633,8 @@ TEST_F(PcdTest, AnOrganizedFrameInItsSensorsFrameHasItsSensorAtTheOrigin) {
     EXPECT_TRUE(moved->points.station_ids.empty());
     EXPECT_THAT(moved->warnings,
                 ::testing::Contains(HasSubstr("no sensor station: organized cloud without a "
-                                              "VIEWPOINT pose, and its grid does not show")));
+                                              "VIEWPOINT pose, and its grid does not show its "
+                                              "frame's origin as its sensor's (seen from")));
     // The caller sets the stations itself: no test, no station, no warning.
     ScanReadOptions declared;
     declared.infer_stations = false;

@@ -1037,16 +1037,14 @@ class PlyParser {
     if (verdict.at_origin) {
       stations_ = {origin_};
       station_ids_.assign(mesh_.positions.size() / 3, 0);
-      report_.warnings.push_back("structured scan (row and column per point) without a station: "
-                                 "its scanner taken at its frame's origin (" +
-                                 verdict.Describe() + ")");
+      report_.warnings.push_back(
+          "structured scan (row and column per point) without a station: " +
+          verdict.Finding("scanner"));
     } else {
       report_.warnings.push_back(
-          std::string("no scanner station: structured scan (row and column per point) without a "
-                      "station, and ") +
-          (verdict.decided ? "its grid does not show its frame's origin as its scanner's ("
-                           : "its grid cannot tell whether its frame's origin is its scanner's (") +
-          verdict.Describe() + "); io.read_points `station` can declare where it stood");
+          "no scanner station: structured scan (row and column per point) without a station, "
+          "and " +
+          verdict.Finding("scanner") + "; io.read_points `station` can declare where it stood");
     }
   }
 
