@@ -93,4 +93,11 @@ std::string GridStationTest::Verdict::Finding(const std::string& device) const {
          Describe() + ")";
 }
 
+std::string GridStationTest::Verdict::Warning(const std::string& subject,
+                                              const std::string& device) const {
+  if (at_origin) return subject + ": " + Finding(device);
+  return "no " + device + " station: " + subject + ", and " + Finding(device) +
+         "; io.read_points `station` can declare where it stood";
+}
+
 }  // namespace pb

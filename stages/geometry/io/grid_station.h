@@ -64,6 +64,10 @@ class GridStationTest {
     // its scanner's (...)" or "its grid cannot tell whether its frame's
     // origin is its scanner's (...)", the brackets Describe().
     std::string Finding(const std::string& device) const;
+    // A one-grid file's warning: "<subject>: <finding>" when at the origin,
+    // else "no <device> station: <subject>, and <finding>; io.read_points
+    // `station` can declare where it stood".
+    std::string Warning(const std::string& subject, const std::string& device) const;
   };
   Verdict Decide() const;
 

@@ -173,6 +173,11 @@ TEST(GridStationTest, AFindingSaysTheVerdictForTheDevice) {
   EXPECT_EQ(small.Finding("scanner"),
             "its grid cannot tell whether its frame's origin is its scanner's (" +
                 small.Describe() + ")");
+  // A one-grid file's warning around it.
+  EXPECT_EQ(there.Warning("a scan", "scanner"), "a scan: " + there.Finding("scanner"));
+  EXPECT_EQ(elsewhere.Warning("a frame", "sensor"),
+            "no sensor station: a frame, and " + elsewhere.Finding("sensor") +
+                "; io.read_points `station` can declare where it stood");
 }
 
 TEST(GridStationTest, AScanOfMillionsIsCountedWhole) {

@@ -511,13 +511,9 @@ class PcdReader {
       if (verdict.at_origin) {
         cloud.stations = {{0.0, 0.0, 0.0}};
         cloud.station_ids.assign(cloud.size(), 0);
-        result_.warnings.push_back("organized cloud without a VIEWPOINT pose: " +
-                                   verdict.Finding("sensor"));
-      } else {
-        result_.warnings.push_back(
-            "no sensor station: organized cloud without a VIEWPOINT pose, and " +
-            verdict.Finding("sensor") + "; io.read_points `station` can declare where it stood");
       }
+      result_.warnings.push_back(
+          verdict.Warning("organized cloud without a VIEWPOINT pose", "sensor"));
     }
     if (!recenter_ || cloud.empty()) return;
     // The bounding-box center rounded to 1 m; the shift is whole meters, so

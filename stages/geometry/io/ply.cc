@@ -1037,15 +1037,9 @@ class PlyParser {
     if (verdict.at_origin) {
       stations_ = {origin_};
       station_ids_.assign(mesh_.positions.size() / 3, 0);
-      report_.warnings.push_back(
-          "structured scan (row and column per point) without a station: " +
-          verdict.Finding("scanner"));
-    } else {
-      report_.warnings.push_back(
-          "no scanner station: structured scan (row and column per point) without a station, "
-          "and " +
-          verdict.Finding("scanner") + "; io.read_points `station` can declare where it stood");
     }
+    report_.warnings.push_back(verdict.Warning(
+        "structured scan (row and column per point) without a station", "scanner"));
   }
 
   static constexpr uint32_t kDropped = std::numeric_limits<uint32_t>::max();
