@@ -2,6 +2,7 @@
 // through the fake context.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <fstream>
 
@@ -264,7 +265,7 @@ TEST_F(ImageStageTest, SchemaDefaultPpdIsFlipDefault) {
   ASSERT_EQ(type->outputs.size(), 3u);
   EXPECT_EQ(type->outputs[1].type, "frames");
   EXPECT_EQ(type->outputs[2].name, "flip_covered");
-  EXPECT_EQ(type->version, 4);
+  EXPECT_EQ(type->version, 5);
 }
 
 TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
@@ -330,4 +331,91 @@ TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
 }
 
 }  // namespace
+TEST_F(ImageStageTest, TheWholeFrameDoesNotDependOnTheBackgroundTheFramesWereDrawnOn) {
+  // The frames of CoveredColumnsAndHolesBesideTheWholeFrame (a covered square
+  // with a border, the test's with a hole), their uncovered pixels drawn on
+  // `background`: a workflow's frames set to magenta to show holes, compared
+  // with a reference drawn on black, measure as both drawn on black.
+  auto drawn = [](int brightness, bool hole, std::array<uint8_t, 3> background) {
+    FrameSet set = MakeSet(64, 64, {{"v", brightness}});
+    Image rgba = Image::Make(64, 64, 4, Image::PixelType::kU8);
+    const Image& rgb = set.frames[0].image;
+    for (int y = 0; y < 64; ++y)
+      for (int x = 0; x < 64; ++x) {
+        bool covered = x >= 10 && x < 54 && y >= 10 && y < 54;
+        if (hole && x >= 30 && x < 36 && y >= 30 && y < 34) covered = false;
+        for (int c = 0; c < 3; ++c) rgba.at_u8(x, y, c) = covered ? rgb.at_u8(x, y, c) : background[size_t(c)];
+        rgba.at_u8(x, y, 3) = covered ? 255 : 0;
+      }
+    set.frames[0].image = std::move(rgba);
+    return set;
+  };
+  const std::array<uint8_t, 3> black{0, 0, 0}, magenta{255, 0, 255};
+  struct Case {
+    const char* name;
+    std::array<uint8_t, 3> test, reference;
+    bool warns;
+  };
+  const Case cases[] = {{"black", black, black, false},
+                        {"test_magenta", magenta, black, true},
+                        {"both_magenta", magenta, magenta, false},
+                        {"reference_magenta", black, magenta, true}};
+  std::vector<Table> tables;
+  for (const Case& c : cases) {
+    std::filesystem::create_directories(dir_ / c.name);
+    FakeContext ctx(dir_ / c.name, nlohmann::json::object());
+    AddFrames(ctx, "frames", std::string(c.name) + "_test", drawn(5, true, c.test));
+    AddFrames(ctx, "reference", std::string(c.name) + "_ref", drawn(0, false, c.reference));
+    const Status st = Run("metrics.image", ctx);
+    ASSERT_TRUE(st.ok()) << st.message();
+    if (c.warns) {
+      ASSERT_EQ(ctx.warnings_.size(), 1u) << c.name;
+      const std::string said = "'frames' are drawn on background " +
+                               std::string(c.test == magenta ? "255,0,255" : "0,0,0") + " and 'reference' on " +
+                               (c.reference == magenta ? "255,0,255" : "0,0,0");
+      EXPECT_NE(ctx.warnings_[0].find(said), std::string::npos) << ctx.warnings_[0];
+    } else {
+      EXPECT_TRUE(ctx.warnings_.empty()) << c.name << ": " << ctx.warnings_[0];
+    }
+    Expected<Table> table = ReadTable(ctx.outputs_.at("table"));
+    ASSERT_TRUE(table.ok()) << table.status().message();
+    tables.push_back(std::move(*table));
+  }
+  // On black, the 24 hole pixels are errors of the whole frame.
+  EXPECT_LT(TableNumber(tables[0].get(0, "psnr_db")), 60);
+  for (size_t i = 1; i < tables.size(); ++i)
+    for (const char* column : {"psnr_db", "ssim_luma", "ssim_rgb", "flip_mean", "covered_psnr_db",
+                               "covered_flip_mean", "hole_px", "coverage_iou"})
+      EXPECT_DOUBLE_EQ(TableNumber(tables[i].get(0, column)), TableNumber(tables[0].get(0, column)))
+          << cases[i].name << " " << column;
+}
+
+TEST(DrawnBackgroundTest, TheColorOfThePixelsWithoutAlpha) {
+  Image rgba = Image::Make(4, 3, 4, Image::PixelType::kU8);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const bool covered = x == 1;
+      const uint8_t color[4] = {uint8_t(covered ? 90 : 255), uint8_t(covered ? 40 : 0), uint8_t(covered ? 10 : 255),
+                                uint8_t(covered ? 255 : 0)};
+      for (int c = 0; c < 4; ++c) rgba.at_u8(x, y, c) = color[c];
+    }
+  ASSERT_TRUE(DrawnBackground(rgba).has_value());
+  EXPECT_EQ(*DrawnBackground(rgba), (std::array<uint8_t, 3>{255, 0, 255}));
+  const Image on_black = BackgroundToBlack(rgba);
+  EXPECT_EQ(*DrawnBackground(on_black), (std::array<uint8_t, 3>{0, 0, 0}));
+  EXPECT_EQ(on_black.at_u8(1, 2, 0), 90);  // covered pixels are kept
+  EXPECT_EQ(on_black.at_u8(0, 2, 3), 0);   // and alpha
+  // Two colours under alpha 0, no pixel without alpha, no alpha at all: none.
+  Image mixed = rgba;
+  mixed.at_u8(3, 2, 1) = 7;
+  EXPECT_FALSE(DrawnBackground(mixed).has_value());
+  Image opaque = rgba;
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) opaque.at_u8(x, y, 3) = 255;
+  EXPECT_FALSE(DrawnBackground(opaque).has_value());
+  Image rgb = Image::Make(4, 3, 3, Image::PixelType::kU8);
+  EXPECT_FALSE(DrawnBackground(rgb).has_value());
+  EXPECT_EQ(BackgroundToBlack(rgb).data, rgb.data);
+}
+
 }  // namespace pb

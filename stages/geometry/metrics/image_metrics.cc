@@ -21,6 +21,7 @@
 #include <cassert>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <string>
 
 namespace pb {
@@ -268,6 +269,36 @@ Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
   m.flip_mean = flip_result.mean;
   if (flip) *flip = std::move(flip_result);
   return m;
+}
+
+Image BackgroundToBlack(Image image) {
+  if (image.type != Image::PixelType::kU8 || (image.channels != 2 && image.channels != 4) ||
+      image.data.size() != image.sample_count())
+    return image;
+  const size_t pixels = size_t(image.width) * size_t(image.height);
+  const int alpha = image.channels - 1;
+  uint8_t* px = image.u8();
+  for (size_t i = 0; i < pixels; ++i, px += image.channels)
+    if (px[alpha] == 0) std::fill(px, px + alpha, uint8_t{0});
+  return image;
+}
+
+std::optional<std::array<uint8_t, 3>> DrawnBackground(const Image& image) {
+  if (image.type != Image::PixelType::kU8 || (image.channels != 2 && image.channels != 4) ||
+      image.data.size() != image.sample_count())
+    return std::nullopt;
+  const size_t pixels = size_t(image.width) * size_t(image.height);
+  const int alpha = image.channels - 1;
+  std::optional<std::array<uint8_t, 3>> color;
+  const uint8_t* px = image.u8();
+  for (size_t i = 0; i < pixels; ++i, px += image.channels) {
+    if (px[alpha] != 0) continue;
+    const std::array<uint8_t, 3> here =
+        alpha == 3 ? std::array<uint8_t, 3>{px[0], px[1], px[2]} : std::array<uint8_t, 3>{px[0], px[0], px[0]};
+    if (!color) color = here;
+    else if (*color != here) return std::nullopt;
+  }
+  return color;
 }
 
 // ---------------------------------------------------------------------------

@@ -42,6 +42,7 @@
 
 #include <array>
 #include <cstdint>
+#include <optional>
 #include <vector>
 
 #include "base/status.h"
@@ -102,6 +103,19 @@ struct ImageMetrics {
 Expected<ImageMetrics> CompareImages(const Image& reference, const Image& test,
                                      const ImageMetricsOptions& options = {},
                                      FlipResult* flip = nullptr);
+
+// The image with every pixel whose alpha is 0 (where nothing was drawn) made
+// black, alpha kept; an image without alpha (1 or 3 channels) is returned
+// as it is. Whole-frame metrics of frames drawn on different backgrounds
+// (render.frames / render.splats `background`) compare them so, as both drawn
+// on the renderers' default black. Edge pixels, covered by some of their
+// supersamples, keep the blend with the background they were drawn on.
+Image BackgroundToBlack(Image image);
+
+// The color of the image's pixels with alpha 0 (the background it was drawn
+// on) when they all share one; nullopt when the image has no alpha, no such
+// pixel, or several colors there.
+std::optional<std::array<uint8_t, 3>> DrawnBackground(const Image& image);
 
 // ---- Covered pixels ----
 //
