@@ -7,6 +7,7 @@
 #include <tbb/task_arena.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <functional>
 #include <limits>
@@ -159,6 +160,34 @@ TEST(ImageMetricsTest, GrayAndAlphaChannelsCountAsRgb) {
   // 32 px is too small for MS-SSIM's five scales: NaN, not an error.
   EXPECT_TRUE(std::isnan(m_rgb->ms_ssim_luma));
   EXPECT_FALSE(MsSsim(rgb, other).ok());
+}
+
+TEST(ImageMetricsTest, DrawnBackgroundAndBackgroundToBlack) {
+  Image rgba = Image::Make(4, 3, 4, Image::PixelType::kU8);
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) {
+      const bool covered = x == 1;
+      const uint8_t color[4] = {uint8_t(covered ? 90 : 255), uint8_t(covered ? 40 : 0), uint8_t(covered ? 10 : 255),
+                                uint8_t(covered ? 255 : 0)};
+      for (int c = 0; c < 4; ++c) rgba.at_u8(x, y, c) = color[c];
+    }
+  ASSERT_TRUE(DrawnBackground(rgba).has_value());
+  EXPECT_EQ(*DrawnBackground(rgba), (std::array<uint8_t, 3>{255, 0, 255}));
+  const Image on_black = BackgroundToBlack(rgba);
+  EXPECT_EQ(*DrawnBackground(on_black), (std::array<uint8_t, 3>{0, 0, 0}));
+  EXPECT_EQ(on_black.at_u8(1, 2, 0), 90);  // covered pixels are kept
+  EXPECT_EQ(on_black.at_u8(0, 2, 3), 0);   // and alpha
+  // Two colours under alpha 0, no pixel without alpha, no alpha at all: none.
+  Image mixed = rgba;
+  mixed.at_u8(3, 2, 1) = 7;
+  EXPECT_FALSE(DrawnBackground(mixed).has_value());
+  Image opaque = rgba;
+  for (int y = 0; y < 3; ++y)
+    for (int x = 0; x < 4; ++x) opaque.at_u8(x, y, 3) = 255;
+  EXPECT_FALSE(DrawnBackground(opaque).has_value());
+  Image rgb = Image::Make(4, 3, 3, Image::PixelType::kU8);
+  EXPECT_FALSE(DrawnBackground(rgb).has_value());
+  EXPECT_EQ(BackgroundToBlack(rgb).data, rgb.data);
 }
 
 TEST(ImageMetricsTest, BadInputIsInvalid) {
