@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <span>
 #include <string>
 
 #include <tbb/blocked_range.h>
@@ -42,6 +43,10 @@ Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const St
       for (size_t j = 0; j < k; ++j) links[size_t(i) * k + j] = neighbors[j].index;
     }
   });
+  if (options.min_cluster_points > 0 && options.air.spacing_ratio != 0 && n > size_t(options.air.k)) {
+    PB_ASSIGN_OR_RETURN(result.stray, AirPoints(index, options.air));
+    for (uint8_t a : result.stray) result.air += a;
+  }
   if (options.min_cluster_points <= 1) return result;
   const std::vector<float>& spacing = result.spacing;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
@@ -64,8 +69,155 @@ Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const St
   UnionFind clusters(n);
   for (size_t i = 0; i < n; ++i)
     for (size_t j = 0; j < k; ++j) clusters.Union(uint32_t(i), links[i * k + j]);
-  for (size_t i = 0; i < n; ++i) result.stray[i] = clusters.SizeOf(uint32_t(i)) < options.min_cluster_points;
+  for (size_t i = 0; i < n; ++i) result.stray[i] |= clusters.SizeOf(uint32_t(i)) < options.min_cluster_points;
   return result;
+}
+
+namespace {
+
+// A neighbour whose local spacing times this is below a point's own is
+// sampled too densely to be of the point's surface (StrayOptions'
+// max_spacing_ratio default).
+constexpr float kPeerSpacingRatio = 3.0f;
+
+// Whether a plane through `p` (the origin) and two of `q`, or a line through
+// `p` and one of `q`, holds at least `needed` of the points of `q` within
+// `tolerance` of it, counting only the points `peer` marks.
+bool OnAPlane(std::span<const std::array<double, 3>> q, std::span<const uint8_t> peer, double tolerance,
+              size_t needed) {
+  const size_t m = q.size();
+  // A line through p and one of them holds a plane's worth: a wire, whose
+  // samples span no plane.
+  for (size_t a = 0; a < m; ++a) {
+    if (!peer[a]) continue;
+    const double la = std::sqrt(q[a][0] * q[a][0] + q[a][1] * q[a][1] + q[a][2] * q[a][2]);
+    if (!(la > 0)) continue;
+    size_t held = 0;
+    for (size_t c = 0; c < m; ++c) {
+      const std::array<double, 3> x = {q[c][1] * q[a][2] - q[c][2] * q[a][1], q[c][2] * q[a][0] - q[c][0] * q[a][2],
+                                       q[c][0] * q[a][1] - q[c][1] * q[a][0]};
+      held += peer[c] && std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) <= tolerance * la;
+    }
+    if (held >= needed) return true;
+  }
+  for (size_t a = 0; a < m; ++a)
+    for (size_t b = a + 1; b < m; ++b) {
+      if (!peer[a] || !peer[b]) continue;
+      const std::array<double, 3> n = {q[a][1] * q[b][2] - q[a][2] * q[b][1], q[a][2] * q[b][0] - q[a][0] * q[b][2],
+                                       q[a][0] * q[b][1] - q[a][1] * q[b][0]};
+      const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      // Two neighbours nearly in line with p span no plane.
+      const double la = std::sqrt(q[a][0] * q[a][0] + q[a][1] * q[a][1] + q[a][2] * q[a][2]);
+      const double lb = std::sqrt(q[b][0] * q[b][0] + q[b][1] * q[b][1] + q[b][2] * q[b][2]);
+      if (!(length > 0.1 * la * lb)) continue;
+      size_t held = 0;
+      for (size_t c = 0; c < m; ++c)
+        held += peer[c] && std::abs(n[0] * q[c][0] + n[1] * q[c][1] + n[2] * q[c][2]) <= tolerance * length;
+      if (held >= needed) return true;
+    }
+  return false;
+}
+
+
+// One pass of AirPoints over the points of `index`: marks `air` (per point
+// of the index) where a point is sparser than `limit` (or, when `limit` is
+// negative, than -limit times the median spacing, which `median` receives)
+// and on no plane with its peers.
+void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, std::vector<uint8_t>& air,
+             double* median) {
+  const size_t n = index.size(), k = size_t(options.k);
+  std::vector<float> spacing(n);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    std::vector<Neighbor> neighbors(k);
+    for (size_t slot = range.begin(); slot < range.end(); ++slot) {
+      const uint32_t i = index.PointAtSlot(slot);
+      const int found = index.QueryPoint(i, int(k), neighbors);
+      spacing[i] = SpacingOfKthNeighbour(neighbors[size_t(found - 1)].squared_distance_m2, int(k));
+    }
+  });
+  if (limit < 0) {
+    std::vector<float> sorted = spacing;
+    std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(n / 2), sorted.end());
+    *median = sorted[n / 2];
+    limit = -limit * *median;
+  }
+  // The plane test, on the sparse points only (a clean scan has few).
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
+    std::vector<Neighbor> neighbors(k);
+    std::vector<std::array<double, 3>> q(k);
+    std::vector<uint8_t> peer(k);
+    for (size_t slot = range.begin(); slot < range.end(); ++slot) {
+      const uint32_t i = index.PointAtSlot(slot);
+      if (!(double(spacing[i]) > limit)) continue;
+      const int found = index.QueryPoint(i, int(k), neighbors);
+      const std::array<float, 3> p = index.PositionAtSlot(slot);
+      for (int j = 0; j < found; ++j) {
+        const std::array<float, 3> r = index.PositionAtSlot(index.SlotOf(neighbors[size_t(j)].index));
+        q[size_t(j)] = {double(r[0]) - double(p[0]), double(r[1]) - double(p[1]), double(r[2]) - double(p[2])};
+        // A neighbour sampled much more densely than the point is not of its
+        // surface: a return in front of a scanned surface sees that surface
+        // among its nearest, on planes through itself that cut it.
+        peer[size_t(j)] = kPeerSpacingRatio * spacing[neighbors[size_t(j)].index] >= spacing[i];
+      }
+      const size_t needed = (size_t(found) + 1) / 2;
+      air[i] = !OnAPlane(std::span(q).first(size_t(found)), std::span(peer).first(size_t(found)),
+                         options.plane_tolerance * double(spacing[i]), needed);
+    }
+  });
+}
+
+}  // namespace
+
+Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions& options, AirReport* report) {
+  if (options.k < 3 || options.k > 64)
+    return Status::Invalid("points in the air: k must be in 3..64, got " + std::to_string(options.k));
+  if (!std::isfinite(options.spacing_ratio) || (options.spacing_ratio != 0 && !(options.spacing_ratio > 1)))
+    return Status::Invalid("points in the air: spacing_ratio must be > 1 (or 0: off)");
+  if (!(options.plane_tolerance > 0) || !std::isfinite(options.plane_tolerance))
+    return Status::Invalid("points in the air: plane_tolerance must be > 0");
+  if (options.passes < 1 || options.passes > 10)
+    return Status::Invalid("points in the air: passes must be in 1..10, got " + std::to_string(options.passes));
+  const size_t n = index.size(), k = size_t(options.k);
+  std::vector<uint8_t> air(n, 0);
+  AirReport local;
+  if (options.spacing_ratio == 0) {
+    if (report) *report = local;
+    return air;
+  }
+  if (n <= k)
+    return Status::Invalid("points in the air: needs more than k = " + std::to_string(k) + " points, the cloud has " +
+                           std::to_string(n));
+  MarkAir(index, options, -options.spacing_ratio, air, &local.median_spacing_m);
+  const double limit = options.spacing_ratio * local.median_spacing_m;
+  local.passes = 1;
+  // Later passes, without the points found: a return whose nearest were
+  // other returns may have had a plane among them by chance.
+  for (size_t found = size_t(std::count(air.begin(), air.end(), uint8_t{1}));
+       found > 0 && local.passes < options.passes;) {
+    std::vector<uint32_t> rest;
+    std::vector<float> xyz;
+    for (size_t slot = 0; slot < n; ++slot) {
+      const uint32_t i = index.PointAtSlot(slot);
+      if (air[i]) continue;
+      rest.push_back(i);
+      const std::array<float, 3> p = index.PositionAtSlot(slot);
+      xyz.insert(xyz.end(), p.begin(), p.end());
+    }
+    if (rest.size() <= k) break;
+    PB_ASSIGN_OR_RETURN(const KnnIndex sub, KnnIndex::Build(xyz));
+    std::vector<uint8_t> more(rest.size(), 0);
+    MarkAir(sub, options, limit, more, nullptr);
+    ++local.passes;
+    found = 0;
+    for (size_t j = 0; j < rest.size(); ++j)
+      if (more[j]) {
+        air[rest[j]] = 1;
+        ++found;
+      }
+  }
+  for (uint8_t a : air) local.air += a;
+  if (report) *report = local;
+  return air;
 }
 
 }  // namespace pb

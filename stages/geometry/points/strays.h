@@ -29,6 +29,32 @@
 // Deterministic (union-find over the k-NN pairs; the cluster sizes do not
 // depend on the order); the k-NN queries run on TBB's threads (run inside a
 // tbb::task_arena to limit them).
+//
+// Points in the air (AirPoints, below): a cloud of returns scattered through
+// the space in front of or around the surface (dust, rain, a scanner's mixed
+// returns off many edges, a photogrammetric reconstruction's floaters) is
+// as sparse as each of its points: its points link to each other, and
+// through those near the surface to it, so the clusters above keep them;
+// screened Poisson wraps them in a hull, and their sparse spacing makes it
+// look supported (mesh.trim). Such a cloud is what no surface is: sparse and
+// on no plane. A point is in the air when its local spacing s (over its `k`
+// nearest, spacing.h) exceeds `spacing_ratio` times the cloud's median local
+// spacing AND no plane through it and two of its peers (nor a line through
+// it and one: a wire) holds half of its k nearest within `plane_tolerance` x
+// s, its peers being the neighbours not
+// sampled over 3 times more densely than itself (a return in front of a
+// scanned surface has that surface among its nearest, and a plane through
+// the return and two surface samples holds a strip of them). Either test
+// alone takes surface: a scan's far field and a floor seen at grazing angle
+// are sparse but on a plane, a rough surface is on no plane but as dense as
+// the rest. The edge where two sparse walls meet has half its neighbours on
+// each wall; at most the apex of a sparse corner of three walls goes. Up to
+// `passes` passes, each without the points found so far (a return whose
+// nearest were other returns may have had a plane among them by chance).
+// Measured (docs/real-scans.md, "Points in the air"): none on the synthetic
+// presets, the bunny's scans and the statue stand-in; a few dozen sparse
+// returns of the pump and the office frame; nearly all of the returns
+// scattered in front of the statue stand-in.
 #pragma once
 
 #include <cstddef>
@@ -42,17 +68,39 @@
 
 namespace pb {
 
+struct AirOptions {
+  int k = 16;                    // neighbours, 3..64
+  double spacing_ratio = 4.0;    // > 1; 0: no point is in the air
+  double plane_tolerance = 0.1;   // > 0, in the point's local spacings
+  int passes = 3;                 // 1..10: again without the points found, while any are
+};
+
 struct StrayOptions {
   int k = 8;                       // neighbours linked per point, 1..64 (LocalSpacing's k)
   double link_spacings = 2.0;      // > 0
   double max_spacing_ratio = 3.0;  // >= 1; 1: the smaller spacing always
   size_t min_cluster_points = 50;  // 0: no point is a stray
+  AirOptions air;                  // points in the air are strays too (air.spacing_ratio 0: not;
+                                   // min_cluster_points 0: no stray at all)
 };
 
 struct SpacingAndStrays {
   std::vector<float> spacing;  // per point: LocalSpacing(index, options.k), the same values
   std::vector<uint8_t> stray;  // per point: 1 for a stray, else 0
+  size_t air = 0;              // of the strays, points in the air (AirPoints)
 };
+
+
+struct AirReport {
+  size_t air = 0;                  // points in the air
+  double median_spacing_m = 0;     // the cloud's median local spacing over k
+  int passes = 0;                  // passes run
+};
+
+// Per point of `index`, 1 when it is in the air (above), else 0.
+// Status::Invalid for options out of range or at most k points.
+Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions& options,
+                                         AirReport* report = nullptr);
 
 // The local spacing and the strays of the points of `index` (KnnIndex::Build
 // over the cloud's positions), from one k-NN query per point: a caller that

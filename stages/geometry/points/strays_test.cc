@@ -108,5 +108,126 @@ TEST(StrayPointsTest, SameFlagsForAnyThreadCountAndBadOptions) {
   EXPECT_EQ(std::count(flags[0].begin(), flags[0].end(), 1), 1);
 }
 
+// Points in the air (strays.h, AirPoints).
+
+// A deterministic pseudo-random number in [0, 1).
+struct Lcg {
+  uint64_t state = 12345;
+  double operator()() {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return double(state >> 11) / double(uint64_t{1} << 53);
+  }
+};
+
+std::vector<uint8_t> Air(const std::vector<float>& xyz, const AirOptions& options = {}, AirReport* report = nullptr) {
+  Expected<KnnIndex> index = KnnIndex::Build(xyz);
+  EXPECT_TRUE(index.ok());
+  Expected<std::vector<uint8_t>> air = AirPoints(*index, options, report);
+  EXPECT_TRUE(air.ok()) << air.status().message();
+  return air.ok() ? *air : std::vector<uint8_t>(xyz.size() / 3, 0);
+}
+
+size_t Count(const std::vector<uint8_t>& flags, size_t begin, size_t end) {
+  return size_t(std::count(flags.begin() + ptrdiff_t(begin), flags.begin() + ptrdiff_t(end), uint8_t{1}));
+}
+
+TEST(AirPointsTest, ReturnsScatteredInFrontAreInTheAirSurfacesAreNot) {
+  std::vector<float> xyz;
+  Lcg random;
+  // A rough surface: 100 x 100 samples 1 cm apart, each up to 1 cm off the
+  // plane (its k nearest have no plane, but it is as dense as the scan).
+  for (int j = 0; j < 100; ++j)
+    for (int i = 0; i < 100; ++i)
+      xyz.insert(xyz.end(), {0.01f * float(i), 0.01f * float(j), float(0.02 * (random() - 0.5))});
+  const size_t rough = xyz.size() / 3;
+  // A far field: 20 x 20 samples 8 cm apart, 3 m away (sparse, planar).
+  for (int j = 0; j < 20; ++j)
+    for (int i = 0; i < 20; ++i) xyz.insert(xyz.end(), {3.0f + 0.08f * float(i), 0.08f * float(j), 0.5f});
+  const size_t far = xyz.size() / 3;
+  // A wire of 60 samples 5 cm apart (sparse, a line).
+  for (int c = 0; c < 60; ++c) xyz.insert(xyz.end(), {-1.0f, 0.05f * float(c), 0.3f});
+  const size_t wire = xyz.size() / 3;
+  // 300 returns scattered through the half metre in front of the surface.
+  for (int c = 0; c < 300; ++c)
+    xyz.insert(xyz.end(), {float(0.2 + 0.6 * random()), float(0.2 + 0.6 * random()), float(0.1 + 0.5 * random())});
+  const size_t all = xyz.size() / 3;
+  AirReport report;
+  const std::vector<uint8_t> air = Air(xyz, {}, &report);
+  EXPECT_EQ(Count(air, 0, rough), 0u);
+  EXPECT_EQ(Count(air, rough, far), 0u);
+  EXPECT_EQ(Count(air, far, wire), 0u);
+  EXPECT_GE(Count(air, wire, all), 270u);  // nearly all; a few lie next to others by chance
+  EXPECT_EQ(report.air, Count(air, 0, all));
+  EXPECT_NEAR(report.median_spacing_m, 0.01, 0.002);
+  // They are strays too, and are not with the air test off.
+  EXPECT_GE(Strays(xyz).count, report.air);
+  Flags without = Strays(xyz, {.air = {.spacing_ratio = 0}});
+  EXPECT_LT(without.count, 30u);  // the cloud links to itself: the clusters keep it
+  // The plane test alone takes surface: with every point above the median
+  // spacing tested, a part of the rough surface goes.
+  const std::vector<uint8_t> unplanar = Air(xyz, {.spacing_ratio = 1.0001});
+  EXPECT_GT(Count(unplanar, 0, rough), rough / 20);
+  // Later passes only add: every point of the first pass is in the last.
+  const std::vector<uint8_t> first = Air(xyz, {.passes = 1});
+  for (size_t i = 0; i < all; ++i) EXPECT_TRUE(!first[i] || air[i]) << i;
+}
+
+TEST(AirPointsTest, ASparseCornerOfThreeWallsLosesAtMostItsApex) {
+  // Three walls meeting at a corner, sampled 8 cm apart, beside a dense patch
+  // that sets the median spacing at 1 cm: the corner is sparse, and the
+  // neighbours of the points nearest its apex span the three walls.
+  std::vector<float> xyz;
+  for (int j = 0; j < 60; ++j)
+    for (int i = 0; i < 60; ++i) xyz.insert(xyz.end(), {0.01f * float(i), 0.01f * float(j), 0.0f});
+  const size_t patch = xyz.size() / 3;
+  for (int wall = 0; wall < 3; ++wall)
+    for (int j = 0; j < 12; ++j)
+      for (int i = 0; i < 12; ++i) {
+        if (wall > 0 && i == 0) continue;  // the shared edges once
+        if (wall == 2 && j == 0) continue;
+        float p[3] = {0, 0, 0};
+        p[wall] = 0.0f;
+        p[(wall + 1) % 3] = 0.08f * float(i);
+        p[(wall + 2) % 3] = 0.08f * float(j);
+        xyz.insert(xyz.end(), {5.0f + p[0], p[1], p[2]});
+      }
+  const size_t all = xyz.size() / 3;
+  const std::vector<uint8_t> air = Air(xyz);
+  EXPECT_EQ(Count(air, 0, patch), 0u);
+  size_t near_apex = 0, flagged = 0;
+  for (size_t i = patch; i < all; ++i) {
+    if (!air[i]) continue;
+    ++flagged;
+    const double dx = xyz[3 * i] - 5.0, dy = xyz[3 * i + 1], dz = xyz[3 * i + 2];
+    near_apex += std::sqrt(dx * dx + dy * dy + dz * dz) < 0.25;
+  }
+  EXPECT_EQ(flagged, near_apex) << "only points within 3 samples of the apex";
+  EXPECT_LE(flagged, 10u);
+}
+
+TEST(AirPointsTest, BadOptionsAndThreads) {
+  std::vector<float> xyz = FallingDensityPlane();
+  Lcg random;
+  for (int c = 0; c < 100; ++c)
+    xyz.insert(xyz.end(), {float(0.3 * random()), float(0.3 * random()), float(0.05 + 0.3 * random())});
+  Expected<KnnIndex> index = KnnIndex::Build(xyz);
+  ASSERT_TRUE(index.ok());
+  EXPECT_FALSE(AirPoints(*index, {.k = 2}).ok());
+  EXPECT_FALSE(AirPoints(*index, {.k = 65}).ok());
+  EXPECT_FALSE(AirPoints(*index, {.spacing_ratio = 0.5}).ok());
+  EXPECT_FALSE(AirPoints(*index, {.plane_tolerance = 0}).ok());
+  EXPECT_FALSE(AirPoints(*index, {.passes = 0}).ok());
+  Expected<std::vector<uint8_t>> off = AirPoints(*index, {.spacing_ratio = 0});
+  ASSERT_TRUE(off.ok());
+  EXPECT_EQ(std::count(off->begin(), off->end(), uint8_t{1}), 0);
+  std::vector<uint8_t> flags[2];
+  for (int threads : {1, 2}) {
+    tbb::task_arena arena(threads);
+    arena.execute([&] { flags[threads - 1] = Air(xyz); });
+  }
+  EXPECT_EQ(flags[0], flags[1]);
+  EXPECT_GT(std::count(flags[0].begin(), flags[0].end(), uint8_t{1}), 50);
+}
+
 }  // namespace
 }  // namespace pb
