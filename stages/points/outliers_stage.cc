@@ -1,5 +1,13 @@
 // points.outliers: statistical outlier removal (stages/geometry/points/outliers.h).
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cstdio>
 #include <string>
+#include <vector>
+
+#include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/strays.h"
 
 #include "stages/geometry/points/outliers.h"
 #include "stages/params.h"
@@ -15,12 +23,30 @@ constexpr const char* kSchema = R"({
   "type": "object",
   "additionalProperties": false,
   "properties": {
+    "method": {
+      "type": "string",
+      "enum": ["statistical", "air"],
+      "default": "statistical",
+      "description": "'statistical': PCL's rule (std_ratio, below). 'air': points in the air (points/strays.h): sparser than spacing_ratio times the cloud's median local spacing and without a plane among their k nearest; the shipped workflows remove these before meshing (docs/real-scans.md, \"Points in the air\")."
+    },
     "k": {
       "type": "integer",
       "minimum": 1,
       "maximum": 1000,
       "default": 16,
-      "description": "Neighbours (the point excluded) over which each point's mean distance is taken."
+      "description": "Neighbours (the point excluded) over which each point's mean distance (statistical) or its local spacing and plane (air, 3..64) is taken."
+    },
+    "spacing_ratio": {
+      "type": "number",
+      "minimum": 0,
+      "default": 4.0,
+      "description": "air: a point is sparse when its local spacing exceeds this many times the cloud's median (> 1; 0 removes nothing)."
+    },
+    "plane_tolerance": {
+      "type": "number",
+      "exclusiveMinimum": 0,
+      "default": 0.1,
+      "description": "air: a sparse point is on a surface when a plane through it and two of its k nearest holds half of them within this many of its local spacings (neighbours sampled over 3 times more densely than the point do not count)."
     },
     "std_ratio": {
       "type": "number",
@@ -37,8 +63,74 @@ constexpr const char* kSchema = R"({
   }
 })";
 
+// method: air. Removes the points AirPoints marks.
+Status RunAir(StageContext& ctx, int k) {
+  PB_ASSIGN_OR_RETURN(const double spacing_ratio, NumberParam(ctx, kId, "spacing_ratio"));
+  PB_ASSIGN_OR_RETURN(const double plane_tolerance, NumberParam(ctx, kId, "plane_tolerance"));
+  PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
+  if (implementation != "own")
+    return Status::Invalid(std::string(kId) + ": method 'air' has implementation 'own' only, got '" +
+                           implementation + "'");
+  PB_ASSIGN_OR_RETURN(const InputPoints in, ReadInputPoints(ctx, kId, 0.3));
+  const PointCloud& input = in.cloud;
+  PointCloud output;
+  AirReport report;
+  {
+    PB_PHASE(ctx, "compute");
+    PB_RETURN_IF_ERROR(CheckFinitePositions(input, std::string(kId) + ": " + in.path));
+    std::vector<uint8_t> air(input.size(), 0);
+    if (input.size() > size_t(k) && spacing_ratio != 0) {
+      Expected<KnnIndex> index = KnnIndex::Build(input.positions);
+      if (!index.ok()) return index.status().WithContext(std::string(kId) + ": " + in.path);
+      tbb::task_arena arena(std::max(1, ctx.threads()));
+      Expected<std::vector<uint8_t>> marked = Status::Internal("not run");
+      arena.execute([&] {
+        marked = AirPoints(*index, {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance}, &report);
+      });
+      if (!marked.ok()) return marked.status().WithContext(std::string(kId) + ": " + in.path);
+      air = std::move(*marked);
+    } else if (spacing_ratio != 0 && !(spacing_ratio > 1)) {
+      return Status::Invalid(std::string(kId) + ": spacing_ratio must be > 1 (or 0: off)");
+    }
+    ctx.progress(0.8);
+    std::vector<uint32_t> kept;
+    kept.reserve(input.size());
+    for (size_t i = 0; i < input.size(); ++i)
+      if (!air[i]) kept.push_back(uint32_t(i));
+    output = kept.size() == input.size() ? input : SelectPoints(input, kept);
+  }
+  const size_t removed = input.size() - output.size();
+  ctx.counter("points_in", double(input.size()));
+  ctx.counter("points_out", double(output.size()));
+  ctx.counter("removed", double(removed));
+  auto number = [](const char* format, double value) {
+    char text[32];
+    std::snprintf(text, sizeof text, format, value);
+    return std::string(text);
+  };
+  if (removed > 0)
+    ctx.warning(std::string(kId) + ": " + in.path + ": " + std::to_string(removed) + " of " +
+                std::to_string(input.size()) + " points are in the air (sparser than " + number("%g", spacing_ratio) +
+                " x the median spacing, " + number("%.2f", report.median_spacing_m * 1000) +
+                " mm, and on no surface) and are left out of the meshes");
+  const nlohmann::json meta = InputPointsMetaWith(
+      ctx, {{"points", output.size()}, {"outliers_removed", removed}, {"outliers_method", "air"}});
+  PB_RETURN_IF_ERROR(WriteOutputPoints(ctx, output, meta));
+  ctx.progress(1.0);
+  return Status::Ok();
+}
+
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {1, 1000}));
+  PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method"));
+  if (method == "air") {
+    if (k < 3 || k > 64)
+      return Status::Invalid(std::string(kId) + ": method 'air' takes k in 3..64, got " + std::to_string(k));
+    return RunAir(ctx, int(k));
+  }
+  if (method != "statistical")
+    return Status::Invalid(std::string(kId) + ": parameter 'method' must be 'statistical' or 'air', got '" + method +
+                           "'");
   PB_ASSIGN_OR_RETURN(const double std_ratio, NumberParam(ctx, kId, "std_ratio"));
   PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
   if (implementation != "own" && implementation != "pcl") {
@@ -81,7 +173,7 @@ Status Run(StageContext& ctx) {
 StageType OutliersStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;  // 2: method air
   type.summary = "Statistical outlier removal (as PCL's StatisticalOutlierRemoval)";
   type.doc =
       "For every point, the mean distance to its `k` nearest other points (exact kd-tree "
@@ -90,8 +182,16 @@ StageType OutliersStage() {
       "attributes and their order. The result does not depend on the thread count. "
       "`implementation: pcl` runs PCL's StatisticalOutlierRemoval instead (pointbake-pcl.so, "
       "loaded on first use), for campaigns that compare implementations.\n\n"
+      "`method: air` removes the points in the air instead (stages/geometry/points/strays.h, "
+      "AirPoints): points whose local spacing over their `k` nearest exceeds `spacing_ratio` times "
+      "the cloud's median and which lie on no plane with half of those neighbours (within "
+      "`plane_tolerance` local spacings): dust, mixed returns, floaters, which screened Poisson "
+      "otherwise wraps in a hull that the scan's own sparse points seem to support. A scan's "
+      "far field, a floor at grazing angle, the edge of two sparse walls (sparse, on planes) and a "
+      "rough surface (dense) stay. It warns with the count when it removes any.\n\n"
       "Meta added: `points`, `outliers_removed`, `outliers_implementation`, "
-      "`outliers_threshold_m` (meters; own implementation only). "
+      "`outliers_threshold_m` (meters; own implementation only); with `air`: `points`, "
+      "`outliers_removed`, `outliers_method`. "
       "Counters: `points_in`, `points_out`, `removed`.";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "The points to clean.", false}};

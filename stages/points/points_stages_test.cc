@@ -563,6 +563,60 @@ TEST_F(PointsStagesTest, OutliersRemovesFarPoints) {
   EXPECT_EQ(out->points.colors, std::vector<uint8_t>(cloud.colors.begin(), cloud.colors.begin() + 2700));
 }
 
+TEST_F(PointsStagesTest, OutliersAirRemovesReturnsInTheAirAndNothingOfACleanScan) {
+  // The 30 x 30 grid alone: nothing goes, no warning, the same points.
+  const PointCloud clean = GridCloud(0);
+  const std::string clean_path = (dir_ / "clean.ply").string();
+  ASSERT_TRUE(WritePlyPoints(clean_path, clean).ok());
+  FakeContext quiet(dir_ / "quiet", {{"method", "air"}});
+  quiet.AddInput("points", "points", clean_path, {{"scene", "grid"}});
+  Status status = Run("points.outliers", quiet);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(quiet.counters_["removed"], 0);
+  EXPECT_TRUE(quiet.warnings_.empty());
+  EXPECT_EQ(quiet.meta_["points"]["outliers_method"], "air");
+  auto same = ReadPlyPoints(quiet.outputs_["points"]);
+  ASSERT_TRUE(same.ok()) << same.status().message();
+  EXPECT_EQ(same->points.positions, clean.positions);
+  EXPECT_EQ(same->points.colors, clean.colors);
+
+  // With 80 returns scattered 2 to 10 cm in front of it (a cloud of them,
+  // as sparse as each other).
+  PointCloud noisy = GridCloud(0);
+  uint64_t state = 99;
+  auto random = [&state] {
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return float(double(state >> 11) / double(uint64_t{1} << 53));
+  };
+  for (int i = 0; i < 80; ++i) {
+    noisy.positions.insert(noisy.positions.end(), {0.06f * random(), 0.06f * random(), 0.02f + 0.08f * random()});
+    noisy.colors.insert(noisy.colors.end(), {255, 0, 0});
+  }
+  const std::string noisy_path = (dir_ / "noisy.ply").string();
+  ASSERT_TRUE(WritePlyPoints(noisy_path, noisy).ok());
+  FakeContext ctx(dir_ / "air", {{"method", "air"}});
+  ctx.AddInput("points", "points", noisy_path);
+  status = Run("points.outliers", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_GE(ctx.counters_["removed"], 70);
+  ASSERT_EQ(ctx.warnings_.size(), 1u);
+  EXPECT_NE(ctx.warnings_[0].find("points are in the air"), std::string::npos) << ctx.warnings_[0];
+  auto out = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  // The grid's 900 points are all kept, first and in order.
+  EXPECT_EQ(std::vector<float>(out->points.positions.begin(), out->points.positions.begin() + 2700), clean.positions);
+  EXPECT_EQ(double(out->points.size()), 980 - ctx.counters_["removed"]);
+
+  // Its options: k within 3..64, and its own implementation only.
+  for (const nlohmann::json& bad : {nlohmann::json{{"method", "air"}, {"k", 100}},
+                                    nlohmann::json{{"method", "air"}, {"implementation", "pcl"}},
+                                    nlohmann::json{{"method", "air"}, {"spacing_ratio", 0.5}}}) {
+    FakeContext wrong(dir_ / "bad", bad);
+    wrong.AddInput("points", "points", noisy_path);
+    EXPECT_FALSE(Run("points.outliers", wrong).ok()) << bad.dump();
+  }
+}
+
 // The implementations in pointbake-pcl.so (built when libpcl-dev is
 // installed; stages/CMakeLists.txt makes this test depend on it).
 bool HavePclModule() { return ModuleSymbol(kPclModule, PB_PCL_SMOOTH_SYMBOL, "test").ok(); }
