@@ -47,7 +47,7 @@ constexpr const char* kSchema = R"({
       "type": "integer",
       "minimum": 0,
       "default": 50,
-      "description": "With `points`: scan points in clusters of fewer samples are strays (points/strays.h, as render.splats leaves them out of the scan's frames: a return in the air, floating dust), which missing surface does not count. 0 counts every point."
+      "description": "With `points`: scan points in clusters of fewer samples are strays (points/strays.h, as render.splats leaves them out of the scan's frames: a return in the air, floating dust; since version 7 also the points in the air, sparse and on no plane), which missing surface does not count. 0 counts every point."
     },
     "stray_spacing_ratio": {
       "type": "number",
@@ -211,6 +211,7 @@ Status Run(StageContext& ctx) {
     Expected<ScanAgreement> agreement = Status::Internal("not run");
     Expected<VertexScanAgreement> at_vertices = Status::Internal("not run");
     std::vector<uint8_t> strays;
+    size_t air_points = 0;
     arena.execute([&] {
       // One index of the scan for the spacing and both measures.
       Expected<KnnIndex> index = KnnIndex::Build(scan->cloud.positions);
@@ -226,6 +227,7 @@ Status Run(StageContext& ctx) {
         return;
       }
       strays = std::move(local->stray);
+      air_points = local->air;
       const std::vector<float>& spacing = local->spacing;
       ScanAgreementOptions options;
       options.strays = strays;
@@ -251,6 +253,7 @@ Status Run(StageContext& ctx) {
     ctx.counter("missing_fraction", agreement->missing_fraction);
     ctx.counter("scan_points", static_cast<double>(scan->cloud.size()));
     ctx.counter("stray_points", static_cast<double>(agreement->stray_points));
+    ctx.counter("air_points", static_cast<double>(air_points));
     meta["median_spacing_m"] = agreement->median_spacing_m;
     meta["mean_edge_m"] = agreement->mean_edge_m;
   }
@@ -275,7 +278,7 @@ StageType GeometryMetricsStage() {
   // 3: the 'errors' output (per-vertex error maps); 4: local spacing r_k sqrt(pi / k), as mesh.trim
   // (was r_k); 5: UV seams are no boundary edges; 6: stray scan points are not
   // missing surface (`stray_cluster_points`).
-  type.version = 6;
+  type.version = 7;  // 7: points in the air are strays (points/strays.h, AirPoints)
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
@@ -314,7 +317,7 @@ StageType GeometryMetricsStage() {
       "`quality` = the first of those arrays, which MeshLab colors by, and each array as a float "
       "vertex property `scalar_NAME`, which CloudCompare loads as scalar field NAME).\n\n"
       "Counters: `mesh_faces`, `samples`, `boundary_edges_per_1000_faces`; with truth `truth_faces`, "
-      "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `stray_points`, `invented_area_fraction`, "
+      "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `stray_points`, `air_points` (of the strays, points in the air), `invented_area_fraction`, "
       "`missing_fraction`, `invented_vertices`. Phases: `io`, `compute` (truth), `scan` (points).";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to evaluate (mesh.ply).", false},

@@ -207,7 +207,7 @@ Status Run(StageContext& ctx) {
 
   tbb::task_arena arena(std::max(1, ctx.threads()));
   std::vector<float> radius, spacing;
-  size_t capped = 0, strays = 0;
+  size_t capped = 0, strays = 0, air_points = 0;
   PointCloud kept;  // the cloud without its stray points, when it has some
   // The whole cloud's index, kept for the surfels when no point is a stray
   // (they index the same positions then; with strays they index `kept`),
@@ -234,6 +234,7 @@ Status Run(StageContext& ctx) {
       spacing.push_back(local->spacing[i]);
     }
     strays = local->stray.size() - keep.size();
+    air_points = local->air;
     if (strays > 0) {
       kept = SelectPoints(input.cloud, keep);
       free_index();
@@ -359,6 +360,7 @@ Status Run(StageContext& ctx) {
   ctx.counter("frames", double(views.size()));
   ctx.counter("points", double(input.cloud.size()));
   ctx.counter("stray_points", double(strays));
+  ctx.counter("air_points", double(air_points));
   ctx.counter("splats_drawn", double(drawn));
   ctx.counter("radii_capped", double(capped));
   ctx.counter("border_points", options.orient ? double(surfels.border_points) : 0.0);
@@ -383,12 +385,13 @@ StageType SplatsStage() {
   // 3: the sample masks (`samples`), frames' PNGs unchanged;
   // 4: the sample masks of the points moved onto their local surface
   // (`samples_on_surface`), frames' PNGs unchanged; 5: stray points left
-  // out (`stray_cluster_points`).
-  type.version = 5;
+  // out (`stray_cluster_points`); 6: points in the air are strays too
+  // (points/strays.h, AirPoints).
+  type.version = 6;
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
       "Leaves out the stray points (clusters of fewer than `stray_cluster_points` linked samples, "
-      "points/strays.h: a return in the air, floating dust), then draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
+      "points/strays.h: a return in the air, floating dust; and, version 6, the points in the air: sparser than 4 median spacings and on no plane or line with half their 16 nearest), then draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
       "(r_k sqrt(pi / k), r_k the distance to its `k`-th nearest other point, at most "
       "`max_radius_spacings` medians of the cloud's local spacings: isolated points stay small), "
       "lying in the point's tangent plane (`orient`; else facing the camera), a border point's disk "
@@ -408,7 +411,7 @@ StageType SplatsStage() {
       "pixels the scan has evidence of; metrics.image counts hole pixels on them), each point taken "
       "where it lies once moved onto the quadric fitted to its neighbourhood (`samples_on_surface`), "
       "so that range noise scattering points past a silhouette does not count as evidence.\n\n"
-      "Counters: `frames`, `points`, `stray_points` (left out), `splats_drawn` (over all frames), "
+      "Counters: `frames`, `points`, `stray_points` (left out), `air_points` (of them, points in the air), `splats_drawn` (over all frames), "
       "`radii_capped`, `border_points`, "
       "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`), `projected_points`, "
       "`mean_projection_m` (with `samples_on_surface`: points moved, mean distance over all points). "
