@@ -2,7 +2,7 @@
 """A statue as it is often delivered, for ctest
 campaign_runs.scene_from_scan.statue (tests/statue_file.sh).
 
-  statue_file.py IN.ply OUT.ply
+  statue_file.py IN.ply OUT.ply [--air FRACTION]
 
 IN is `synth.scan` preset `sculpture`'s points.ply (binary PLY: x y z in
 meters, z up, colors, a station per point and the stations in comments).
@@ -11,7 +11,14 @@ one file without scanner stations (neither the comments nor the per-point
 property), in millimetres, y up (x, y, z -> x, z, -y), and cropped to 1 m
 around the plinth's axis (the carved blob, its box and a disk of paving).
 Normals, if IN has them, are turned with the points.
+
+--air FRACTION moves that fraction of the kept points (a fixed pseudo-random
+choice) into the air: each along the line to the station that scanned it,
+5 to 60 % of the way (dust, mixed returns; IN must have its stations). It
+prints how many, for the test to check that the workflows left them out
+(docs/real-scans.md, "Points in the air").
 """
+import random
 import struct
 import sys
 
@@ -43,10 +50,28 @@ def read_header(data, path):
     return end + len(b'end_header\n'), count, names, struct.Struct(fmt)
 
 
+def stations_of(data, path):
+    """The `comment station I X Y Z` lines of IN's header, by I."""
+    header = data[:data.find(b'end_header\n')].decode('ascii')
+    stations = {}
+    for line in header.splitlines():
+        words = line.split()
+        if words[:2] == ['comment', 'station'] and len(words) == 6:
+            stations[int(words[2])] = tuple(float(w) for w in words[3:])
+    if not stations:
+        sys.exit(f'{path}: --air needs the scanner stations (comment station lines)')
+    return stations
+
+
 def main():
-    if len(sys.argv) != 3:
+    args = sys.argv[1:]
+    air = 0.0
+    if len(args) == 4 and args[2] == '--air':
+        air = float(args[3])
+        args = args[:2]
+    if len(args) != 2 or not 0 <= air < 1:
         sys.exit(__doc__)
-    source, target = sys.argv[1], sys.argv[2]
+    source, target = args
     with open(source, 'rb') as f:
         data = f.read()
     start, count, names, record = read_header(data, source)
@@ -58,6 +83,13 @@ def main():
     ix, iy, iz = (names.index(n) for n in ('x', 'y', 'z'))
     colors = [names.index(n) for n in ('red', 'green', 'blue')]
     normals = [names.index(n) for n in ('nx', 'ny', 'nz')] if 'nx' in names else None
+    if air > 0:
+        if 'station' not in names:
+            sys.exit(f'{source}: --air needs the per-point station property')
+        stations = stations_of(data, source)
+        ist = names.index('station')
+    rnd = random.Random(5)
+    moved = 0
     out = struct.Struct('<fffBBB' + ('fff' if normals else ''))
     body = bytearray()
     kept = 0
@@ -65,6 +97,11 @@ def main():
         x, y, z = r[ix], r[iy], r[iz]
         if x * x + y * y > 1.0:
             continue
+        if air > 0 and rnd.random() < air:
+            sx, sy, sz = stations[r[ist]]
+            t = rnd.uniform(0.05, 0.6)
+            x, y, z = x + t * (sx - x), y + t * (sy - y), z + t * (sz - z)
+            moved += 1
         values = [1000 * x, 1000 * z, -1000 * y] + [r[i] for i in colors]
         if normals:
             values += [r[normals[0]], r[normals[2]], -r[normals[1]]]
@@ -80,6 +117,8 @@ def main():
         f.write(('\n'.join(header) + '\n').encode('ascii'))
         f.write(body)
     print(f'{target}: {kept} of {count} points (mm, y up, no stations)')
+    if air > 0:
+        print(f'{target}: {moved} points moved into the air')
 
 
 if __name__ == '__main__':
