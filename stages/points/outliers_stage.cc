@@ -1,4 +1,5 @@
-// points.outliers: statistical outlier removal (stages/geometry/points/outliers.h).
+// points.outliers: statistical outlier removal (stages/geometry/points/outliers.h)
+// or the points in the air (stages/geometry/points/strays.h).
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -7,9 +8,8 @@
 #include <vector>
 
 #include "stages/geometry/points/knn.h"
-#include "stages/geometry/points/strays.h"
-
 #include "stages/geometry/points/outliers.h"
+#include "stages/geometry/points/strays.h"
 #include "stages/params.h"
 #include "stages/points_io.h"
 #include "stages/builtin.h"
@@ -27,7 +27,7 @@ constexpr const char* kSchema = R"({
       "type": "string",
       "enum": ["statistical", "air"],
       "default": "statistical",
-      "description": "'statistical': PCL's rule (std_ratio, below). 'air': points in the air (points/strays.h): sparser than spacing_ratio times the cloud's median local spacing and without a plane among their k nearest; the shipped workflows remove these before meshing (docs/real-scans.md, \"Points in the air\")."
+      "description": "'statistical': PCL's rule (std_ratio, below). 'air': points in the air (points/strays.h): sparser than spacing_ratio times the cloud's median local spacing and on no plane or line with half their k nearest; the shipped workflows remove these before meshing (docs/real-scans.md, \"Points in the air\")."
     },
     "k": {
       "type": "integer",
@@ -71,6 +71,8 @@ Status RunAir(StageContext& ctx, int k) {
   if (implementation != "own")
     return Status::Invalid(std::string(kId) + ": method 'air' has implementation 'own' only, got '" +
                            implementation + "'");
+  if (spacing_ratio != 0 && !(spacing_ratio > 1))
+    return Status::Invalid(std::string(kId) + ": spacing_ratio must be > 1 (or 0: off)");
   PB_ASSIGN_OR_RETURN(const InputPoints in, ReadInputPoints(ctx, kId, 0.3));
   const PointCloud& input = in.cloud;
   PointCloud output;
@@ -89,8 +91,6 @@ Status RunAir(StageContext& ctx, int k) {
       });
       if (!marked.ok()) return marked.status().WithContext(std::string(kId) + ": " + in.path);
       air = std::move(*marked);
-    } else if (spacing_ratio != 0 && !(spacing_ratio > 1)) {
-      return Status::Invalid(std::string(kId) + ": spacing_ratio must be > 1 (or 0: off)");
     }
     ctx.progress(0.8);
     std::vector<uint32_t> kept;
@@ -109,7 +109,7 @@ Status RunAir(StageContext& ctx, int k) {
     return std::string(text);
   };
   if (removed > 0)
-    ctx.warning(std::string(kId) + ": " + in.path + ": " + std::to_string(removed) + " of " +
+    ctx.warning(std::string(kId) + ": " + std::to_string(removed) + " of " +
                 std::to_string(input.size()) + " points are in the air (sparser than " + number("%g", spacing_ratio) +
                 " x the median spacing, " + number("%.2f", report.median_spacing_m * 1000) +
                 " mm, and on no surface) and are left out of the meshes");
@@ -174,7 +174,7 @@ StageType OutliersStage() {
   StageType type;
   type.id = kId;
   type.version = 2;  // 2: method air
-  type.summary = "Statistical outlier removal (as PCL's StatisticalOutlierRemoval)";
+  type.summary = "Outlier removal: statistical (as PCL's StatisticalOutlierRemoval), or the points in the air";
   type.doc =
       "For every point, the mean distance to its `k` nearest other points (exact kd-tree "
       "search); points whose mean exceeds the cloud-wide mean of those distances plus "

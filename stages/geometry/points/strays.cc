@@ -118,7 +118,6 @@ bool OnAPlane(std::span<const std::array<double, 3>> q, std::span<const uint8_t>
   return false;
 }
 
-
 // One pass of AirPoints over the points of `index`: marks `air` (per point
 // of the index) where a point is sparser than `limit` (or, when `limit` is
 // negative, than -limit times the median spacing, which `median` receives)
