@@ -1,13 +1,8 @@
 // points.outliers: statistical outlier removal (stages/geometry/points/outliers.h)
 // or the points in the air (stages/geometry/points/strays.h).
-#include <tbb/task_arena.h>
-
-#include <algorithm>
 #include <cstdio>
 #include <string>
-#include <vector>
 
-#include "stages/geometry/points/knn.h"
 #include "stages/geometry/points/outliers.h"
 #include "stages/geometry/points/strays.h"
 #include "stages/params.h"
@@ -71,34 +66,18 @@ Status RunAir(StageContext& ctx, int k) {
   if (implementation != "own")
     return Status::Invalid(std::string(kId) + ": method 'air' has implementation 'own' only, got '" +
                            implementation + "'");
-  if (spacing_ratio != 0 && !(spacing_ratio > 1))
-    return Status::Invalid(std::string(kId) + ": spacing_ratio must be > 1 (or 0: off)");
   PB_ASSIGN_OR_RETURN(const InputPoints in, ReadInputPoints(ctx, kId, 0.3));
   const PointCloud& input = in.cloud;
   PointCloud output;
   AirReport report;
   {
     PB_PHASE(ctx, "compute");
-    PB_RETURN_IF_ERROR(CheckFinitePositions(input, std::string(kId) + ": " + in.path));
-    std::vector<uint8_t> air(input.size(), 0);
-    if (input.size() > size_t(k) && spacing_ratio != 0) {
-      Expected<KnnIndex> index = KnnIndex::Build(input.positions);
-      if (!index.ok()) return index.status().WithContext(std::string(kId) + ": " + in.path);
-      tbb::task_arena arena(std::max(1, ctx.threads()));
-      Expected<std::vector<uint8_t>> marked = Status::Internal("not run");
-      arena.execute([&] {
-        marked = AirPoints(*index, {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance}, &report);
-      });
-      if (!marked.ok()) return marked.status().WithContext(std::string(kId) + ": " + in.path);
-      air = std::move(*marked);
-    }
-    ctx.progress(0.8);
-    std::vector<uint32_t> kept;
-    kept.reserve(input.size());
-    for (size_t i = 0; i < input.size(); ++i)
-      if (!air[i]) kept.push_back(uint32_t(i));
-    output = kept.size() == input.size() ? input : SelectPoints(input, kept);
+    Expected<PointCloud> kept = RemoveAirPoints(
+        input, {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance}, ctx.threads(), &report);
+    if (!kept.ok()) return kept.status().WithContext(std::string(kId) + ": " + in.path);
+    output = std::move(*kept);
   }
+  ctx.progress(0.8);
   const size_t removed = input.size() - output.size();
   ctx.counter("points_in", double(input.size()));
   ctx.counter("points_out", double(output.size()));

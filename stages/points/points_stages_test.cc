@@ -583,11 +583,9 @@ TEST_F(PointsStagesTest, OutliersAirRemovesReturnsInTheAirAndNothingOfACleanScan
   // With 80 returns scattered 2 to 10 cm in front of it (a cloud of them,
   // as sparse as each other).
   PointCloud noisy = GridCloud(0);
-  uint64_t state = 99;
-  auto random = [&state] {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return float(double(state >> 11) / double(uint64_t{1} << 53));
-  };
+  std::mt19937 engine(99);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  auto random = [&] { return unit(engine); };
   for (int i = 0; i < 80; ++i) {
     noisy.positions.insert(noisy.positions.end(), {0.06f * random(), 0.06f * random(), 0.02f + 0.08f * random()});
     noisy.colors.insert(noisy.colors.end(), {255, 0, 0});

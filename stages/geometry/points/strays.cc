@@ -11,8 +11,10 @@
 
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
+#include <tbb/task_arena.h>
 
 #include "stages/geometry/core/union_find.h"
+#include "stages/geometry/core/vec3.h"
 
 namespace pb {
 
@@ -83,36 +85,27 @@ constexpr float kPeerSpacingRatio = 3.0f;
 // Whether a plane through `p` (the origin) and two of `q`, or a line through
 // `p` and one of `q`, holds at least `needed` of the points of `q` within
 // `tolerance` of it, counting only the points `peer` marks.
-bool OnAPlane(std::span<const std::array<double, 3>> q, std::span<const uint8_t> peer, double tolerance,
-              size_t needed) {
+bool OnAPlane(std::span<const vec3::V3> q, std::span<const uint8_t> peer, double tolerance, size_t needed) {
+  using vec3::Cross, vec3::Dot, vec3::Norm;
   const size_t m = q.size();
   // A line through p and one of them holds a plane's worth: a wire, whose
   // samples span no plane.
   for (size_t a = 0; a < m; ++a) {
-    if (!peer[a]) continue;
-    const double la = std::sqrt(q[a][0] * q[a][0] + q[a][1] * q[a][1] + q[a][2] * q[a][2]);
-    if (!(la > 0)) continue;
+    const double la = Norm(q[a]);
+    if (!peer[a] || !(la > 0)) continue;
     size_t held = 0;
-    for (size_t c = 0; c < m; ++c) {
-      const std::array<double, 3> x = {q[c][1] * q[a][2] - q[c][2] * q[a][1], q[c][2] * q[a][0] - q[c][0] * q[a][2],
-                                       q[c][0] * q[a][1] - q[c][1] * q[a][0]};
-      held += peer[c] && std::sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]) <= tolerance * la;
-    }
+    for (size_t c = 0; c < m; ++c) held += peer[c] && Norm(Cross(q[c], q[a])) <= tolerance * la;
     if (held >= needed) return true;
   }
   for (size_t a = 0; a < m; ++a)
     for (size_t b = a + 1; b < m; ++b) {
       if (!peer[a] || !peer[b]) continue;
-      const std::array<double, 3> n = {q[a][1] * q[b][2] - q[a][2] * q[b][1], q[a][2] * q[b][0] - q[a][0] * q[b][2],
-                                       q[a][0] * q[b][1] - q[a][1] * q[b][0]};
-      const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+      const vec3::V3 n = Cross(q[a], q[b]);
+      const double length = Norm(n);
       // Two neighbours nearly in line with p span no plane.
-      const double la = std::sqrt(q[a][0] * q[a][0] + q[a][1] * q[a][1] + q[a][2] * q[a][2]);
-      const double lb = std::sqrt(q[b][0] * q[b][0] + q[b][1] * q[b][1] + q[b][2] * q[b][2]);
-      if (!(length > 0.1 * la * lb)) continue;
+      if (!(length > 0.1 * Norm(q[a]) * Norm(q[b]))) continue;
       size_t held = 0;
-      for (size_t c = 0; c < m; ++c)
-        held += peer[c] && std::abs(n[0] * q[c][0] + n[1] * q[c][1] + n[2] * q[c][2]) <= tolerance * length;
+      for (size_t c = 0; c < m; ++c) held += peer[c] && std::abs(Dot(n, q[c])) <= tolerance * length;
       if (held >= needed) return true;
     }
   return false;
@@ -143,7 +136,7 @@ void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, std
   // The plane test, on the sparse points only (a clean scan has few).
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<Neighbor> neighbors(k);
-    std::vector<std::array<double, 3>> q(k);
+    std::vector<vec3::V3> q(k);
     std::vector<uint8_t> peer(k);
     for (size_t slot = range.begin(); slot < range.end(); ++slot) {
       const uint32_t i = index.PointAtSlot(slot);
@@ -165,9 +158,7 @@ void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, std
   });
 }
 
-}  // namespace
-
-Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions& options, AirReport* report) {
+Status CheckAirOptions(const AirOptions& options) {
   if (options.k < 3 || options.k > 64)
     return Status::Invalid("points in the air: k must be in 3..64, got " + std::to_string(options.k));
   if (!std::isfinite(options.spacing_ratio) || (options.spacing_ratio != 0 && !(options.spacing_ratio > 1)))
@@ -176,6 +167,13 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
     return Status::Invalid("points in the air: plane_tolerance must be > 0");
   if (options.passes < 1 || options.passes > 10)
     return Status::Invalid("points in the air: passes must be in 1..10, got " + std::to_string(options.passes));
+  return Status::Ok();
+}
+
+}  // namespace
+
+Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions& options, AirReport* report) {
+  PB_RETURN_IF_ERROR(CheckAirOptions(options));
   const size_t n = index.size(), k = size_t(options.k);
   std::vector<uint8_t> air(n, 0);
   AirReport local;
@@ -217,6 +215,34 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
   for (uint8_t a : air) local.air += a;
   if (report) *report = local;
   return air;
+}
+
+Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& options, int threads,
+                                     AirReport* report) {
+  PB_RETURN_IF_ERROR(CheckAirOptions(options));
+  PB_RETURN_IF_ERROR(Validate(cloud));
+  PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "points in the air"));
+  AirReport local;
+  if (options.spacing_ratio == 0 || cloud.size() <= size_t(options.k)) {
+    if (report) *report = local;
+    return cloud;
+  }
+  PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
+  Expected<std::vector<uint8_t>> air = Status::Internal("not run");
+  auto run = [&] { air = AirPoints(index, options, &local); };
+  if (threads > 0) {
+    tbb::task_arena(threads).execute(run);
+  } else {
+    run();
+  }
+  if (!air.ok()) return air.status();
+  if (report) *report = local;
+  if (local.air == 0) return cloud;
+  std::vector<uint32_t> kept;
+  kept.reserve(cloud.size() - local.air);
+  for (size_t i = 0; i < cloud.size(); ++i)
+    if (!(*air)[i]) kept.push_back(uint32_t(i));
+  return SelectPoints(cloud, kept);
 }
 
 }  // namespace pb

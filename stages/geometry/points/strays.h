@@ -63,6 +63,7 @@
 #include <vector>
 
 #include "base/status.h"
+#include "stages/geometry/core/point_cloud.h"
 #include "stages/geometry/points/knn.h"
 #include "stages/geometry/points/spacing.h"
 
@@ -101,6 +102,14 @@ struct AirReport {
 // Status::Invalid for options out of range or at most k points.
 Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions& options,
                                          AirReport* report = nullptr);
+
+// The cloud without its points in the air; kept points keep every attribute
+// and their order (as RemoveStatisticalOutliers, outliers.h). A cloud of at
+// most k points, or spacing_ratio 0, comes back as it is. Status::Invalid
+// for options out of range, inconsistent attributes or a non-finite
+// coordinate. `threads` 0: TBB's default.
+Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& options, int threads = 0,
+                                     AirReport* report = nullptr);
 
 // The local spacing and the strays of the points of `index` (KnnIndex::Build
 // over the cloud's positions), from one k-NN query per point: a caller that

@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <random>
 #include <vector>
 
 #include "stages/geometry/points/spacing.h"
@@ -110,13 +111,11 @@ TEST(StrayPointsTest, SameFlagsForAnyThreadCountAndBadOptions) {
 
 // Points in the air (strays.h, AirPoints).
 
-// A deterministic pseudo-random number in [0, 1).
-struct Lcg {
-  uint64_t state = 12345;
-  double operator()() {
-    state = state * 6364136223846793005ull + 1442695040888963407ull;
-    return double(state >> 11) / double(uint64_t{1} << 53);
-  }
+// Pseudo-random numbers in [0, 1), the same on every run.
+struct Uniform {
+  std::mt19937 engine{12345};
+  std::uniform_real_distribution<double> unit{0.0, 1.0};
+  double operator()() { return unit(engine); }
 };
 
 std::vector<uint8_t> Air(const std::vector<float>& xyz, const AirOptions& options = {}, AirReport* report = nullptr) {
@@ -133,7 +132,7 @@ size_t Count(const std::vector<uint8_t>& flags, size_t begin, size_t end) {
 
 TEST(AirPointsTest, ReturnsScatteredInFrontAreInTheAirSurfacesAreNot) {
   std::vector<float> xyz;
-  Lcg random;
+  Uniform random;
   // A rough surface: 100 x 100 samples 1 cm apart, each up to 1 cm off the
   // plane (its k nearest have no plane, but it is as dense as the scan).
   for (int j = 0; j < 100; ++j)
@@ -207,7 +206,7 @@ TEST(AirPointsTest, ASparseCornerOfThreeWallsLosesAtMostItsApex) {
 
 TEST(AirPointsTest, BadOptionsAndThreads) {
   std::vector<float> xyz = FallingDensityPlane();
-  Lcg random;
+  Uniform random;
   for (int c = 0; c < 100; ++c)
     xyz.insert(xyz.end(), {float(0.3 * random()), float(0.3 * random()), float(0.05 + 0.3 * random())});
   Expected<KnnIndex> index = KnnIndex::Build(xyz);
