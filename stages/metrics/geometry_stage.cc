@@ -278,7 +278,9 @@ StageType GeometryMetricsStage() {
   // 3: the 'errors' output (per-vertex error maps); 4: local spacing r_k sqrt(pi / k), as mesh.trim
   // (was r_k); 5: UV seams are no boundary edges; 6: stray scan points are not
   // missing surface (`stray_cluster_points`).
-  type.version = 7;  // 7: points in the air are strays (points/strays.h, AirPoints)
+  // 7: points in the air are strays (points/strays.h, AirPoints); 8: their
+  // plane test allows the scan's noise (AirOptions::noise_tolerance).
+  type.version = 8;
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";

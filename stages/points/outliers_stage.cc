@@ -41,7 +41,13 @@ constexpr const char* kSchema = R"({
       "type": "number",
       "exclusiveMinimum": 0,
       "default": 0.1,
-      "description": "air: a sparse point is on a surface when a plane through it and two of its k nearest holds half of them within this many of its local spacings (neighbours sampled over 3 times more densely than the point do not count)."
+      "description": "air: a sparse point is on a surface when a plane through it and two of its k nearest holds half of them within this many of its local spacings (neighbours sampled over 3 times more densely than the point do not count), or within noise_tolerance times the scan's surface noise if that is more."
+    },
+    "noise_tolerance": {
+      "type": "number",
+      "minimum": 0,
+      "default": 2.5,
+      "description": "air: the plane test allows at least this many times the scan's surface noise (the median RMS distance of a point and its k nearest to their plane), so a sparse, noisy surface (the side of an object one far station saw) is not taken for points in the air; 0: plane_tolerance alone."
     },
     "std_ratio": {
       "type": "number",
@@ -62,6 +68,7 @@ constexpr const char* kSchema = R"({
 Status RunAir(StageContext& ctx, int k) {
   PB_ASSIGN_OR_RETURN(const double spacing_ratio, NumberParam(ctx, kId, "spacing_ratio"));
   PB_ASSIGN_OR_RETURN(const double plane_tolerance, NumberParam(ctx, kId, "plane_tolerance"));
+  PB_ASSIGN_OR_RETURN(const double noise_tolerance, NumberParam(ctx, kId, "noise_tolerance"));
   PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
   if (implementation != "own")
     return Status::Invalid(std::string(kId) + ": method 'air' has implementation 'own' only, got '" +
@@ -73,7 +80,8 @@ Status RunAir(StageContext& ctx, int k) {
   {
     PB_PHASE(ctx, "compute");
     Expected<PointCloud> kept = RemoveAirPoints(
-        input, {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance}, ctx.threads(), &report);
+        input, {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance,
+                .noise_tolerance = noise_tolerance}, ctx.threads(), &report);
     if (!kept.ok()) return kept.status().WithContext(std::string(kId) + ": " + in.path);
     output = std::move(*kept);
   }
@@ -82,6 +90,7 @@ Status RunAir(StageContext& ctx, int k) {
   ctx.counter("points_in", double(input.size()));
   ctx.counter("points_out", double(output.size()));
   ctx.counter("removed", double(removed));
+  ctx.counter("noise_m", report.noise_m);
   auto number = [](const char* format, double value) {
     char text[32];
     std::snprintf(text, sizeof text, format, value);
@@ -152,7 +161,7 @@ Status Run(StageContext& ctx) {
 StageType OutliersStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;  // 2: method air
+  type.version = 3;  // 2: method air; 3: its plane test allows the scan's noise
   type.summary = "Outlier removal: statistical (as PCL's StatisticalOutlierRemoval), or the points in the air";
   type.doc =
       "For every point, the mean distance to its `k` nearest other points (exact kd-tree "
@@ -164,14 +173,16 @@ StageType OutliersStage() {
       "`method: air` removes the points in the air instead (stages/geometry/points/strays.h, "
       "AirPoints): points whose local spacing over their `k` nearest exceeds `spacing_ratio` times "
       "the cloud's median and which lie on no plane with half of those neighbours (within "
-      "`plane_tolerance` local spacings): dust, mixed returns, floaters, which screened Poisson "
-      "otherwise wraps in a hull that the scan's own sparse points seem to support. A scan's "
-      "far field, a floor at grazing angle, the edge of two sparse walls (sparse, on planes) and a "
-      "rough surface (dense) stay. It warns with the count when it removes any.\n\n"
+      "`plane_tolerance` local spacings, or `noise_tolerance` times the scan's surface noise if "
+      "that is more): dust, mixed returns, floaters, which screened Poisson otherwise wraps in a "
+      "hull that the scan's own sparse points seem to support. A scan's far field, a floor at "
+      "grazing angle, the edge of two sparse walls (sparse, on planes), the side of an object one "
+      "far station saw (sparse and noisy) and a rough surface (dense) stay. It warns with the "
+      "count when it removes any.\n\n"
       "Meta added: `points`, `outliers_removed`, `outliers_implementation`, "
       "`outliers_threshold_m` (meters; own implementation only); with `air`: `points`, "
       "`outliers_removed`, `outliers_method`. "
-      "Counters: `points_in`, `points_out`, `removed`.";
+      "Counters: `points_in`, `points_out`, `removed`; with `air`, `noise_m` (the surface noise).";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "The points to clean.", false}};
   type.outputs = {{"points", "points", "The points that are not outliers.", false}};

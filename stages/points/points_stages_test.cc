@@ -573,6 +573,7 @@ TEST_F(PointsStagesTest, OutliersAirRemovesReturnsInTheAirAndNothingOfACleanScan
   Status status = Run("points.outliers", quiet);
   ASSERT_TRUE(status.ok()) << status.message();
   EXPECT_EQ(quiet.counters_["removed"], 0);
+  EXPECT_LT(quiet.counters_["noise_m"], 1e-6);  // a flat grid: no noise off its plane
   EXPECT_TRUE(quiet.warnings_.empty());
   EXPECT_EQ(quiet.meta_["points"]["outliers_method"], "air");
   auto same = ReadPlyPoints(quiet.outputs_["points"]);
@@ -608,7 +609,8 @@ TEST_F(PointsStagesTest, OutliersAirRemovesReturnsInTheAirAndNothingOfACleanScan
   // Its options: k within 3..64, and its own implementation only.
   for (const nlohmann::json& bad : {nlohmann::json{{"method", "air"}, {"k", 100}},
                                     nlohmann::json{{"method", "air"}, {"implementation", "pcl"}},
-                                    nlohmann::json{{"method", "air"}, {"spacing_ratio", 0.5}}}) {
+                                    nlohmann::json{{"method", "air"}, {"spacing_ratio", 0.5}},
+                                    nlohmann::json{{"method", "air"}, {"noise_tolerance", -1}}}) {
     FakeContext wrong(dir_ / "bad", bad);
     wrong.AddInput("points", "points", noisy_path);
     EXPECT_FALSE(Run("points.outliers", wrong).ok()) << bad.dump();

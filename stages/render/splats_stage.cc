@@ -386,8 +386,9 @@ StageType SplatsStage() {
   // 4: the sample masks of the points moved onto their local surface
   // (`samples_on_surface`), frames' PNGs unchanged; 5: stray points left
   // out (`stray_cluster_points`); 6: points in the air are strays too
-  // (points/strays.h, AirPoints).
-  type.version = 6;
+  // (points/strays.h, AirPoints); 7: their plane test allows the scan's
+  // noise (AirOptions::noise_tolerance): a sparse, noisy surface is drawn.
+  type.version = 7;
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
       "Leaves out the stray points (clusters of fewer than `stray_cluster_points` linked samples, "

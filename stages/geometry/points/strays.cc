@@ -15,6 +15,7 @@
 
 #include "stages/geometry/core/union_find.h"
 #include "stages/geometry/core/vec3.h"
+#include "stages/geometry/points/normals.h"
 
 namespace pb {
 
@@ -111,12 +112,52 @@ bool OnAPlane(std::span<const vec3::V3> q, std::span<const uint8_t> peer, double
   return false;
 }
 
+// The scan's noise off its surfaces: the median, over up to 20,000 points
+// spread evenly through the tree's slot order, of the RMS distance of a
+// point and its k nearest to their least-squares plane (the square root of
+// the smallest eigenvalue of their covariance). Most points lie on smooth
+// surface at a spacing where curvature adds little, so this is the range
+// noise and roughness a plane test must allow (and registration error where
+// stations overlap).
+double SurfaceNoise(const KnnIndex& index, int k) {
+  const size_t n = index.size(), stride = std::max<size_t>(1, n / 20000), samples = (n + stride - 1) / stride;
+  std::vector<double> rms(samples);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, samples, 256), [&](const tbb::blocked_range<size_t>& range) {
+    std::vector<Neighbor> neighbors(static_cast<size_t>(k));
+    std::vector<std::array<float, 3>> points(static_cast<size_t>(k) + 1);
+    for (size_t s = range.begin(); s < range.end(); ++s) {
+      const size_t slot = s * stride;
+      const int found = index.QueryPoint(index.PointAtSlot(slot), k, neighbors);
+      points[0] = index.PositionAtSlot(slot);
+      for (int j = 0; j < found; ++j)
+        points[size_t(j) + 1] = index.PositionAtSlot(index.SlotOf(neighbors[size_t(j)].index));
+      const size_t m = size_t(found) + 1;
+      double mean[3] = {0, 0, 0};
+      for (size_t j = 0; j < m; ++j)
+        for (int a = 0; a < 3; ++a) mean[a] += double(points[j][size_t(a)]) / double(m);
+      double covariance[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
+      for (size_t j = 0; j < m; ++j) {
+        const double d[3] = {double(points[j][0]) - mean[0], double(points[j][1]) - mean[1],
+                             double(points[j][2]) - mean[2]};
+        for (int a = 0; a < 3; ++a)
+          for (int b = 0; b < 3; ++b) covariance[3 * a + b] += d[a] * d[b] / double(m);
+      }
+      double normal[3];
+      rms[s] = std::sqrt(std::max(0.0, SmallestEigenvector(covariance, normal)));
+    }
+  });
+  std::nth_element(rms.begin(), rms.begin() + ptrdiff_t(samples / 2), rms.end());
+  return rms[samples / 2];
+}
+
 // One pass of AirPoints over the points of `index`: marks `air` (per point
 // of the index) where a point is sparser than `limit` (or, when `limit` is
 // negative, than -limit times the median spacing, which `median` receives)
-// and on no plane with its peers.
-void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, std::vector<uint8_t>& air,
-             double* median) {
+// and on no plane with its peers within the larger of plane_tolerance times
+// its spacing and noise_tolerance times `noise` (the first pass, with a
+// negative `limit`, measures the noise itself into `noise_out`).
+void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, double noise, std::vector<uint8_t>& air,
+             double* median, double* noise_out) {
   const size_t n = index.size(), k = size_t(options.k);
   std::vector<float> spacing(n);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
@@ -132,7 +173,10 @@ void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, std
     std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(n / 2), sorted.end());
     *median = sorted[n / 2];
     limit = -limit * *median;
+    noise = SurfaceNoise(index, int(k));
+    *noise_out = noise;
   }
+  const double noise_floor = options.noise_tolerance * noise;
   // The plane test, on the sparse points only (a clean scan has few).
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<Neighbor> neighbors(k);
@@ -153,7 +197,7 @@ void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, std
       }
       const size_t needed = (size_t(found) + 1) / 2;
       air[i] = !OnAPlane(std::span(q).first(size_t(found)), std::span(peer).first(size_t(found)),
-                         options.plane_tolerance * double(spacing[i]), needed);
+                         std::max(options.plane_tolerance * double(spacing[i]), noise_floor), needed);
     }
   });
 }
@@ -165,6 +209,8 @@ Status CheckAirOptions(const AirOptions& options) {
     return Status::Invalid("points in the air: spacing_ratio must be > 1 (or 0: off)");
   if (!(options.plane_tolerance > 0) || !std::isfinite(options.plane_tolerance))
     return Status::Invalid("points in the air: plane_tolerance must be > 0");
+  if (!(options.noise_tolerance >= 0) || !std::isfinite(options.noise_tolerance))
+    return Status::Invalid("points in the air: noise_tolerance must be >= 0");
   if (options.passes < 1 || options.passes > 10)
     return Status::Invalid("points in the air: passes must be in 1..10, got " + std::to_string(options.passes));
   return Status::Ok();
@@ -184,7 +230,7 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
   if (n <= k)
     return Status::Invalid("points in the air: needs more than k = " + std::to_string(k) + " points, the cloud has " +
                            std::to_string(n));
-  MarkAir(index, options, -options.spacing_ratio, air, &local.median_spacing_m);
+  MarkAir(index, options, -options.spacing_ratio, 0, air, &local.median_spacing_m, &local.noise_m);
   const double limit = options.spacing_ratio * local.median_spacing_m;
   local.passes = 1;
   // Later passes, without the points found: a return whose nearest were
@@ -203,7 +249,7 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
     if (rest.size() <= k) break;
     PB_ASSIGN_OR_RETURN(const KnnIndex sub, KnnIndex::Build(xyz));
     std::vector<uint8_t> more(rest.size(), 0);
-    MarkAir(sub, options, limit, more, nullptr);
+    MarkAir(sub, options, limit, local.noise_m, more, nullptr, nullptr);
     ++local.passes;
     found = 0;
     for (size_t j = 0; j < rest.size(); ++j)
