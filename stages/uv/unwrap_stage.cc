@@ -20,9 +20,9 @@ constexpr const char* kSchema = R"({
   "properties": {
     "method": {
       "type": "string",
-      "enum": ["charts", "conformal", "per_triangle"],
+      "enum": ["charts", "conformal", "per_triangle", "auto"],
       "default": "conformal",
-      "description": "charts: grow charts of faces with similar normals (Blender Smart UV Project's criterion), project each on its plane, pack their bounding boxes. conformal: charts that follow curved surfaces (grown by normal cone, cut at creases), flattened by least-squares conformal maps, split where they stretch, packed by shape with quarter turns; for scanned organic or carved surfaces. per_triangle: every face its own right-isosceles chart in a grid (MeshLab's trivial parametrization; a baseline)."
+      "description": "auto: charts, or conformal (with a warning) when the planar charts do not fit the atlas (a curved high mesh: a statue's 430,000 faces made 187,935 planar charts, too many for 2048 texels). charts: grow charts of faces with similar normals (Blender Smart UV Project's criterion), project each on its plane, pack their bounding boxes. conformal: charts that follow curved surfaces (grown by normal cone, cut at creases), flattened by least-squares conformal maps, split where they stretch, packed by shape with quarter turns; for scanned organic or carved surfaces. per_triangle: every face its own right-isosceles chart in a grid (MeshLab's trivial parametrization; a baseline)."
     },
     "size": {
       "type": "integer",
@@ -70,7 +70,7 @@ constexpr const char* kSchema = R"({
 Status Run(StageContext& ctx) {
   UnwrapOptions options;
   PB_ASSIGN_OR_RETURN(const std::string method, StringParam(ctx, kId, "method"));
-  if (method == "charts") {
+  if (method == "charts" || method == "auto") {
     options.method = UnwrapMethod::kCharts;
   } else if (method == "conformal") {
     options.method = UnwrapMethod::kConformal;
@@ -78,7 +78,7 @@ Status Run(StageContext& ctx) {
     options.method = UnwrapMethod::kPerTriangle;
   } else {
     return Status::Invalid(std::string(kId) + ": parameter 'method' must be 'charts', " +
-                           "'conformal' or 'per_triangle', got '" + method + "'");
+                           "'conformal', 'per_triangle' or 'auto', got '" + method + "'");
   }
   PB_ASSIGN_OR_RETURN(const int64_t size, IntegerParam(ctx, kId, "size", {64, 16384}));
   PB_ASSIGN_OR_RETURN(const int64_t gutter, IntegerParam(ctx, kId, "gutter", {0, 64}));
@@ -110,12 +110,34 @@ Status Run(StageContext& ctx) {
 
   PB_ASSIGN_OR_RETURN(InputMesh input, ReadInputMesh(ctx, kId, 0.2));
   const Mesh& mesh = input.mesh;
-  options.progress = [&ctx](double fraction) { ctx.progress(0.2 + 0.7 * fraction); };
+  double reported = 0.2;  // the progress so far: a fallback goes on from it
+  options.progress = [&ctx, &reported](double fraction) {
+    reported = 0.2 + 0.7 * fraction;
+    ctx.progress(reported);
+  };
   AtlasReport report;
   Mesh output;
+  std::string used = method == "auto" ? "charts" : method;
   {
     PB_PHASE(ctx, "compute");
     auto unwrapped = UnwrapMesh(mesh, options, &report);
+    if (!unwrapped.ok() && method == "auto") {
+      // Planar charts fragment on curved surfaces; conformal charts follow
+      // them, far fewer.
+      const Status planar = unwrapped.status();
+      options.method = UnwrapMethod::kConformal;
+      options.progress = [&ctx, from = reported](double fraction) { ctx.progress(from + (0.9 - from) * fraction); };
+      report = AtlasReport();
+      unwrapped = UnwrapMesh(mesh, options, &report);
+      if (!unwrapped.ok()) {
+        return Status::Invalid(std::string(kId) + ": method auto: planar charts failed (" + planar.message() +
+                               "), and conformal charts failed too (" + unwrapped.status().message() + ")")
+            .WithContext(input.path);
+      }
+      used = "conformal";
+      ctx.warning(std::string(kId) + ": planar charts failed (" + planar.message() + "); unwrapped with " +
+                  std::to_string(report.charts) + " conformal charts instead");
+    }
     if (!unwrapped.ok()) return unwrapped.status().WithContext(input.path);
     output = std::move(*unwrapped);
   }
@@ -126,11 +148,13 @@ Status Run(StageContext& ctx) {
   ctx.counter("seam_length_m", report.seam_length_m);
   ctx.counter("vertices_out", static_cast<double>(output.vertex_count()));
   ctx.counter("texels_per_meter", report.texels_per_meter);
+  if (method == "auto") ctx.counter("conformal_fallback", used == "conformal" ? 1.0 : 0.0);
   PB_RETURN_IF_ERROR(WriteOutputMesh(
       ctx, output,
       InputMeshMetaWith(ctx, output,
               {{"uv",
-                {{"method", method},
+                {{"method", used},
+                 {"method_asked", method},
                  {"size", size},
                  {"gutter", gutter},
                  {"max_angle_deg", options.max_angle_deg},
@@ -152,7 +176,8 @@ Status Run(StageContext& ctx) {
 StageType UnwrapStage() {
   StageType type;
   type.id = kId;
-  type.version = 8;  // 8: LSCM solved in complex form (same charts, UVs within rounding);
+  type.version = 9;  // 9: method auto, meta method_asked;
+                     // 8: LSCM solved in complex form (same charts, UVs within rounding);
                      // 7: the scale search's second pair aimed lower when the first
                      // pair's fitting trial is nearly full (bunny 10^5: 4 trials, not 6);
                      // 6: LSCM ordered by vertices (same charts and packing, UVs within
@@ -171,15 +196,19 @@ StageType UnwrapStage() {
       "splits any whose L2 stretch exceeds `max_chart_stretch` (or that folds or overlaps "
       "itself), and packs the chart shapes (not their boxes) with quarter turns at one texel "
       "density. `per_triangle` gives every face its own cell (MeshLab's trivial "
-      "parametrization). Vertices are split along seams, copying normals and colors; faces "
+      "parametrization). `auto` is `charts`, or `conformal` with a warning when the planar "
+      "charts cannot be packed (on a curved high mesh they fragment into too many for the "
+      "atlas). Vertices are split along seams, copying normals and colors; faces "
       "keep their order and winding and are counter-clockwise in UV (no mirrored charts). "
       "Non-manifold edges are treated as seams, so uncleaned meshes work too. Deterministic "
       "whatever the thread count. Fails with a clear message when the charts cannot fit at "
       "`size` with `gutter`.\n\n"
       "Counters: `charts`, `coverage` (fraction of the atlas covered by triangles), "
       "`stretch_l2` and `stretch_linf` (Sander et al. 2001 texture stretch, normalized so 1 "
-      "is no distortion), `seam_length_m`, `vertices_out`, `texels_per_meter`. The output "
-      "meta's `uv` object has the parameters and these figures.";
+      "is no distortion), `seam_length_m`, `vertices_out`, `texels_per_meter`, "
+      "`conformal_fallback` (auto: 1 when the conformal charts were used). The output "
+      "meta's `uv` object has the parameters and these figures (`method` the method used, "
+      "`method_asked` the one asked).";
   type.params_schema = kSchema;
   type.inputs = {
       {"mesh", "mesh", "The mesh to unwrap (mesh.ply); existing UVs are replaced.", false}};

@@ -63,11 +63,11 @@ class UvStagesTest : public StageTest {
 TEST_F(UvStagesTest, UnwrapIsWellFormed) {
   const StageType* type = registry_.Find("uv.unwrap");
   ASSERT_NE(type, nullptr);
-  EXPECT_EQ(type->version, 8);
+  EXPECT_EQ(type->version, 9);
   const nlohmann::json schema = CheckedSchema(*type, /*defaults=*/true);
   EXPECT_EQ(schema["properties"]["method"]["default"], "conformal");
   EXPECT_EQ(schema["properties"]["method"]["enum"],
-            nlohmann::json::array({"charts", "conformal", "per_triangle"}));
+            nlohmann::json::array({"charts", "conformal", "per_triangle", "auto"}));
   EXPECT_EQ(schema["properties"]["cone_deg"]["default"], 45);
   EXPECT_EQ(schema["properties"]["max_chart_stretch"]["default"], 1.03);
   EXPECT_EQ(schema["properties"]["size"]["default"], 4096);
@@ -146,8 +146,9 @@ TEST_F(UvStagesTest, PlanarChartsStayAvailable) {
   EXPECT_EQ(ctx.meta_["mesh"]["uv"]["method"], "charts");
 }
 
-TEST_F(UvStagesTest, SameBytesWithOneOrTwoThreads) {
-  Mesh wavy;  // a bumpy sheet: many charts
+// A bumpy sheet of 7,200 faces: many planar charts.
+Mesh WavySheet() {
+  Mesh wavy;
   const int n = 60;
   for (int j = 0; j <= n; ++j) {
     for (int i = 0; i <= n; ++i) {
@@ -162,7 +163,54 @@ TEST_F(UvStagesTest, SameBytesWithOneOrTwoThreads) {
       wavy.indices.insert(wavy.indices.end(), {a, b, c, a, c, d});
     }
   }
-  const std::string input = WriteMesh("mesh.ply", wavy);
+  return wavy;
+}
+
+TEST_F(UvStagesTest, AutoIsPlanarChartsOrConformalOnesWhenThoseDoNotFit) {
+  // A cube: its six planar charts fit, and auto is charts.
+  FakeContext cube(dir_ / "cube", {{"method", "auto"}, {"size", 256}, {"gutter", 2}});
+  cube.AddInput("mesh", "mesh", WriteMesh("cube.ply", Cube()));
+  Status status = Run("uv.unwrap", cube);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(cube.counters_["charts"], 6);
+  EXPECT_EQ(cube.counters_["conformal_fallback"], 0);
+  EXPECT_EQ(cube.meta_["mesh"]["uv"]["method"], "charts");
+  EXPECT_EQ(cube.meta_["mesh"]["uv"]["method_asked"], "auto");
+  EXPECT_TRUE(cube.warnings_.empty());
+  // The bumpy sheet's 541 planar charts do not fit 96 texels with a gutter
+  // of 4 (17 x 17 cells of 5 texels at the least); its 159 conformal charts
+  // do.
+  const std::string input = WriteMesh("mesh.ply", WavySheet());
+  auto small = [](const char* method) { return nlohmann::json{{"size", 96}, {"gutter", 4}, {"method", method}}; };
+  FakeContext planar(dir_ / "planar", small("charts"));
+  planar.AddInput("mesh", "mesh", input);
+  status = Run("uv.unwrap", planar);
+  ASSERT_FALSE(status.ok());
+  EXPECT_THAT(status.message(), HasSubstr("do not fit"));
+  FakeContext conformal(dir_ / "conformal", small("conformal"));
+  conformal.AddInput("mesh", "mesh", input);
+  ASSERT_TRUE(Run("uv.unwrap", conformal).ok());
+  FakeContext automatic(dir_ / "auto", small("auto"));
+  automatic.AddInput("mesh", "mesh", input);
+  status = Run("uv.unwrap", automatic);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(automatic.counters_["conformal_fallback"], 1);
+  EXPECT_EQ(automatic.meta_["mesh"]["uv"]["method"], "conformal");
+  ASSERT_EQ(automatic.warnings_.size(), 1u);
+  EXPECT_THAT(automatic.warnings_[0], HasSubstr("do not fit"));
+  EXPECT_EQ(Slurp(automatic.outputs_["mesh"]), Slurp(conformal.outputs_["mesh"])) << "the conformal atlas itself";
+  // Neither fits: one error that says both.
+  FakeContext neither(dir_ / "neither", {{"method", "auto"}, {"size", 64}, {"gutter", 16}});
+  neither.AddInput("mesh", "mesh", input);
+  status = Run("uv.unwrap", neither);
+  EXPECT_EQ(status.code(), Status::Code::kInvalid);
+  EXPECT_THAT(status.message(), HasSubstr("planar charts failed"));
+  EXPECT_THAT(status.message(), HasSubstr("conformal charts failed too"));
+  EXPECT_TRUE(neither.outputs_.empty());
+}
+
+TEST_F(UvStagesTest, SameBytesWithOneOrTwoThreads) {
+  const std::string input = WriteMesh("mesh.ply", WavySheet());
   for (const char* method : {"charts", "conformal"}) {
     SCOPED_TRACE(method);
     FakeContext one(dir_ / (std::string("one_") + method), {{"size", 1024}, {"method", method}}, 1);
@@ -195,7 +243,7 @@ TEST_F(UvStagesTest, ClearErrors) {
   FakeContext method(dir_ / "a", {{"method", "lscm"}});
   method.AddInput("mesh", "mesh", input);
   EXPECT_THAT(Run("uv.unwrap", method).message(),
-              HasSubstr("'method' must be 'charts', 'conformal' or 'per_triangle'"));
+              HasSubstr("'method' must be 'charts', 'conformal', 'per_triangle' or 'auto'"));
   FakeContext size(dir_ / "b", {{"size", 32}});
   size.AddInput("mesh", "mesh", input);
   const Status size_status = Run("uv.unwrap", size);
