@@ -124,21 +124,26 @@ double SurfaceNoise(const KnnIndex& index, int k) {
   std::vector<double> rms(samples);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, samples, 256), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<Neighbor> neighbors(static_cast<size_t>(k));
-    std::vector<std::array<float, 3>> points(static_cast<size_t>(k) + 1);
+    std::vector<vec3::V3> offsets(static_cast<size_t>(k) + 1);
     for (size_t s = range.begin(); s < range.end(); ++s) {
       const size_t slot = s * stride;
       const int found = index.QueryPoint(index.PointAtSlot(slot), k, neighbors);
-      points[0] = index.PositionAtSlot(slot);
-      for (int j = 0; j < found; ++j)
-        points[size_t(j) + 1] = index.PositionAtSlot(index.SlotOf(neighbors[size_t(j)].index));
+      // Offsets from the point, so the covariance keeps its digits far from
+      // the origin (as normals.cc and surfels.cc).
+      const std::array<float, 3> p = index.PositionAtSlot(slot);
+      offsets[0] = {0, 0, 0};
+      for (int j = 0; j < found; ++j) {
+        const std::array<float, 3> q = index.PositionAtSlot(index.SlotOf(neighbors[size_t(j)].index));
+        offsets[size_t(j) + 1] = {double(q[0]) - double(p[0]), double(q[1]) - double(p[1]),
+                                  double(q[2]) - double(p[2])};
+      }
       const size_t m = size_t(found) + 1;
       double mean[3] = {0, 0, 0};
       for (size_t j = 0; j < m; ++j)
-        for (int a = 0; a < 3; ++a) mean[a] += double(points[j][size_t(a)]) / double(m);
+        for (int a = 0; a < 3; ++a) mean[a] += offsets[j][size_t(a)] / double(m);
       double covariance[9] = {0, 0, 0, 0, 0, 0, 0, 0, 0};
       for (size_t j = 0; j < m; ++j) {
-        const double d[3] = {double(points[j][0]) - mean[0], double(points[j][1]) - mean[1],
-                             double(points[j][2]) - mean[2]};
+        const double d[3] = {offsets[j][0] - mean[0], offsets[j][1] - mean[1], offsets[j][2] - mean[2]};
         for (int a = 0; a < 3; ++a)
           for (int b = 0; b < 3; ++b) covariance[3 * a + b] += d[a] * d[b] / double(m);
       }
@@ -150,33 +155,13 @@ double SurfaceNoise(const KnnIndex& index, int k) {
   return rms[samples / 2];
 }
 
-// One pass of AirPoints over the points of `index`: marks `air` (per point
-// of the index) where a point is sparser than `limit` (or, when `limit` is
-// negative, than -limit times the median spacing, which `median` receives)
-// and on no plane with its peers within the larger of plane_tolerance times
-// its spacing and noise_tolerance times `noise` (the first pass, with a
-// negative `limit`, measures the noise itself into `noise_out`).
-void MarkAir(const KnnIndex& index, const AirOptions& options, double limit, double noise, std::vector<uint8_t>& air,
-             double* median, double* noise_out) {
+// One pass of AirPoints over the points of `index`, whose local spacings
+// over k are `spacing`: marks `air` (per point of the index) where a point is
+// sparser than `limit` and on no plane with its peers within the larger of
+// plane_tolerance times its spacing and `noise_floor`.
+void MarkAir(const KnnIndex& index, const AirOptions& options, std::span<const float> spacing, double limit,
+             double noise_floor, std::vector<uint8_t>& air) {
   const size_t n = index.size(), k = size_t(options.k);
-  std::vector<float> spacing(n);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
-    std::vector<Neighbor> neighbors(k);
-    for (size_t slot = range.begin(); slot < range.end(); ++slot) {
-      const uint32_t i = index.PointAtSlot(slot);
-      const int found = index.QueryPoint(i, int(k), neighbors);
-      spacing[i] = SpacingOfKthNeighbour(neighbors[size_t(found - 1)].squared_distance_m2, int(k));
-    }
-  });
-  if (limit < 0) {
-    std::vector<float> sorted = spacing;
-    std::nth_element(sorted.begin(), sorted.begin() + ptrdiff_t(n / 2), sorted.end());
-    *median = sorted[n / 2];
-    limit = -limit * *median;
-    noise = SurfaceNoise(index, int(k));
-    *noise_out = noise;
-  }
-  const double noise_floor = options.noise_tolerance * noise;
   // The plane test, on the sparse points only (a clean scan has few).
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
     std::vector<Neighbor> neighbors(k);
@@ -230,8 +215,12 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
   if (n <= k)
     return Status::Invalid("points in the air: needs more than k = " + std::to_string(k) + " points, the cloud has " +
                            std::to_string(n));
-  MarkAir(index, options, -options.spacing_ratio, 0, air, &local.median_spacing_m, &local.noise_m);
+  PB_ASSIGN_OR_RETURN(const std::vector<float> spacing, LocalSpacing(index, int(k)));
+  local.median_spacing_m = MedianLocalSpacing(spacing);
+  local.noise_m = SurfaceNoise(index, int(k));
   const double limit = options.spacing_ratio * local.median_spacing_m;
+  const double noise_floor = options.noise_tolerance * local.noise_m;
+  MarkAir(index, options, spacing, limit, noise_floor, air);
   local.passes = 1;
   // Later passes, without the points found: a return whose nearest were
   // other returns may have had a plane among them by chance.
@@ -248,8 +237,9 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
     }
     if (rest.size() <= k) break;
     PB_ASSIGN_OR_RETURN(const KnnIndex sub, KnnIndex::Build(xyz));
+    PB_ASSIGN_OR_RETURN(const std::vector<float> sub_spacing, LocalSpacing(sub, int(k)));
     std::vector<uint8_t> more(rest.size(), 0);
-    MarkAir(sub, options, limit, local.noise_m, more, nullptr, nullptr);
+    MarkAir(sub, options, sub_spacing, limit, noise_floor, more);
     ++local.passes;
     found = 0;
     for (size_t j = 0; j < rest.size(); ++j)
