@@ -110,6 +110,7 @@ Status Run(StageContext& ctx) {
   if (report.orientation_used == NormalOrientation::kPropagate && interior == NormalInterior::kAuto) {
     ctx.counter("enclosed_volume_m3", report.enclosed_volume_m3);
     ctx.counter("facing_enclosure", static_cast<double>(report.facing_enclosure));
+    ctx.counter("facing_rays", static_cast<double>(report.facing_rays));
   }
   const nlohmann::json meta =
       InputPointsMetaWith(ctx, {{"points", cloud.size()},
@@ -127,7 +128,7 @@ Status Run(StageContext& ctx) {
 StageType NormalsStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;
+  type.version = 4;
   type.summary = "k-NN PCA normals, oriented toward the scanner, like the file's own, or by propagation";
   type.doc =
       "Estimates a unit normal per point: the eigenvector of the smallest eigenvalue of the "
@@ -137,7 +138,10 @@ StageType NormalsStage() {
       "neighbour graph seeded outward from the point farthest from the centroid (`propagate`, "
       "Hoppe et al. 1992; right for closed objects; with `interior: auto`, version 3, where the "
       "scan encloses free space, a room's, the points beside it face it and the propagation "
-      "starts from them, so that a room merged without its stations is not meshed inside-out), "
+      "starts from them, so that a room merged without its stations is not meshed inside-out; "
+      "elsewhere, version 4, rays decide the points whose outside they see, open ahead and "
+      "closed behind, and the propagation starts from them, so that a plinth standing on its "
+      "ground is not turned inside out through it), "
       "like the normals the points came with "
       "(`input`: a file's own normals, whose software knew the sensor; propagation can flip "
       "whole thin parts), `auto` (stations if present, else the input normals if every point "
@@ -151,7 +155,8 @@ StageType NormalsStage() {
       "Counters: `points`, `flipped` (normals whose sign orientation reversed); with "
       "propagation and `interior: auto`, `enclosed_volume_m3` (the enclosed space found, 0 for "
       "none; stages/geometry/points/enclosure.h) and `facing_enclosure` (points oriented to face "
-      "it; the rest by propagation from them).";
+      "it; the rest by propagation from them) and `facing_rays` (points whose side rays decided, "
+      "when no enclosed space was found).";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "The points to estimate normals for.", false}};
   type.outputs = {{"points", "points", "The same points with unit normals.", false}};

@@ -188,6 +188,127 @@ class Frontier {
   size_t size_ = 0;
 };
 
+// Which side of a part of the surface is its outside, by rays (kPropagate's
+// check of each part's seed): the voxels holding points, on a grid over the
+// cloud's box (0.1st to 99.9th percentile per axis), voxels at least twice
+// the median distance to a point's kPropagationNeighbors-th neighbour so
+// that a sampled surface stops a ray, at most kEscapeGridSide a side. A ray
+// from a point along its normal, started kEscapeStartVoxels out so that it
+// clears the point's own surface, escapes when it leaves the box without
+// entering an occupied voxel.
+constexpr int kEscapeGridSide = 256;
+constexpr double kEscapeStartVoxels = 3;
+constexpr int kRayDirections = 48;
+constexpr double kOpenShare = 0.75;
+// Points whose sides rays look for, at most (every n / this-th point).
+constexpr size_t kMaxRayPoints = 100000;
+
+class EscapeGrid {
+ public:
+  EscapeGrid(const float* positions, size_t n, const std::vector<uint32_t>& graph) {
+    const size_t step = std::max<size_t>(1, n / 100000);
+    std::vector<float> along[3];
+    std::vector<double> reach;
+    for (size_t i = 0; i < n; i += step) {
+      for (int a = 0; a < 3; ++a) along[a].push_back(positions[3 * i + a]);
+      double farthest = 0;
+      for (int j = 0; j < kPropagationNeighbors; ++j) {
+        const uint32_t t = graph[size_t{kPropagationNeighbors} * i + j];
+        if (t == kNoNeighbor) continue;
+        double d2 = 0;
+        for (int a = 0; a < 3; ++a) {
+          const double d = double(positions[3 * t + a]) - positions[3 * i + a];
+          d2 += d * d;
+        }
+        farthest = std::max(farthest, d2);
+      }
+      reach.push_back(std::sqrt(farthest));
+    }
+    double extent = 0;
+    for (int a = 0; a < 3; ++a) {
+      std::vector<float>& v = along[a];
+      const size_t low = v.size() / 1000, high = v.size() - 1 - v.size() / 1000;
+      std::nth_element(v.begin(), v.begin() + low, v.end());
+      lo_[a] = v[low];
+      std::nth_element(v.begin(), v.begin() + high, v.end());
+      hi_[a] = v[high];
+      extent = std::max(extent, double(hi_[a]) - lo_[a]);
+    }
+    std::nth_element(reach.begin(), reach.begin() + reach.size() / 2, reach.end());
+    voxel_ = std::max({extent / kEscapeGridSide, 2.0 * reach[reach.size() / 2], 1e-9});
+    for (int a = 0; a < 3; ++a) {
+      dims_[a] = std::clamp(int(std::ceil((double(hi_[a]) - lo_[a]) / voxel_)), 1, kEscapeGridSide);
+    }
+    // A Fibonacci sphere: kRayDirections nearly even directions.
+    for (int k = 0; k < kRayDirections; ++k) {
+      const double z = 1.0 - (2.0 * k + 1.0) / kRayDirections;
+      const double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+      const double phi = k * std::numbers::pi * (3.0 - std::sqrt(5.0));
+      directions_.push_back({float(r * std::cos(phi)), float(r * std::sin(phi)), float(z)});
+    }
+    occupied_.assign(size_t(dims_[0]) * dims_[1] * dims_[2], 0);
+    for (size_t i = 0; i < n; ++i) {
+      const size_t cell = Cell(positions[3 * i], positions[3 * i + 1], positions[3 * i + 2]);
+      if (cell != kOutside) occupied_[cell] = 1;
+    }
+  }
+
+  // +1 when the side the normal faces is open and the other closed: of the
+  // rays within 60 degrees of the normal (kRayDirections spread over the
+  // sphere) at least kOpenShare more escape than of those within 60 degrees
+  // of its opposite; -1 for the reverse; else 0. Cones, not one ray each
+  // way, so that a gap in the scan behind the surface does not decide
+  // alone, and the share, so that a ground beside a wall (half its sky
+  // hidden, nothing scanned below it) does not decide either.
+  int OpenSide(const float* p, const float* normal) const {
+    int out = 0, out_rays = 0, in = 0, in_rays = 0;
+    for (const auto& d : directions_) {
+      const double cosine = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2];
+      if (cosine >= 0.5) {
+        ++out_rays;
+        out += Escapes(p, d.data(), 1.0f);
+      } else if (cosine <= -0.5) {
+        ++in_rays;
+        in += Escapes(p, d.data(), 1.0f);
+      }
+    }
+    if (out_rays == 0 || in_rays == 0) return 0;
+    const double open = double(out) / out_rays - double(in) / in_rays;
+    return open >= kOpenShare ? 1 : open <= -kOpenShare ? -1 : 0;
+  }
+
+  bool Escapes(const float* p, const float* direction, float sign) const {
+    const double step = 0.5 * voxel_;
+    for (double t = kEscapeStartVoxels * voxel_;; t += step) {
+      double q[3];
+      for (int a = 0; a < 3; ++a) q[a] = p[a] + sign * t * direction[a];
+      const size_t cell = Cell(q[0], q[1], q[2]);
+      if (cell == kOutside) return true;
+      if (occupied_[cell]) return false;
+    }
+  }
+
+ private:
+  static constexpr size_t kOutside = std::numeric_limits<size_t>::max();
+  size_t Cell(double x, double y, double z) const {
+    const double q[3] = {x, y, z};
+    int c[3];
+    for (int a = 0; a < 3; ++a) {
+      const double f = (q[a] - lo_[a]) / voxel_;
+      if (!(f >= 0) || f >= dims_[a]) return kOutside;
+      c[a] = int(f);
+    }
+    return (size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
+  }
+
+  float lo_[3], hi_[3];
+  double voxel_ = 1;
+  int dims_[3] = {1, 1, 1};
+  std::vector<uint8_t> occupied_;
+  std::vector<std::array<float, 3>> directions_;
+};
+
+
 // Propagation (normals.h, kPropagate). `inward` seeds each part facing the
 // centroid instead of away from it. With a non-empty `enclosure`, every point
 // whose one side lies in the enclosed space and whose other does not faces
@@ -261,6 +382,40 @@ void OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph, 
       decided.push_back(uint32_t(i));
     }
     report.facing_enclosure = decided.size();
+    for (uint32_t i : decided) {
+      visited[i] = 0;  // visit() marks it again and queues its edges
+      visit(i);
+    }
+    grow();
+  } else if (!inward) {
+    // An object (no enclosed space): rays decide the points whose outside
+    // they see, a ray along the normal escaping while the one against it
+    // meets the surface (EscapeGrid), or the reverse; the propagation
+    // grows from those points. The seeds below alone fail where the point
+    // farthest from the centroid has its normal across the way out: a
+    // statue's ground, seeded at its rim, faced down, and through the
+    // ground the plinth standing on it faced in. Points whose rays both
+    // escape (an open sheet, a ground, a front-only scan) or both meet
+    // surface (a concave fold) are left to the propagation.
+    const EscapeGrid grid(positions, n, graph);
+    const size_t stride = std::max<size_t>(1, n / kMaxRayPoints);
+    const size_t probes = (n + stride - 1) / stride;
+    std::vector<int8_t> side(probes, 0);
+    tbb::parallel_for(tbb::blocked_range<size_t>(0, probes, 256), [&](const tbb::blocked_range<size_t>& range) {
+      for (size_t k = range.begin(); k < range.end(); ++k) {
+        const size_t i = k * stride;
+        side[k] = grid.OpenSide(&positions[3 * i], &normals[3 * i]);
+      }
+    });
+    std::vector<uint32_t> decided;
+    for (size_t k = 0; k < probes; ++k) {
+      if (side[k] == 0) continue;
+      const uint32_t i = uint32_t(k * stride);
+      if (side[k] < 0) flip(i);
+      visited[i] = 1;
+      decided.push_back(i);
+    }
+    report.facing_rays = decided.size();
     for (uint32_t i : decided) {
       visited[i] = 0;  // visit() marks it again and queues its edges
       visit(i);

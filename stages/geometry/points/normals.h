@@ -83,6 +83,9 @@ struct NormalReport {
   // the points oriented to face it (the rest by propagation).
   double enclosed_volume_m3 = 0.0;
   size_t facing_enclosure = 0;
+  // kPropagate without enclosed space (an object): the points whose side
+  // rays decided (the rest by propagation from them).
+  size_t facing_rays = 0;
 };
 
 // Replaces cloud.normals with estimated, oriented unit normals (3 floats per

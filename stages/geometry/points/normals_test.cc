@@ -22,6 +22,7 @@ const double kCos2Deg = std::cos(2.0 * std::numbers::pi / 180.0);
 
 double Dot(const float* n, const double v[3]) { return n[0] * v[0] + n[1] * v[1] + n[2] * v[2]; }
 
+using testing::AddBoxFaces;
 using testing::AddSphere;
 
 TEST(NormalsTest, SmallestEigenvector) {
@@ -280,6 +281,59 @@ RoomSides SidesOf(const PointCloud& room, double width_m, double depth_m) {
     }
   }
   return {double(walls_in) / double(walls), double(table_out) / double(table)};
+}
+
+// A plinth on a ground, as a statue's file brings them (no stations, no
+// normals): the box's four sides and top, the ground around it, one linked
+// part. The seed, the ground's corner farthest from the centroid, has its
+// normal across the way out and faced down, and propagation turned the box
+// inside out through the ground (version 3: every side point faced in).
+// Rays now find the box's outside (open ahead, its far side behind) and
+// the propagation grows from the points they decide.
+TEST(NormalsTest, RaysFaceAPlinthOutwardOnItsGround) {
+  PointCloud cloud;
+  const double lo[3] = {-0.3, -0.3, 0.0}, hi[3] = {0.3, 0.3, 1.0};
+  AddBoxFaces(cloud, lo, hi, 0.02, 0.001, 7, [](double, double, double z) { return z < 0.01; });
+  const size_t box = cloud.size();
+  for (double x = -1.5; x <= 1.5; x += 0.02) {
+    for (double y = -1.5; y <= 1.5; y += 0.02) {
+      if (std::fabs(x) < 0.31 && std::fabs(y) < 0.31) continue;
+      cloud.positions.insert(cloud.positions.end(), {float(x), float(y), 0.0f});
+    }
+  }
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(cloud, {}, &report).ok());
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kPropagate);
+  EXPECT_GT(report.facing_rays, 0u);
+  size_t sides = 0, sides_out = 0, top = 0, top_up = 0, ground_up = 0;
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const float* p = &cloud.positions[3 * i];
+    const float* normal = &cloud.normals[3 * i];
+    if (i >= box) {
+      ground_up += normal[2] > 0;
+    } else if (p[2] > 0.99f) {
+      ++top;
+      top_up += normal[2] > 0;
+    } else if (p[2] > 0.05f && (std::fabs(p[0]) > 0.29f || std::fabs(p[1]) > 0.29f)) {
+      ++sides;
+      sides_out += p[0] * normal[0] + p[1] * normal[1] > 0;
+    }
+  }
+  EXPECT_GT(double(sides_out) / double(sides), 0.99) << sides_out << " of " << sides;
+  EXPECT_GT(double(top_up) / double(top), 0.99) << top_up << " of " << top;
+  EXPECT_GT(double(ground_up) / double(cloud.size() - box), 0.99);
+
+  // A ball alone, a cloud the seed already got right, stays outward.
+  PointCloud ball;
+  const double center[3] = {0, 0, 0};
+  AddSphere(ball, center, 0.4, 20000, 0.0005, 3);
+  ASSERT_TRUE(EstimateNormals(ball, {}, &report).ok());
+  EXPECT_GT(report.facing_rays, 0u);
+  for (size_t i = 0; i < ball.size(); ++i) {
+    const float* p = &ball.positions[3 * i];
+    ASSERT_GT(p[0] * ball.normals[3 * i] + p[1] * ball.normals[3 * i + 1] + p[2] * ball.normals[3 * i + 2], 0)
+        << "point " << i;
+  }
 }
 
 // A room merged into one cloud without its stations: propagation alone
