@@ -7,7 +7,9 @@
 // priority queue is a 256-bucket queue (weights quantized); and the seed
 // of each connected part is its point farthest from the cloud's centroid,
 // oriented away from it (Hoppe seeds the highest point toward +z, which turns
-// closed objects inside out when their top is not the seed's side). The 3x3
+// closed objects inside out when their top is not the seed's side), after
+// the points whose side an enclosed space (a room) or rays (an object)
+// decide. The 3x3
 // eigen problem: eigenvalues in closed form (O. K. Smith, "Eigenvalues of a
 // symmetric 3x3 matrix", CACM 4(4), 1961), then the eigenvector as a cross
 // product of two rows of A - lambda I. The small eigenvalue loses relative
@@ -188,14 +190,13 @@ class Frontier {
   size_t size_ = 0;
 };
 
-// Which side of a part of the surface is its outside, by rays (kPropagate's
-// check of each part's seed): the voxels holding points, on a grid over the
-// cloud's box (0.1st to 99.9th percentile per axis), voxels at least twice
-// the median distance to a point's kPropagationNeighbors-th neighbour so
-// that a sampled surface stops a ray, at most kEscapeGridSide a side. A ray
-// from a point along its normal, started kEscapeStartVoxels out so that it
-// clears the point's own surface, escapes when it leaves the box without
-// entering an occupied voxel.
+// Which side of the surface at a point is its outside, by rays (kPropagate
+// of an object): the voxels holding points, on a grid over the cloud's box
+// (0.1st to 99.9th percentile per axis), voxels at least twice the median
+// distance to a point's kPropagationNeighbors-th neighbour so that a sampled
+// surface stops a ray, at most kEscapeGridSide a side. A ray from a point,
+// started kEscapeStartVoxels out so that it clears the point's own surface,
+// escapes when it leaves the box without entering an occupied voxel.
 constexpr int kEscapeGridSide = 256;
 constexpr double kEscapeStartVoxels = 3;
 constexpr int kRayDirections = 48;
@@ -266,10 +267,10 @@ class EscapeGrid {
       const double cosine = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2];
       if (cosine >= 0.5) {
         ++out_rays;
-        out += Escapes(p, d.data(), 1.0f);
+        out += Escapes(p, d.data());
       } else if (cosine <= -0.5) {
         ++in_rays;
-        in += Escapes(p, d.data(), 1.0f);
+        in += Escapes(p, d.data());
       }
     }
     if (out_rays == 0 || in_rays == 0) return 0;
@@ -277,11 +278,11 @@ class EscapeGrid {
     return open >= kOpenShare ? 1 : open <= -kOpenShare ? -1 : 0;
   }
 
-  bool Escapes(const float* p, const float* direction, float sign) const {
+  bool Escapes(const float* p, const float* direction) const {
     const double step = 0.5 * voxel_;
     for (double t = kEscapeStartVoxels * voxel_;; t += step) {
       double q[3];
-      for (int a = 0; a < 3; ++a) q[a] = p[a] + sign * t * direction[a];
+      for (int a = 0; a < 3; ++a) q[a] = p[a] + t * direction[a];
       const size_t cell = Cell(q[0], q[1], q[2]);
       if (cell == kOutside) return true;
       if (occupied_[cell]) return false;
@@ -307,7 +308,6 @@ class EscapeGrid {
   std::vector<uint8_t> occupied_;
   std::vector<std::array<float, 3>> directions_;
 };
-
 
 // Propagation (normals.h, kPropagate). `inward` seeds each part facing the
 // centroid instead of away from it. With a non-empty `enclosure`, every point
@@ -389,14 +389,14 @@ void OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph, 
     grow();
   } else if (!inward) {
     // An object (no enclosed space): rays decide the points whose outside
-    // they see, a ray along the normal escaping while the one against it
-    // meets the surface (EscapeGrid), or the reverse; the propagation
-    // grows from those points. The seeds below alone fail where the point
+    // they see, open within 60 degrees of one side and closed on the other
+    // (EscapeGrid::OpenSide), at most kMaxRayPoints of them; the
+    // propagation grows from those points. The seeds below alone fail where the point
     // farthest from the centroid has its normal across the way out: a
     // statue's ground, seeded at its rim, faced down, and through the
-    // ground the plinth standing on it faced in. Points whose rays both
-    // escape (an open sheet, a ground, a front-only scan) or both meet
-    // surface (a concave fold) are left to the propagation.
+    // ground the plinth standing on it faced in. Points open on both sides
+    // (an open sheet, a ground, a front-only scan) or closed on both (a
+    // concave fold) are left to the propagation.
     const EscapeGrid grid(positions, n, graph);
     const size_t stride = std::max<size_t>(1, n / kMaxRayPoints);
     const size_t probes = (n + stride - 1) / stride;

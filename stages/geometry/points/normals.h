@@ -26,7 +26,12 @@
 //               ahead and behind: a wall's, a floor's, a table's in the
 //               room) faces it, and the propagation grows from those points
 //               to the rest (propagation alone is unreliable across the
-//               sharp creases where furniture meets a floor). kNo keeps the
+//               sharp creases where furniture meets a floor). Without an
+//               enclosed space (an object), rays over a voxel grid decide
+//               first the points open on one side and closed on the other
+//               (of 48 directions, those within 60 degrees of either
+//               side: at least 75 % more escape on one), at most 100,000;
+//               a plinth on its ground otherwise faced in through it. kNo keeps the
 //               outward seeds (version 2's rule); kYes seeds inward, toward
 //               the centroid, for an interior the enclosure test misses (a
 //               room open on a side wider than 1.5 m).
