@@ -12,6 +12,18 @@ property), in millimetres, y up (x, y, z -> x, z, -y), and cropped to 1 m
 around the plinth's axis (the carved blob, its box and a disk of paving).
 Normals, if IN has them, are turned with the points.
 
+  statue_file.py --check-sides GLB...
+
+--check-sides reads each model.glb the workflows exported from OUT and
+asserts that its faces' fronts (counter-clockwise, as glTF draws and culls
+them) face out: of the area of the faces within 60 degrees of level (the
+plinth's and the blob's sides) at least 90 % faces away from the vertical
+axis through the model's middle, and of the rest (the ground, the plinth's
+top) at least 90 % faces up. A viewer culls back faces: with points.normals
+3 the plinth and the ground faced in and down (38 % and 10 %), and a
+headset would have shown the statue standing on nothing. Up is the file's
++y, which the glTF's z-up-to-y-up node turns to -z.
+
 --air FRACTION moves that fraction of the kept points (a fixed pseudo-random
 choice) into the air: each along the line to the station that scanned it,
 5 to 60 % of the way (dust, mixed returns; IN must have its stations). It
@@ -63,8 +75,51 @@ def stations_of(data, path):
     return stations
 
 
+def check_sides(paths, least=0.9):
+    import math
+    import os
+    sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+    from merged_room import triangles
+    up = (0.0, 0.0, -1.0)
+    failed = 0
+    for path in paths:
+        faces = triangles(path)
+        lo = [min(p[a] for f in faces for p in f) for a in range(3)]
+        hi = [max(p[a] for f in faces for p in f) for a in range(3)]
+        middle = [(lo[a] + hi[a]) / 2 for a in range(3)]
+        side = side_out = level = level_up = 0.0
+        for a, b, c in faces:
+            u = [b[k] - a[k] for k in range(3)]
+            v = [c[k] - a[k] for k in range(3)]
+            n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
+            area = math.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2) / 2
+            if area == 0:
+                continue
+            vertical = sum(n[k] * up[k] for k in range(3)) / (2 * area)
+            away = [(a[k] + b[k] + c[k]) / 3 - middle[k] for k in range(3)]
+            height = sum(away[k] * up[k] for k in range(3))
+            away = [away[k] - height * up[k] for k in range(3)]
+            if abs(vertical) < 0.5:
+                side += area
+                side_out += area if sum(n[k] * away[k] for k in range(3)) > 0 else 0.0
+            else:
+                level += area
+                level_up += area if vertical > 0 else 0.0
+        shares = (side_out / side if side else 0.0, level_up / level if level else 0.0)
+        ok = min(shares) >= least
+        failed += not ok
+        print('%s  %s: %.1f %% of the sides\' area faces out, %.1f %% of the level faces\' up (>= %.0f %%)'
+              % ('ok  ' if ok else 'FAIL', path, 100 * shares[0], 100 * shares[1], 100 * least))
+    if not paths:
+        print('FAIL  no models to check')
+        return 1
+    return 1 if failed else 0
+
+
 def main():
     args = sys.argv[1:]
+    if args[:1] == ['--check-sides']:
+        sys.exit(check_sides(args[1:]))
     air = 0.0
     if len(args) == 4 and args[2] == '--air':
         air = float(args[3])

@@ -199,10 +199,13 @@ class Frontier {
 // escapes when it leaves the box without entering an occupied voxel.
 constexpr int kEscapeGridSide = 256;
 constexpr double kEscapeStartVoxels = 3;
+constexpr double kNearVoxels = 2;
 constexpr int kRayDirections = 48;
 constexpr double kOpenShare = 0.75;
 // Points whose sides rays look for, at most (every n / this-th point).
 constexpr size_t kMaxRayPoints = 100000;
+constexpr int kRayNeighbours = 8;
+constexpr int kRayConsensus = 3;
 
 class EscapeGrid {
  public:
@@ -265,12 +268,15 @@ class EscapeGrid {
     int out = 0, out_rays = 0, in = 0, in_rays = 0;
     for (const auto& d : directions_) {
       const double cosine = d[0] * normal[0] + d[1] * normal[1] + d[2] * normal[2];
-      if (cosine >= 0.5) {
+      if (std::fabs(cosine) < 0.5) continue;
+      const Ray ray = Cast(p, d.data());
+      if (ray == Ray::kNear) continue;
+      if (cosine > 0) {
         ++out_rays;
-        out += Escapes(p, d.data());
-      } else if (cosine <= -0.5) {
+        out += ray == Ray::kEscapes;
+      } else {
         ++in_rays;
-        in += Escapes(p, d.data());
+        in += ray == Ray::kEscapes;
       }
     }
     if (out_rays == 0 || in_rays == 0) return 0;
@@ -278,14 +284,20 @@ class EscapeGrid {
     return open >= kOpenShare ? 1 : open <= -kOpenShare ? -1 : 0;
   }
 
-  bool Escapes(const float* p, const float* direction) const {
+  // kEscapes: the ray leaves the box; kMeets: it meets surface at least
+  // kNearVoxels past its start; kNear: sooner. A ray that meets surface at
+  // once runs along a neighbouring one (a ground point at the foot of a
+  // wall, looking up the wall) and tells nothing of an inside.
+  enum class Ray { kEscapes, kMeets, kNear };
+  Ray Cast(const float* p, const float* direction) const {
     const double step = 0.5 * voxel_;
-    for (double t = kEscapeStartVoxels * voxel_;; t += step) {
+    const double start = kEscapeStartVoxels * voxel_, near = start + kNearVoxels * voxel_;
+    for (double t = start;; t += step) {
       double q[3];
       for (int a = 0; a < 3; ++a) q[a] = p[a] + t * direction[a];
       const size_t cell = Cell(q[0], q[1], q[2]);
-      if (cell == kOutside) return true;
-      if (occupied_[cell]) return false;
+      if (cell == kOutside) return Ray::kEscapes;
+      if (occupied_[cell]) return t < near ? Ray::kNear : Ray::kMeets;
     }
   }
 
@@ -407,13 +419,36 @@ void OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph, 
         side[k] = grid.OpenSide(&positions[3 * i], &normals[3 * i]);
       }
     });
-    std::vector<uint32_t> decided;
+    // A decision stands when at least kRayConsensus of the nearest
+    // kRayNeighbours probes are decided alike (their outsides within 60
+    // degrees) and more than are decided against: a lone decision (a
+    // ground point at a wall's foot; a ray through a scan's gap) would
+    // otherwise win a whole undecided ground for its side.
+    std::vector<float> at(3 * probes);
     for (size_t k = 0; k < probes; ++k) {
-      if (side[k] == 0) continue;
-      const uint32_t i = uint32_t(k * stride);
-      if (side[k] < 0) flip(i);
+      for (int a = 0; a < 3; ++a) at[3 * k + a] = positions[3 * k * stride + a];
+    }
+    const Expected<KnnIndex> probe_index = KnnIndex::Build(at);
+    std::vector<uint32_t> decided;
+    if (probe_index.ok()) {
+      std::vector<Neighbor> near(kRayNeighbours);
+      for (size_t k = 0; k < probes; ++k) {
+        if (side[k] == 0) continue;
+        const int found = probe_index->QueryPoint(uint32_t(k), kRayNeighbours, near);
+        int agree = 0, against = 0;
+        for (int j = 0; j < found; ++j) {
+          const size_t m = near[j].index;
+          if (side[m] == 0) continue;
+          const double alike = side[k] * side[m] * dot(k * stride, m * stride);
+          agree += alike >= 0.5;
+          against += alike <= -0.5;
+        }
+        if (agree >= kRayConsensus && agree > against) decided.push_back(uint32_t(k * stride));
+      }
+    }
+    for (uint32_t i : decided) {
+      if (side[i / stride] < 0) flip(i);
       visited[i] = 1;
-      decided.push_back(i);
     }
     report.facing_rays = decided.size();
     for (uint32_t i : decided) {

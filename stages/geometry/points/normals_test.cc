@@ -293,12 +293,15 @@ RoomSides SidesOf(const PointCloud& room, double width_m, double depth_m) {
 TEST(NormalsTest, RaysFaceAPlinthOutwardOnItsGround) {
   PointCloud cloud;
   const double lo[3] = {-0.3, -0.3, 0.0}, hi[3] = {0.3, 0.3, 1.0};
-  AddBoxFaces(cloud, lo, hi, 0.02, 0.001, 7, [](double, double, double z) { return z < 0.01; });
+  // Noise half the spacing, as a laser scan's at a few metres.
+  AddBoxFaces(cloud, lo, hi, 0.02, 0.01, 7, [](double, double, double z) { return z < 0.01; });
   const size_t box = cloud.size();
+  std::mt19937 rng(8);
+  std::normal_distribution<double> noise(0.0, 0.01);
   for (double x = -1.5; x <= 1.5; x += 0.02) {
     for (double y = -1.5; y <= 1.5; y += 0.02) {
-      if (std::fabs(x) < 0.31 && std::fabs(y) < 0.31) continue;
-      cloud.positions.insert(cloud.positions.end(), {float(x), float(y), 0.0f});
+      if (std::fabs(x) < 0.3 && std::fabs(y) < 0.3) continue;
+      cloud.positions.insert(cloud.positions.end(), {float(x), float(y), float(noise(rng))});
     }
   }
   NormalReport report;
