@@ -1,5 +1,6 @@
 // points.normals: k-NN PCA normals with orientation (stages/geometry/points/normals.h).
 #include <cstddef>
+#include <cstdio>
 #include <string>
 #include <utility>
 
@@ -94,6 +95,9 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.3));
   PointCloud& cloud = input.cloud;
   NormalReport report;
+  // `auto` checks the sides of a file's own normals before it takes them.
+  const bool checks_input = orientation == NormalOrientation::kAuto && cloud.has_normals() &&
+                            !(cloud.has_stations() && !cloud.stations.empty());
   {
     PB_PHASE(ctx, "compute");
     NormalOptions options;
@@ -105,6 +109,16 @@ Status Run(StageContext& ctx) {
     options.progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); };
     PB_RETURN_IF_ERROR(EstimateNormals(cloud, options, &report).WithContext(input.path));
   }
+  if (checks_input && report.orientation_used == NormalOrientation::kPropagate &&
+      report.input_sides_disagree > 0) {
+    char share[32];
+    std::snprintf(share, sizeof share, "%.1f", 100.0 * report.input_sides_disagree);
+    ctx.warning(std::string(kId) + ": the file's normals face inconsistent sides (" + share +
+                " % of neighbouring pairs on one smooth surface disagree, over 5 %: a tool computed "
+                "them without orienting them) in " + input.path +
+                "; oriented by propagation instead (orientation: input keeps their sides)");
+  }
+  if (checks_input) ctx.counter("input_sides_disagree", report.input_sides_disagree);
   ctx.counter("points", static_cast<double>(report.points));
   ctx.counter("flipped", static_cast<double>(report.flipped));
   if (report.orientation_used == NormalOrientation::kPropagate && interior == NormalInterior::kAuto) {
@@ -156,7 +170,10 @@ StageType NormalsStage() {
       "propagation and `interior: auto`, `enclosed_volume_m3` (the enclosed space found, 0 for "
       "none; stages/geometry/points/enclosure.h) and `facing_enclosure` (points oriented to face "
       "it; the rest by propagation from them) and `facing_rays` (points whose side rays decided, "
-      "when no enclosed space was found).";
+      "when no enclosed space was found); with `auto` and a file's own normals, "
+      "`input_sides_disagree` (the share of neighbouring pairs on one smooth surface whose file "
+      "sides disagree; over 0.05, version 4, the sides were not oriented, a warning says so and "
+      "propagation orients instead).";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "The points to estimate normals for.", false}};
   type.outputs = {{"points", "points", "The same points with unit normals.", false}};

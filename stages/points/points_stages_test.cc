@@ -754,6 +754,29 @@ TEST_F(PointsStagesTest, NormalsOfARoomWithoutStationsFaceIntoIt) {
   EXPECT_THAT(Run("points.normals", bad).message(), HasSubstr("interior"));
 }
 
+// A file whose normals were computed without orienting them (random signs
+// on a ball): the stage warns, names the file and propagates instead.
+TEST_F(PointsStagesTest, NormalsWarnOfAFilesUnorientedNormals) {
+  PointCloud ball;
+  const double center[3] = {0, 0, 0};
+  pb::testing::AddSphere(ball, center, 0.4, 8000, 0.0002, 4);
+  for (size_t i = 0; i < ball.size(); ++i) {
+    const float sign = (i * 2654435761u) % 7 < 3 ? -1.0f : 1.0f;
+    for (int a = 0; a < 3; ++a) ball.normals.push_back(sign * ball.positions[3 * i + a]);
+  }
+  const std::string input = (dir_ / "ball.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, ball).ok());
+  FakeContext ctx(dir_ / "out", {});
+  ctx.AddInput("points", "points", input);
+  const Status status = Run("points.normals", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.meta_["points"]["normals_orientation"], "propagate");
+  EXPECT_GT(ctx.counters_["input_sides_disagree"], 0.3);
+  ASSERT_EQ(ctx.warnings_.size(), 1u);
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr("the file's normals face inconsistent sides"));
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr("ball.ply"));
+}
+
 TEST_F(PointsStagesTest, NormalsRejectsBadParameters) {
   const std::string input = (dir_ / "in.ply").string();
   ASSERT_TRUE(WritePlyPoints(input, GridCloud(0)).ok());

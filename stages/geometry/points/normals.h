@@ -42,7 +42,9 @@
 //               PCL and Open3D write oriented ones), dot(n_in, n) >= 0. Needs
 //               every point to have a finite, non-zero input normal.
 //   kAuto:      kStations when the cloud has stations, else kInput when every
-//               point has a usable input normal, else kPropagate.
+//               point has a usable input normal whose sides agree between
+//               neighbours (NormalReport::input_sides_disagree at most 5 %),
+//               else kPropagate.
 //   kNone:      the sign the eigen solver happens to produce.
 //
 // Output is identical whatever the thread count. Cost: one kNN query per
@@ -93,6 +95,11 @@ struct NormalReport {
   // kPropagate without enclosed space (an object): the points whose side
   // rays decided (the rest by propagation from them).
   size_t facing_rays = 0;
+  // kAuto with the file's normals: the share of neighbouring pairs on one
+  // smooth surface whose file sides disagree; over 5 %, the file's sides
+  // were not oriented (a tool's "preferred orientation", random signs) and
+  // propagation orients instead (orientation_used says so).
+  double input_sides_disagree = 0.0;
 };
 
 // Replaces cloud.normals with estimated, oriented unit normals (3 floats per

@@ -211,6 +211,44 @@ TEST(NormalsTest, InputNormalsGiveTheSides) {
               HasSubstr("orientation 'input' needs the cloud's own normals"));
 }
 
+// A file whose normals a tool computed without orienting them (random
+// signs here): `auto` finds their sides disagree between neighbours and
+// propagates instead of taking them; oriented ones it takes.
+TEST(NormalsTest, AutoDoesNotTakeUnorientedFileNormals) {
+  PointCloud cloud;
+  const double center[3] = {0.3, -0.2, 1.0};
+  AddSphere(cloud, center, 0.5, 20000, 0.0002, 5);
+  std::mt19937 rng(9);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    const float sign = rng() % 2 ? 1.0f : -1.0f;
+    for (int a = 0; a < 3; ++a) cloud.normals.push_back(sign * float(cloud.positions[3 * i + a] - center[a]));
+  }
+  PointCloud oriented = cloud;
+  for (size_t i = 0; i < oriented.size(); ++i) {
+    for (int a = 0; a < 3; ++a) oriented.normals[3 * i + a] = float(oriented.positions[3 * i + a] - center[a]);
+  }
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(cloud, {}, &report).ok());
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kPropagate);
+  EXPECT_GT(report.input_sides_disagree, 0.4);
+  for (size_t i = 0; i < cloud.size(); ++i) {
+    double radial[3];
+    for (int a = 0; a < 3; ++a) radial[a] = cloud.positions[3 * i + a] - center[a];
+    ASSERT_GT(Dot(&cloud.normals[3 * i], radial), 0) << "point " << i;
+  }
+  ASSERT_TRUE(EstimateNormals(oriented, {}, &report).ok());
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kInput);
+  EXPECT_LT(report.input_sides_disagree, 0.01);
+  // `input` asked for takes them as they are.
+  PointCloud asked = cloud;
+  for (size_t i = 0; i < asked.size(); ++i) {
+    for (int a = 0; a < 3; ++a) asked.normals[3 * i + a] = -asked.normals[3 * i + a];
+  }
+  ASSERT_TRUE(EstimateNormals(asked, {.orientation = NormalOrientation::kInput}, &report).ok());
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kInput);
+  EXPECT_EQ(report.input_sides_disagree, 0.0);
+}
+
 TEST(NormalsTest, Errors) {
   PointCloud cloud;
   cloud.positions = {0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0};
