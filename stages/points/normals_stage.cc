@@ -113,10 +113,11 @@ Status Run(StageContext& ctx) {
       report.input_sides_disagree > 0) {
     char share[32];
     std::snprintf(share, sizeof share, "%.1f", 100.0 * report.input_sides_disagree);
-    ctx.warning(std::string(kId) + ": the file's normals face inconsistent sides (" + share +
+    ctx.warning(std::string(kId) + ": the normals the points came with (the scan file's own) "
+                "face inconsistent sides (" + share +
                 " % of neighbouring pairs on one smooth surface disagree, over 5 %: a tool computed "
-                "them without orienting them) in " + input.path +
-                "; oriented by propagation instead (orientation: input keeps their sides)");
+                "them without orienting them); oriented by propagation instead (orientation: input "
+                "keeps their sides)");
   }
   if (checks_input) ctx.counter("input_sides_disagree", report.input_sides_disagree);
   ctx.counter("points", static_cast<double>(report.points));

@@ -755,7 +755,7 @@ TEST_F(PointsStagesTest, NormalsOfARoomWithoutStationsFaceIntoIt) {
 }
 
 // A file whose normals were computed without orienting them (random signs
-// on a ball): the stage warns, names the file and propagates instead.
+// on a ball): the stage warns and propagates instead.
 TEST_F(PointsStagesTest, NormalsWarnOfAFilesUnorientedNormals) {
   PointCloud ball;
   const double center[3] = {0, 0, 0};
@@ -773,8 +773,9 @@ TEST_F(PointsStagesTest, NormalsWarnOfAFilesUnorientedNormals) {
   EXPECT_EQ(ctx.meta_["points"]["normals_orientation"], "propagate");
   EXPECT_GT(ctx.counters_["input_sides_disagree"], 0.3);
   ASSERT_EQ(ctx.warnings_.size(), 1u);
-  EXPECT_THAT(ctx.warnings_[0], HasSubstr("the file's normals face inconsistent sides"));
-  EXPECT_THAT(ctx.warnings_[0], HasSubstr("ball.ply"));
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr("the normals the points came with (the scan file's own) "
+                                           "face inconsistent sides"));
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr("oriented by propagation instead"));
 }
 
 TEST_F(PointsStagesTest, NormalsRejectsBadParameters) {
