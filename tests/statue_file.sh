@@ -9,11 +9,12 @@
 # (depth 9 / 8, 97,000 / 9,700 faces), and the four shipped workflows must
 # hold issue 15's goals on it (tests/scene_from_scan.sh), about 3 minutes.
 # It covers the path (units, up axis, no stations, the budget), not every
-# failure found on it: at this size the LPM's hole pixels are 0.095 % (0.082 %
-# without the returns in the air), and were 0.107 % with mesh.fit along the
-# normals only (version 3), which failed (0.214 %) only on the full-size
-# stand-in (1,066,135 points; docs/real-scans.md, "A statue delivered as one
-# file").
+# failure found on it: at this size the LPM's hole pixels are 0.006 % (0.095 %
+# with points.normals 3, whose plinth faced in; 0.082 % without the returns
+# in the air), and were 0.107 % with mesh.fit along the normals only (version
+# 3), which failed (0.214 %) only on the full-size stand-in (1,066,135
+# points; docs/real-scans.md, "A statue delivered as one file"). Since
+# points.normals 4 it also checks that the models face out.
 # Usage: statue_file.sh POINTBAKE SOURCE_DIR PYTHON WORK_DIR
 set -eu
 bin=$1 src=$2 python=$3 dir=$4
