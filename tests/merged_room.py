@@ -141,18 +141,26 @@ def triangles(path):
     return out
 
 
-def facing_in(path):
+def fronts(path):
+    """The triangles of a model.glb as (area, front normal of length 2 * area,
+    center), and the middle of their bounding box."""
     faces = triangles(path)
     lo = [min(p[a] for f in faces for p in f) for a in range(3)]
     hi = [max(p[a] for f in faces for p in f) for a in range(3)]
-    middle = [(lo[a] + hi[a]) / 2 for a in range(3)]
-    inward = total = 0.0
+    out = []
     for a, b, c in faces:
         u = [b[k] - a[k] for k in range(3)]
         v = [c[k] - a[k] for k in range(3)]
         n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
         area = math.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2) / 2
-        center = [(a[k] + b[k] + c[k]) / 3 for k in range(3)]
+        out.append((area, n, [(a[k] + b[k] + c[k]) / 3 for k in range(3)]))
+    return out, [(lo[a] + hi[a]) / 2 for a in range(3)]
+
+
+def facing_in(path):
+    faces, middle = fronts(path)
+    inward = total = 0.0
+    for area, n, center in faces:
         toward = sum(n[k] * (middle[k] - center[k]) for k in range(3))
         total += area
         inward += area if toward > 0 else 0.0

@@ -78,27 +78,19 @@ def stations_of(data, path):
 
 
 def check_sides(paths, least_sides=0.9, least_level=0.75):
-    import math
     import os
     sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-    from merged_room import triangles
+    from merged_room import fronts
     up = (0.0, 0.0, -1.0)
     failed = 0
     for path in paths:
-        faces = triangles(path)
-        lo = [min(p[a] for f in faces for p in f) for a in range(3)]
-        hi = [max(p[a] for f in faces for p in f) for a in range(3)]
-        middle = [(lo[a] + hi[a]) / 2 for a in range(3)]
+        faces, middle = fronts(path)
         side = side_out = level = level_up = 0.0
-        for a, b, c in faces:
-            u = [b[k] - a[k] for k in range(3)]
-            v = [c[k] - a[k] for k in range(3)]
-            n = (u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0])
-            area = math.sqrt(n[0] ** 2 + n[1] ** 2 + n[2] ** 2) / 2
+        for area, n, center in faces:
             if area == 0:
                 continue
             vertical = sum(n[k] * up[k] for k in range(3)) / (2 * area)
-            away = [(a[k] + b[k] + c[k]) / 3 - middle[k] for k in range(3)]
+            away = [center[k] - middle[k] for k in range(3)]
             height = sum(away[k] * up[k] for k in range(3))
             away = [away[k] - height * up[k] for k in range(3)]
             if abs(vertical) < 0.5:

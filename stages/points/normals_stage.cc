@@ -95,9 +95,6 @@ Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(InputPoints input, ReadInputPoints(ctx, kId, 0.3));
   PointCloud& cloud = input.cloud;
   NormalReport report;
-  // `auto` checks the sides of a file's own normals before it takes them.
-  const bool checks_input = orientation == NormalOrientation::kAuto && cloud.has_normals() &&
-                            !(cloud.has_stations() && !cloud.stations.empty());
   {
     PB_PHASE(ctx, "compute");
     NormalOptions options;
@@ -109,8 +106,7 @@ Status Run(StageContext& ctx) {
     options.progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); };
     PB_RETURN_IF_ERROR(EstimateNormals(cloud, options, &report).WithContext(input.path));
   }
-  if (checks_input && report.orientation_used == NormalOrientation::kPropagate &&
-      report.input_sides_disagree > 0) {
+  if (report.input_sides_checked && report.input_sides_disagree > kMaxInputSidesDisagree) {
     char share[32];
     std::snprintf(share, sizeof share, "%.1f", 100.0 * report.input_sides_disagree);
     ctx.warning(std::string(kId) + ": the normals the points came with (the scan file's own) "
@@ -119,7 +115,7 @@ Status Run(StageContext& ctx) {
                 "them without orienting them); oriented by propagation instead (orientation: input "
                 "keeps their sides)");
   }
-  if (checks_input) ctx.counter("input_sides_disagree", report.input_sides_disagree);
+  if (report.input_sides_checked) ctx.counter("input_sides_disagree", report.input_sides_disagree);
   ctx.counter("points", static_cast<double>(report.points));
   ctx.counter("flipped", static_cast<double>(report.flipped));
   if (report.orientation_used == NormalOrientation::kPropagate && interior == NormalInterior::kAuto) {

@@ -164,8 +164,7 @@ size_t OrientLikeInput(PointCloud& cloud, const std::vector<float>& input) {
 // one side of an axis: a "preferred orientation") disagrees on many, an
 // oriented one only where two close surfaces meet. Measured on the statue
 // stand-in: random 50 %, all toward +y 13 %, its stations' sides 1.1 %;
-// the living room's file 0.007 %.
-constexpr double kMaxInputSidesDisagree = 0.05;
+// the living room's file 0.007 % (kMaxInputSidesDisagree, normals.h).
 
 double InputSidesDisagree(const std::vector<float>& normals, const std::vector<float>& input,
                           const std::vector<uint32_t>& graph) {
@@ -251,12 +250,18 @@ constexpr int kRayConsensus = 3;
 
 class EscapeGrid {
  public:
-  EscapeGrid(const float* positions, size_t n, const std::vector<uint32_t>& graph) {
+  EscapeGrid(const PointCloud& cloud, const std::vector<uint32_t>& graph) {
+    const size_t n = cloud.size();
+    const float* positions = cloud.positions.data();
+    const Bounds box = RobustLocalBounds(cloud, 0.001);
+    double extent = 0;
+    for (int a = 0; a < 3; ++a) {
+      lo_[a] = box.min_m[a];
+      extent = std::max(extent, box.max_m[a] - box.min_m[a]);
+    }
     const size_t step = std::max<size_t>(1, n / 100000);
-    std::vector<float> along[3];
     std::vector<double> reach;
     for (size_t i = 0; i < n; i += step) {
-      for (int a = 0; a < 3; ++a) along[a].push_back(positions[3 * i + a]);
       double farthest = 0;
       for (int j = 0; j < kPropagationNeighbors; ++j) {
         const uint32_t t = graph[size_t{kPropagationNeighbors} * i + j];
@@ -270,20 +275,10 @@ class EscapeGrid {
       }
       reach.push_back(std::sqrt(farthest));
     }
-    double extent = 0;
-    for (int a = 0; a < 3; ++a) {
-      std::vector<float>& v = along[a];
-      const size_t low = v.size() / 1000, high = v.size() - 1 - v.size() / 1000;
-      std::nth_element(v.begin(), v.begin() + low, v.end());
-      lo_[a] = v[low];
-      std::nth_element(v.begin(), v.begin() + high, v.end());
-      hi_[a] = v[high];
-      extent = std::max(extent, double(hi_[a]) - lo_[a]);
-    }
     std::nth_element(reach.begin(), reach.begin() + reach.size() / 2, reach.end());
     voxel_ = std::max({extent / kEscapeGridSide, 2.0 * reach[reach.size() / 2], 1e-9});
     for (int a = 0; a < 3; ++a) {
-      dims_[a] = std::clamp(int(std::ceil((double(hi_[a]) - lo_[a]) / voxel_)), 1, kEscapeGridSide);
+      dims_[a] = std::clamp(int(std::ceil((box.max_m[a] - box.min_m[a]) / voxel_)), 1, kEscapeGridSide);
     }
     // A Fibonacci sphere: kRayDirections nearly even directions.
     for (int k = 0; k < kRayDirections; ++k) {
@@ -356,7 +351,7 @@ class EscapeGrid {
     return (size_t(c[2]) * dims_[1] + c[1]) * dims_[0] + c[0];
   }
 
-  float lo_[3], hi_[3];
+  double lo_[3] = {0, 0, 0};
   double voxel_ = 1;
   int dims_[3] = {1, 1, 1};
   std::vector<uint8_t> occupied_;
@@ -451,7 +446,7 @@ void OrientByPropagation(PointCloud& cloud, const std::vector<uint32_t>& graph, 
     // ground the plinth standing on it faced in. Points open on both sides
     // (an open sheet, a ground, a front-only scan) or closed on both (a
     // concave fold) are left to the propagation.
-    const EscapeGrid grid(positions, n, graph);
+    const EscapeGrid grid(cloud, graph);
     const size_t stride = std::max<size_t>(1, n / kMaxRayPoints);
     const size_t probes = (n + stride - 1) / stride;
     std::vector<int8_t> side(probes, 0);
@@ -625,6 +620,7 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
   }
   report.points = n;
   if (check_input) {
+    report.input_sides_checked = true;
     report.input_sides_disagree = InputSidesDisagree(cloud.normals, input, graph);
     if (report.input_sides_disagree > kMaxInputSidesDisagree) orientation = NormalOrientation::kPropagate;
   }

@@ -95,12 +95,16 @@ struct NormalReport {
   // kPropagate without enclosed space (an object): the points whose side
   // rays decided (the rest by propagation from them).
   size_t facing_rays = 0;
-  // kAuto with the file's normals: the share of neighbouring pairs on one
-  // smooth surface whose file sides disagree; over 5 %, the file's sides
-  // were not oriented (a tool's "preferred orientation", random signs) and
+  // kAuto with the file's normals, every one usable (input_sides_checked):
+  // the share of neighbouring pairs on one smooth surface whose file sides
+  // disagree; over kMaxInputSidesDisagree the file's sides were not
+  // oriented (a tool's "preferred orientation", random signs) and
   // propagation orients instead (orientation_used says so).
+  bool input_sides_checked = false;
   double input_sides_disagree = 0.0;
 };
+
+inline constexpr double kMaxInputSidesDisagree = 0.05;
 
 // Replaces cloud.normals with estimated, oriented unit normals (3 floats per
 // point). Status::Invalid if k is outside 3..100, the cloud has fewer than 3
