@@ -211,7 +211,7 @@ Status Run(StageContext& ctx) {
     Expected<ScanAgreement> agreement = Status::Internal("not run");
     Expected<VertexScanAgreement> at_vertices = Status::Internal("not run");
     std::vector<uint8_t> strays;
-    size_t air_points = 0;
+    size_t air_points = 0, seen_through = 0;
     arena.execute([&] {
       // One index of the scan for the spacing and both measures.
       Expected<KnnIndex> index = KnnIndex::Build(scan->cloud.positions);
@@ -221,13 +221,15 @@ Status Run(StageContext& ctx) {
       }
       Expected<SpacingAndStrays> local =
           LocalSpacingAndStrays(*index, {.k = int(k), .max_spacing_ratio = stray_spacing_ratio,
-                                         .min_cluster_points = size_t(stray_cluster_points)});
+                                         .min_cluster_points = size_t(stray_cluster_points)},
+                                &scan->cloud);
       if (!local.ok()) {
         agreement = local.status();
         return;
       }
       strays = std::move(local->stray);
       air_points = local->air;
+      seen_through = local->seen_through;
       const std::vector<float>& spacing = local->spacing;
       ScanAgreementOptions options;
       options.strays = strays;
@@ -254,6 +256,7 @@ Status Run(StageContext& ctx) {
     ctx.counter("scan_points", static_cast<double>(scan->cloud.size()));
     ctx.counter("stray_points", static_cast<double>(agreement->stray_points));
     ctx.counter("air_points", static_cast<double>(air_points));
+    ctx.counter("seen_through_points", static_cast<double>(seen_through));
     meta["median_spacing_m"] = agreement->median_spacing_m;
     meta["mean_edge_m"] = agreement->mean_edge_m;
   }
@@ -279,8 +282,9 @@ StageType GeometryMetricsStage() {
   // (was r_k); 5: UV seams are no boundary edges; 6: stray scan points are not
   // missing surface (`stray_cluster_points`).
   // 7: points in the air are strays (points/strays.h, AirPoints); 8: their
-  // plane test allows the scan's noise (AirOptions::noise_tolerance).
-  type.version = 8;
+  // plane test allows the scan's noise (AirOptions::noise_tolerance); 9: the
+  // points another station saw through are strays (points/seen_through.h).
+  type.version = 9;
   type.summary =
       "Mesh accuracy against ground truth (mean, RMS, 95th percentile, Hausdorff) and, without truth, "
       "against the scan: invented area, missing surface, boundary edges";
@@ -319,7 +323,7 @@ StageType GeometryMetricsStage() {
       "`quality` = the first of those arrays, which MeshLab colors by, and each array as a float "
       "vertex property `scalar_NAME`, which CloudCompare loads as scalar field NAME).\n\n"
       "Counters: `mesh_faces`, `samples`, `boundary_edges_per_1000_faces`; with truth `truth_faces`, "
-      "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `stray_points`, `air_points` (of the strays, points in the air), `invented_area_fraction`, "
+      "`mean_m`, `hausdorff_m` (symmetric); with points `scan_points`, `stray_points`, `air_points` (of the strays, points in the air), `seen_through_points` (of those, points another station saw through), `invented_area_fraction`, "
       "`missing_fraction`, `invented_vertices`. Phases: `io`, `compute` (truth), `scan` (points).";
   type.params_schema = kSchema;
   type.inputs = {{"mesh", "mesh", "The mesh to evaluate (mesh.ply).", false},

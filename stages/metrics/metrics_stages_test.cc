@@ -84,7 +84,7 @@ TEST_F(MeshMetricsStagesTest, GeometrySchemaAndPorts) {
   EXPECT_TRUE(type->inputs[1].optional);
   EXPECT_EQ(type->inputs[2].name, "points");
   EXPECT_TRUE(type->inputs[2].optional);
-  EXPECT_EQ(type->version, 8);
+  EXPECT_EQ(type->version, 9);  // 9: points another station saw through are strays
   ASSERT_EQ(type->outputs.size(), 2u);
   EXPECT_EQ(type->outputs[1].name, "errors");
 }

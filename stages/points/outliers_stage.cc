@@ -1,5 +1,6 @@
 // points.outliers: statistical outlier removal (stages/geometry/points/outliers.h)
 // or the points in the air (stages/geometry/points/strays.h).
+#include <algorithm>
 #include <cstdio>
 #include <string>
 
@@ -49,6 +50,23 @@ constexpr const char* kSchema = R"({
       "default": 2.5,
       "description": "air: the plane test allows at least this many times the scan's surface noise (the median RMS distance of a point and its k nearest to their plane), so a sparse, noisy surface (the side of an object one far station saw) is not taken for points in the air; 0: plane_tolerance alone."
     },
+    "seen_through": {
+      "type": "boolean",
+      "default": true,
+      "description": "air: also remove the points another station saw through (points/seen_through.h): a person, a bird or a clump one station recorded and the others saw past (every sample of another station around the point's direction lies farther than the point by the margin below). Needs the scan's stations; a scan without them, or with one, loses none this way."
+    },
+    "seen_through_spacings": {
+      "type": "number",
+      "minimum": 0,
+      "default": 3.0,
+      "description": "air, seen_through: the margin around a point that another station must have seen past, at least this many of the point's local spacings ..."
+    },
+    "seen_through_range": {
+      "type": "number",
+      "minimum": 0,
+      "default": 0.01,
+      "description": "... and at least this fraction of its distance to that station (the registration error between stations and the noise stay within it)."
+    },
     "std_ratio": {
       "type": "number",
       "minimum": 0,
@@ -69,6 +87,9 @@ Status RunAir(StageContext& ctx, int k) {
   PB_ASSIGN_OR_RETURN(const double spacing_ratio, NumberParam(ctx, kId, "spacing_ratio"));
   PB_ASSIGN_OR_RETURN(const double plane_tolerance, NumberParam(ctx, kId, "plane_tolerance"));
   PB_ASSIGN_OR_RETURN(const double noise_tolerance, NumberParam(ctx, kId, "noise_tolerance"));
+  PB_ASSIGN_OR_RETURN(const bool seen_through, BoolParam(ctx, kId, "seen_through"));
+  PB_ASSIGN_OR_RETURN(const double seen_spacings, NumberParam(ctx, kId, "seen_through_spacings"));
+  PB_ASSIGN_OR_RETURN(const double seen_range, NumberParam(ctx, kId, "seen_through_range"));
   PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
   if (implementation != "own")
     return Status::Invalid(std::string(kId) + ": method 'air' has implementation 'own' only, got '" +
@@ -80,8 +101,11 @@ Status RunAir(StageContext& ctx, int k) {
   {
     PB_PHASE(ctx, "compute");
     Expected<PointCloud> kept = RemoveAirPoints(
-        input, {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance,
-                .noise_tolerance = noise_tolerance}, ctx.threads(), &report);
+        input,
+        {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance,
+         .noise_tolerance = noise_tolerance, .seen_through = seen_through,
+         .seen = {.margin_spacings = seen_spacings, .margin_range = seen_range}},
+        ctx.threads(), &report);
     if (!kept.ok()) return kept.status().WithContext(std::string(kId) + ": " + in.path);
     output = std::move(*kept);
   }
@@ -91,16 +115,25 @@ Status RunAir(StageContext& ctx, int k) {
   ctx.counter("points_out", double(output.size()));
   ctx.counter("removed", double(removed));
   ctx.counter("noise_m", report.noise_m);
+  ctx.counter("seen_through", double(report.seen_through));
+  ctx.counter("seen_through_stations", double(report.seen_stations));
+  ctx.counter("seen_through_decided", double(report.seen_decided));
   auto number = [](const char* format, double value) {
     char text[32];
     std::snprintf(text, sizeof text, format, value);
     return std::string(text);
   };
-  if (removed > 0)
-    ctx.warning(std::string(kId) + ": " + std::to_string(removed) + " of " +
+  const size_t sparse = removed - std::min(removed, report.seen_through);
+  if (sparse > 0)
+    ctx.warning(std::string(kId) + ": " + std::to_string(sparse) + " of " +
                 std::to_string(input.size()) + " points are in the air (sparser than " + number("%g", spacing_ratio) +
                 " x the median spacing, " + number("%.2f", report.median_spacing_m * 1000) +
                 " mm, and on no surface) and are left out of the meshes");
+  if (report.seen_through > 0)
+    ctx.warning(std::string(kId) + ": " + std::to_string(report.seen_through) + " of " +
+                std::to_string(input.size()) +
+                " points are where another scanner station saw through (a person, a bird, a clump only one "
+                "station recorded) and are left out of the meshes");
   const nlohmann::json meta = InputPointsMetaWith(
       ctx, {{"points", output.size()}, {"outliers_removed", removed}, {"outliers_method", "air"}});
   PB_RETURN_IF_ERROR(WriteOutputPoints(ctx, output, meta));
@@ -161,7 +194,7 @@ Status Run(StageContext& ctx) {
 StageType OutliersStage() {
   StageType type;
   type.id = kId;
-  type.version = 3;  // 2: method air; 3: its plane test allows the scan's noise
+  type.version = 4;  // 2: method air; 3: its plane test allows the scan's noise; 4: and what another station saw through
   type.summary = "Outlier removal: statistical (as PCL's StatisticalOutlierRemoval), or the points in the air";
   type.doc =
       "For every point, the mean distance to its `k` nearest other points (exact kd-tree "
@@ -177,12 +210,21 @@ StageType OutliersStage() {
       "that is more): dust, mixed returns, floaters, which screened Poisson otherwise wraps in a "
       "hull that the scan's own sparse points seem to support. A scan's far field, a floor at "
       "grazing angle, the edge of two sparse walls (sparse, on planes), the side of an object one "
-      "far station saw (sparse and noisy) and a rough surface (dense) stay. It warns with the "
-      "count when it removes any.\n\n"
+      "far station saw (sparse and noisy) and a rough surface (dense) stay. With `seen_through` "
+      "(default) and a scan of several stations, it also removes the points another station saw "
+      "through (stages/geometry/points/seen_through.h): every sample of that station in the "
+      "directions of a ball around the point (radius: `seen_through_spacings` local spacings, at "
+      "least `seen_through_range` of its distance to the station) lies beyond the ball; a "
+      "person walking past one station, a bird, a clump of dust returns, a mixed return "
+      "another station saw behind. It warns with the counts when it removes any.\n\n"
       "Meta added: `points`, `outliers_removed`, `outliers_implementation`, "
       "`outliers_threshold_m` (meters; own implementation only); with `air`: `points`, "
       "`outliers_removed`, `outliers_method`. "
-      "Counters: `points_in`, `points_out`, `removed`; with `air`, `noise_m` (the surface noise).";
+      "Counters: `points_in`, `points_out`, `removed`; with `air`, `noise_m` (the surface noise) "
+      "`seen_through` (of the removed, the points another station saw through; they may "
+      "also be sparse), `seen_through_stations` (the stations looked through: 0 for a scan without "
+      "stations or with one) and `seen_through_decided` (the points whose surroundings another "
+      "station sampled in every direction, so that it could tell).";
   type.params_schema = kSchema;
   type.inputs = {{"points", "points", "The points to clean.", false}};
   type.outputs = {{"points", "points", "The points that are not outliers.", false}};

@@ -617,6 +617,67 @@ TEST_F(PointsStagesTest, OutliersAirRemovesReturnsInTheAirAndNothingOfACleanScan
   }
 }
 
+TEST_F(PointsStagesTest, OutliersAirRemovesWhatAnotherStationSawThrough) {
+  // A wall 1 m in front of two stations, each sampling it every 1 cm, and a
+  // clump of 150 points 40 cm in front of it that only the first recorded
+  // (a bird): the second saw the wall through it.
+  PointCloud cloud;
+  cloud.stations = {{-0.5, 0.0, 0.0}, {0.5, 0.0, 0.0}};
+  for (uint16_t s = 0; s < 2; ++s)
+    for (int i = 0; i < 200; ++i)
+      for (int j = 0; j < 100; ++j) {
+        cloud.positions.insert(cloud.positions.end(),
+                               {-1.0f + 0.01f * float(i) + 0.005f * float(s), 1.0f, -0.5f + 0.01f * float(j)});
+        cloud.colors.insert(cloud.colors.end(), {200, 200, 200});
+        cloud.station_ids.push_back(s);
+      }
+  const size_t wall = cloud.size();
+  std::mt19937 engine(3);
+  std::normal_distribution<float> spread(0.0f, 0.01f);
+  for (int i = 0; i < 150; ++i) {
+    cloud.positions.insert(cloud.positions.end(), {spread(engine), 0.6f + spread(engine), spread(engine)});
+    cloud.colors.insert(cloud.colors.end(), {0, 200, 255});
+    cloud.station_ids.push_back(0);
+  }
+  const std::string path = (dir_ / "bird.ply").string();
+  ASSERT_TRUE(WritePlyPoints(path, cloud).ok());
+  FakeContext ctx(dir_ / "seen", {{"method", "air"}});
+  ctx.AddInput("points", "points", path);
+  Status status = Run("points.outliers", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["seen_through_stations"], 2);
+  EXPECT_GE(ctx.counters_["seen_through"], 140);
+  EXPECT_GE(ctx.counters_["seen_through_decided"], 0.9 * double(wall));
+  auto out = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  // The wall's points are all kept, first and in order.
+  ASSERT_GE(out->points.size(), wall);
+  EXPECT_EQ(std::vector<float>(out->points.positions.begin(), out->points.positions.begin() + ptrdiff_t(3 * wall)),
+            std::vector<float>(cloud.positions.begin(), cloud.positions.begin() + ptrdiff_t(3 * wall)));
+  EXPECT_EQ(out->points.stations.size(), 2u);
+  bool warned = false;
+  for (const std::string& warning : ctx.warnings_)
+    warned |= warning.find("another scanner station saw through") != std::string::npos;
+  EXPECT_TRUE(warned);
+
+  // seen_through false: the clump is as dense as the wall and stays.
+  FakeContext off(dir_ / "off", {{"method", "air"}, {"seen_through", false}});
+  off.AddInput("points", "points", path);
+  status = Run("points.outliers", off);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(off.counters_["seen_through"], 0);
+  EXPECT_EQ(off.counters_["seen_through_stations"], 0);
+  EXPECT_LT(off.counters_["removed"], 20);
+
+  for (const nlohmann::json& bad : {nlohmann::json{{"method", "air"}, {"seen_through_spacings", -1}},
+                                    nlohmann::json{{"method", "air"}, {"seen_through_range", -0.5}},
+                                    nlohmann::json{{"method", "air"}, {"seen_through", "yes"}}}) {
+    FakeContext wrong(dir_ / "bad", bad);
+    wrong.AddInput("points", "points", path);
+    EXPECT_FALSE(Run("points.outliers", wrong).ok()) << bad.dump();
+  }
+}
+
 // The implementations in pointbake-pcl.so (built when libpcl-dev is
 // installed; stages/CMakeLists.txt makes this test depend on it).
 bool HavePclModule() { return ModuleSymbol(kPclModule, PB_PCL_SMOOTH_SYMBOL, "test").ok(); }

@@ -207,7 +207,7 @@ Status Run(StageContext& ctx) {
 
   tbb::task_arena arena(std::max(1, ctx.threads()));
   std::vector<float> radius, spacing;
-  size_t capped = 0, strays = 0, air_points = 0;
+  size_t capped = 0, strays = 0, air_points = 0, seen_through = 0;
   PointCloud kept;  // the cloud without its stray points, when it has some
   // The whole cloud's index, kept for the surfels when no point is a stray
   // (they index the same positions then; with strays they index `kept`),
@@ -223,7 +223,8 @@ Status Run(StageContext& ctx) {
       if (!index.ok()) return;
       local = LocalSpacingAndStrays(*index, {.k = options.k,
                                              .max_spacing_ratio = options.stray_spacing_ratio,
-                                             .min_cluster_points = size_t(options.stray_cluster_points)});
+                                             .min_cluster_points = size_t(options.stray_cluster_points)},
+                                    &input.cloud);
     });
     if (!index.ok()) return index.status().WithContext(where);
     if (!local.ok()) return local.status().WithContext(where);
@@ -235,6 +236,7 @@ Status Run(StageContext& ctx) {
     }
     strays = local->stray.size() - keep.size();
     air_points = local->air;
+    seen_through = local->seen_through;
     if (strays > 0) {
       kept = SelectPoints(input.cloud, keep);
       free_index();
@@ -361,6 +363,7 @@ Status Run(StageContext& ctx) {
   ctx.counter("points", double(input.cloud.size()));
   ctx.counter("stray_points", double(strays));
   ctx.counter("air_points", double(air_points));
+  ctx.counter("seen_through_points", double(seen_through));
   ctx.counter("splats_drawn", double(drawn));
   ctx.counter("radii_capped", double(capped));
   ctx.counter("border_points", options.orient ? double(surfels.border_points) : 0.0);
@@ -387,12 +390,14 @@ StageType SplatsStage() {
   // (`samples_on_surface`), frames' PNGs unchanged; 5: stray points left
   // out (`stray_cluster_points`); 6: points in the air are strays too
   // (points/strays.h, AirPoints); 7: their plane test allows the scan's
-  // noise (AirOptions::noise_tolerance): a sparse, noisy surface is drawn.
-  type.version = 7;
+  // noise (AirOptions::noise_tolerance): a sparse, noisy surface is drawn;
+  // 8: the points another station saw through are strays too
+  // (points/seen_through.h: a person or a clump one station recorded).
+  type.version = 8;
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
       "Leaves out the stray points (clusters of fewer than `stray_cluster_points` linked samples, "
-      "points/strays.h: a return in the air, floating dust; and, version 6, the points in the air: sparser than 4 median spacings and on no plane or line with half their 16 nearest), then draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
+      "points/strays.h: a return in the air, floating dust; and, version 6, the points in the air: sparser than 4 median spacings and on no plane or line with half their 16 nearest; and, version 8, in a scan of several stations, the points another station saw through, as `points.outliers` method `air` leaves them out of the meshes), then draws every point of `points` as a disk of radius `radius_scale` * its local spacing "
       "(r_k sqrt(pi / k), r_k the distance to its `k`-th nearest other point, at most "
       "`max_radius_spacings` medians of the cloud's local spacings: isolated points stay small), "
       "lying in the point's tangent plane (`orient`; else facing the camera), a border point's disk "
@@ -412,7 +417,7 @@ StageType SplatsStage() {
       "pixels the scan has evidence of; metrics.image counts hole pixels on them), each point taken "
       "where it lies once moved onto the quadric fitted to its neighbourhood (`samples_on_surface`), "
       "so that range noise scattering points past a silhouette does not count as evidence.\n\n"
-      "Counters: `frames`, `points`, `stray_points` (left out), `air_points` (of them, points in the air), `splats_drawn` (over all frames), "
+      "Counters: `frames`, `points`, `stray_points` (left out), `air_points` (of them, points in the air), `seen_through_points` (of those, points another station saw through), `splats_drawn` (over all frames), "
       "`radii_capped`, `border_points`, "
       "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`), `projected_points`, "
       "`mean_projection_m` (with `samples_on_surface`: points moved, mean distance over all points). "

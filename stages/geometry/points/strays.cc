@@ -19,7 +19,8 @@
 
 namespace pb {
 
-Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const StrayOptions& options) {
+Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const StrayOptions& options,
+                                                 const PointCloud* cloud) {
   if (options.k < 1 || options.k > 64)
     return Status::Invalid("stray points: k must be in 1..64, got " + std::to_string(options.k));
   if (!(options.link_spacings > 0) || !std::isfinite(options.link_spacings))
@@ -29,6 +30,9 @@ Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const St
   const size_t n = index.size(), k = size_t(options.k);
   if (n <= k)
     return Status::Invalid("local spacing: needs more than k = " + std::to_string(k) + " points, the cloud has " +
+                           std::to_string(n));
+  if (cloud && cloud->size() != n)
+    return Status::Invalid("stray points: a cloud of " + std::to_string(cloud->size()) + " points for an index of " +
                            std::to_string(n));
   SpacingAndStrays result;
   result.spacing.resize(n);
@@ -48,8 +52,15 @@ Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const St
   });
   if (options.min_cluster_points > 0 && options.air.spacing_ratio != 0 && n > size_t(options.air.k)) {
     PB_ASSIGN_OR_RETURN(result.stray, AirPoints(index, options.air));
-    for (uint8_t a : result.stray) result.air += a;
   }
+  if (options.min_cluster_points > 0 && options.air.seen_through && cloud && cloud->stations.size() >= 2) {
+    SeenThroughReport seen_report;
+    PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> seen,
+                        SeenThroughPoints(*cloud, result.spacing, options.air.seen, &seen_report));
+    for (size_t i = 0; i < n; ++i) result.stray[i] |= seen[i];
+    result.seen_through = seen_report.seen_through;
+  }
+  for (uint8_t a : result.stray) result.air += a;
   if (options.min_cluster_points <= 1) return result;
   const std::vector<float>& spacing = result.spacing;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
@@ -259,7 +270,8 @@ Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& 
   PB_RETURN_IF_ERROR(Validate(cloud));
   PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "points in the air"));
   AirReport local;
-  if (options.spacing_ratio == 0 || cloud.size() <= size_t(options.k)) {
+  const bool look_through = options.seen_through && cloud.stations.size() >= 2;
+  if ((options.spacing_ratio == 0 && !look_through) || cloud.size() <= size_t(options.k)) {
     if (report) *report = local;
     return cloud;
   }
@@ -272,6 +284,32 @@ Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& 
     run();
   }
   if (!air.ok()) return air.status();
+  if (look_through) {
+    Expected<std::vector<uint8_t>> seen = Status::Internal("not run");
+    SeenThroughReport seen_report;
+    auto look = [&] {
+      Expected<std::vector<float>> spacing = LocalSpacing(index, options.k);
+      if (!spacing.ok()) {
+        seen = spacing.status();
+        return;
+      }
+      seen = SeenThroughPoints(cloud, *spacing, options.seen, &seen_report);
+    };
+    if (threads > 0) {
+      tbb::task_arena(threads).execute(look);
+    } else {
+      look();
+    }
+    if (!seen.ok()) return seen.status();
+    local.seen_through = seen_report.seen_through;
+    local.seen_stations = seen_report.stations;
+    local.seen_decided = seen_report.decided;
+    local.air = 0;
+    for (size_t i = 0; i < cloud.size(); ++i) {
+      (*air)[i] |= (*seen)[i];
+      local.air += (*air)[i];
+    }
+  }
   if (report) *report = local;
   if (local.air == 0) return cloud;
   std::vector<uint32_t> kept;

@@ -71,6 +71,7 @@
 #include "base/status.h"
 #include "stages/geometry/core/point_cloud.h"
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/seen_through.h"
 #include "stages/geometry/points/spacing.h"
 
 namespace pb {
@@ -82,6 +83,12 @@ struct AirOptions {
   int passes = 3;                 // 1..10: again without the points found, while any are
   double noise_tolerance = 2.5;   // >= 0: the plane test allows at least this many times the
                                   // scan's surface noise (SurfaceNoise in strays.cc); 0: not
+  // Points another station saw through (seen_through.h: a person, a bird, a
+  // floating clump one station recorded and the others saw past) are in the
+  // air too, whatever their density; needs the cloud's stations (the
+  // functions given only a KnnIndex cannot tell).
+  bool seen_through = true;
+  SeenThroughOptions seen;
 };
 
 struct StrayOptions {
@@ -96,12 +103,16 @@ struct StrayOptions {
 struct SpacingAndStrays {
   std::vector<float> spacing;  // per point: LocalSpacing(index, options.k), the same values
   std::vector<uint8_t> stray;  // per point: 1 for a stray, else 0
-  size_t air = 0;              // of the strays, points in the air (AirPoints)
+  size_t air = 0;              // of the strays, points in the air (AirPoints or seen through)
+  size_t seen_through = 0;     // of those, points another station saw through (seen_through.h)
 };
 
 
 struct AirReport {
-  size_t air = 0;                  // points in the air
+  size_t air = 0;                  // points in the air (sparse and on no surface, or seen through)
+  size_t seen_through = 0;         // of those, points another station saw through (seen_through.h)
+  size_t seen_stations = 0;        // stations looked through (SeenThroughReport::stations)
+  size_t seen_decided = 0;         // points some other station's samples answered (::decided)
   double median_spacing_m = 0;     // the cloud's median local spacing over k
   double noise_m = 0;              // the scan's surface noise (RMS off a plane over k + 1 points)
   int passes = 0;                  // passes run
@@ -112,7 +123,9 @@ struct AirReport {
 Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions& options,
                                          AirReport* report = nullptr);
 
-// The cloud without its points in the air; kept points keep every attribute
+// The cloud without its points in the air, and without the points another
+// station saw through when options.seen_through and the cloud has stations;
+// kept points keep every attribute
 // and their order (as RemoveStatisticalOutliers, outliers.h). A cloud of at
 // most k points, or spacing_ratio 0, comes back as it is. Status::Invalid
 // for options out of range, inconsistent attributes or a non-finite
@@ -123,8 +136,13 @@ Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& 
 // The local spacing and the strays of the points of `index` (KnnIndex::Build
 // over the cloud's positions), from one k-NN query per point: a caller that
 // needs both (render.splats, metrics.geometry) does not query twice.
+// `cloud`: the cloud the index was built over, for its stations: the points
+// another station saw through are strays too (options.air.seen_through and
+// min_cluster_points > 0), as RemoveAirPoints leaves them out of the meshes;
+// nullptr or a cloud without stations: none is.
 // Status::Invalid for options out of range or at most k points (as
-// LocalSpacing).
-Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const StrayOptions& options);
+// LocalSpacing), or a cloud of another size than the index.
+Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const StrayOptions& options,
+                                                 const PointCloud* cloud = nullptr);
 
 }  // namespace pb
