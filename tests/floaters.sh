@@ -16,14 +16,7 @@ set -eu
 bin=$1 src=$2 python=$3 dir=$4
 rm -rf "$dir"
 mkdir -p "$dir"
-cat > "$dir/sculpture.yaml" <<WORKFLOW
-name: sculpture-points
-stages:
-  scan:
-    uses: synth.scan
-    with: { preset: sculpture, points: 300000, stations: 6, noise_mm: 3, seed: 7 }
-WORKFLOW
-"$bin" run "$dir/sculpture.yaml" --cache "$dir/cache" --out "$dir/sculpture" -q
+sh "$src/tests/sculpture_scan.sh" "$bin" "$dir" 300000
 "$python" "$src/tests/floaters.py" "$dir/sculpture/scan.points.ply" "$dir/floaters.ply" 30 | tee "$dir/floaters.txt"
 sh "$src/tests/scene_from_scan.sh" "$bin" "$src" "$python" "$dir/run" "$dir/floaters.ply"
 added=$(sed -n 's/.*: \([0-9]*\) points added in .*/\1/p' "$dir/floaters.txt")

@@ -20,14 +20,7 @@ set -eu
 bin=$1 src=$2 python=$3 dir=$4
 rm -rf "$dir"
 mkdir -p "$dir"
-cat > "$dir/sculpture.yaml" <<WORKFLOW
-name: sculpture-points
-stages:
-  scan:
-    uses: synth.scan
-    with: { preset: sculpture, points: 800000, stations: 6, noise_mm: 3, seed: 7 }
-WORKFLOW
-"$bin" run "$dir/sculpture.yaml" --cache "$dir/cache" --out "$dir/sculpture" -q
+sh "$src/tests/sculpture_scan.sh" "$bin" "$dir" 800000
 # 0.3 % of its points moved into the air, along their scanner's lines of
 # sight: the workflows leave them out of their meshes (io.read_points ->
 # points.outliers method air), or screened Poisson wraps the statue in a hull

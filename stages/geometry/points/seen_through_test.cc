@@ -168,7 +168,10 @@ TEST(SeenThroughTest, TheStraysOfACloudWithStationsAreWhatAnotherStationSawThrou
   ASSERT_TRUE(index.ok());
   Expected<SpacingAndStrays> with = LocalSpacingAndStrays(*index, {}, &scan.cloud);
   ASSERT_TRUE(with.ok()) << with.status().message();
-  Expected<std::vector<uint8_t>> seen = SeenThroughPoints(scan.cloud, with->spacing);
+  // The same points as the air stage's: spacings over the air's k (16).
+  Expected<std::vector<float>> air_spacing = LocalSpacing(*index, StrayOptions{}.air.k);
+  ASSERT_TRUE(air_spacing.ok());
+  Expected<std::vector<uint8_t>> seen = SeenThroughPoints(scan.cloud, *air_spacing);
   ASSERT_TRUE(seen.ok());
   size_t seen_count = 0;
   for (size_t i = 0; i < seen->size(); ++i) {

@@ -55,8 +55,15 @@ Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const St
   }
   if (options.min_cluster_points > 0 && options.air.seen_through && cloud && cloud->stations.size() >= 2) {
     SeenThroughReport seen_report;
+    // The spacings over the air's k, as RemoveAirPoints takes them, so that
+    // the same points go from the meshes and from the scan's render.
+    std::vector<float> air_spacing;
+    if (options.air.k != options.k) {
+      PB_ASSIGN_OR_RETURN(air_spacing, LocalSpacing(index, options.air.k));
+    }
     PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> seen,
-                        SeenThroughPoints(*cloud, result.spacing, options.air.seen, &seen_report));
+                        SeenThroughPoints(*cloud, options.air.k != options.k ? air_spacing : result.spacing,
+                                          options.air.seen, &seen_report));
     for (size_t i = 0; i < n; ++i) result.stray[i] |= seen[i];
     result.seen_through = seen_report.seen_through;
   }

@@ -138,7 +138,8 @@ Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& 
 // needs both (render.splats, metrics.geometry) does not query twice.
 // `cloud`: the cloud the index was built over, for its stations: the points
 // another station saw through are strays too (options.air.seen_through and
-// min_cluster_points > 0), as RemoveAirPoints leaves them out of the meshes;
+// min_cluster_points > 0), as RemoveAirPoints leaves them out of the meshes
+// (the same points: their spacings over options.air.k, as it takes them);
 // nullptr or a cloud without stations: none is.
 // Status::Invalid for options out of range or at most k points (as
 // LocalSpacing), or a cloud of another size than the index.
