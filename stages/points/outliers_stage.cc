@@ -220,7 +220,7 @@ StageType OutliersStage() {
       "Meta added: `points`, `outliers_removed`, `outliers_implementation`, "
       "`outliers_threshold_m` (meters; own implementation only); with `air`: `points`, "
       "`outliers_removed`, `outliers_method`. "
-      "Counters: `points_in`, `points_out`, `removed`; with `air`, `noise_m` (the surface noise) "
+      "Counters: `points_in`, `points_out`, `removed`; with `air`, `noise_m` (the surface noise), "
       "`seen_through` (of the removed, the points another station saw through; they may "
       "also be sparse), `seen_through_stations` (the stations looked through: 0 for a scan without "
       "stations or with one) and `seen_through_decided` (the points whose surroundings another "

@@ -57,6 +57,10 @@
 // far station saw, sparse and as noisy as the rest, failed the plane test
 // (a statue stand-in: 861 of such points, 40 with the allowance; the
 // returns in front of it are found as before).
+// Points another station saw through (seen_through.h: a person or a clump
+// of returns one station recorded, as dense as the surface) are in the air
+// too where the cloud's stations are known: RemoveAirPoints, and
+// LocalSpacingAndStrays given the cloud.
 // Measured (docs/real-scans.md, "Points in the air"): none on the synthetic
 // presets, the bunny's scans and the statue stand-in; a few dozen sparse
 // returns of the pump and the office frame; nearly all of the returns
@@ -127,7 +131,8 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
 // station saw through when options.seen_through and the cloud has stations;
 // kept points keep every attribute
 // and their order (as RemoveStatisticalOutliers, outliers.h). A cloud of at
-// most k points, or spacing_ratio 0, comes back as it is. Status::Invalid
+// most k points, or spacing_ratio 0 with nothing to look through (no
+// seen_through, or fewer than two stations), comes back as it is. Status::Invalid
 // for options out of range, inconsistent attributes or a non-finite
 // coordinate. `threads` 0: TBB's default.
 Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& options, int threads = 0,
