@@ -176,7 +176,9 @@ TEST(SeenThroughTest, TheStraysOfACloudWithStationsAreWhatAnotherStationSawThrou
   size_t seen_count = 0;
   for (size_t i = 0; i < seen->size(); ++i) {
     seen_count += (*seen)[i];
-    if ((*seen)[i]) EXPECT_EQ(with->stray[i], 1) << "point " << i;
+    if ((*seen)[i]) {
+      EXPECT_EQ(with->stray[i], 1) << "point " << i;
+    }
   }
   EXPECT_GT(seen_count, 800u);
   EXPECT_EQ(with->seen_through, seen_count);

@@ -18,6 +18,24 @@
 #include "stages/geometry/points/normals.h"
 
 namespace pb {
+namespace {
+
+// AirPoints, and the local spacings over options.k of its first pass in
+// `spacing` (left empty when spacing_ratio is 0: no pass ran), for the
+// callers that look through the stations with the same spacings.
+Expected<std::vector<uint8_t>> AirPointsAndSpacing(const KnnIndex& index, const AirOptions& options,
+                                                   AirReport* report, std::vector<float>* spacing);
+
+// The spacings over the air's k for SeenThroughPoints: the air's own when it
+// ran, else those over `k` when that is its k, else a k-NN pass of their own.
+Expected<std::vector<float>> AirSpacing(const KnnIndex& index, const AirOptions& options, std::vector<float> air,
+                                        std::span<const float> over_k, int k) {
+  if (!air.empty()) return air;
+  if (options.k == k && !over_k.empty()) return std::vector<float>(over_k.begin(), over_k.end());
+  return LocalSpacing(index, options.k);
+}
+
+}  // namespace
 
 Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const StrayOptions& options,
                                                  const PointCloud* cloud) {
@@ -50,20 +68,17 @@ Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const St
       for (size_t j = 0; j < k; ++j) links[size_t(i) * k + j] = neighbors[j].index;
     }
   });
+  std::vector<float> air_spacing;
   if (options.min_cluster_points > 0 && options.air.spacing_ratio != 0 && n > size_t(options.air.k)) {
-    PB_ASSIGN_OR_RETURN(result.stray, AirPoints(index, options.air));
+    PB_ASSIGN_OR_RETURN(result.stray, AirPointsAndSpacing(index, options.air, nullptr, &air_spacing));
   }
   if (options.min_cluster_points > 0 && options.air.seen_through && cloud && cloud->stations.size() >= 2) {
     SeenThroughReport seen_report;
     // The spacings over the air's k, as RemoveAirPoints takes them, so that
     // the same points go from the meshes and from the scan's render.
-    std::vector<float> air_spacing;
-    if (options.air.k != options.k) {
-      PB_ASSIGN_OR_RETURN(air_spacing, LocalSpacing(index, options.air.k));
-    }
+    PB_ASSIGN_OR_RETURN(air_spacing, AirSpacing(index, options.air, std::move(air_spacing), result.spacing, options.k));
     PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> seen,
-                        SeenThroughPoints(*cloud, options.air.k != options.k ? air_spacing : result.spacing,
-                                          options.air.seen, &seen_report));
+                        SeenThroughPoints(*cloud, air_spacing, options.air.seen, &seen_report));
     for (size_t i = 0; i < n; ++i) result.stray[i] |= seen[i];
     result.seen_through = seen_report.seen_through;
   }
@@ -222,6 +237,13 @@ Status CheckAirOptions(const AirOptions& options) {
 }  // namespace
 
 Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions& options, AirReport* report) {
+  return AirPointsAndSpacing(index, options, report, nullptr);
+}
+
+namespace {
+
+Expected<std::vector<uint8_t>> AirPointsAndSpacing(const KnnIndex& index, const AirOptions& options,
+                                                   AirReport* report, std::vector<float>* first_spacing) {
   PB_RETURN_IF_ERROR(CheckAirOptions(options));
   const size_t n = index.size(), k = size_t(options.k);
   std::vector<uint8_t> air(n, 0);
@@ -233,7 +255,7 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
   if (n <= k)
     return Status::Invalid("points in the air: needs more than k = " + std::to_string(k) + " points, the cloud has " +
                            std::to_string(n));
-  PB_ASSIGN_OR_RETURN(const std::vector<float> spacing, LocalSpacing(index, int(k)));
+  PB_ASSIGN_OR_RETURN(std::vector<float> spacing, LocalSpacing(index, int(k)));
   local.median_spacing_m = MedianLocalSpacing(spacing);
   local.noise_m = SurfaceNoise(index, int(k));
   const double limit = options.spacing_ratio * local.median_spacing_m;
@@ -268,8 +290,11 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
   }
   for (uint8_t a : air) local.air += a;
   if (report) *report = local;
+  if (first_spacing) *first_spacing = std::move(spacing);
   return air;
 }
+
+}  // namespace
 
 Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& options, int threads,
                                      AirReport* report) {
@@ -284,7 +309,8 @@ Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& 
   }
   PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
   Expected<std::vector<uint8_t>> air = Status::Internal("not run");
-  auto run = [&] { air = AirPoints(index, options, &local); };
+  std::vector<float> air_spacing;
+  auto run = [&] { air = AirPointsAndSpacing(index, options, &local, &air_spacing); };
   if (threads > 0) {
     tbb::task_arena(threads).execute(run);
   } else {
@@ -295,7 +321,7 @@ Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& 
     Expected<std::vector<uint8_t>> seen = Status::Internal("not run");
     SeenThroughReport seen_report;
     auto look = [&] {
-      Expected<std::vector<float>> spacing = LocalSpacing(index, options.k);
+      Expected<std::vector<float>> spacing = AirSpacing(index, options, std::move(air_spacing), {}, 0);
       if (!spacing.ok()) {
         seen = spacing.status();
         return;
