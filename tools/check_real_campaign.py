@@ -2,7 +2,7 @@
 """Checks a finished campaign on real scans against issue 15's goals.
 
 Usage: tools/check_real_campaign.py CAMPAIGN_OUT_DIR [--scene NAME]... [--max-holes F]
-           [--max-in-front F] [--background R,G,B [--max-background F]]
+           [--max-in-front F] [--max-back F] [--background R,G,B [--max-background F]]
 
 Reads report/results.json and, for every scene (or those named), checks:
   - every shipped workflow's final mesh: invented area < 2 % of its area,
@@ -29,6 +29,13 @@ Reads report/results.json and, for every scene (or those named), checks:
     the invented area, which counts those returns as scan points, stays
     low (a statue stand-in: 36-68 %, docs/real-scans.md, "Points in the
     air");
+  - every workflow's faces seen from the back (render.frames' back_share:
+    of the samples that hit the model, the share whose face turns its back
+    to the eye) at most --max-back (default 0.05; the real scenes:
+    0.0-1.3 %, the synthetic rooms 0): render.frames draws both sides, a
+    headset culls back faces and shows what lies behind there, so a model
+    turned inside out (a statue's plinth with points.normals 3) looked
+    right in every other figure;
   - the final low meshes' boundary edges per 1000 faces within 1.5x LPM's
     (met on the four real scenes: 1.06x, 1.12x, 1.02x, 0.93x with
     mesh.decimate version 5);
@@ -176,6 +183,22 @@ def uniform_grey_scan(run_dir):
     return False
 
 
+def back_share(run_dir):
+    """render.frames' counter back_share of the workflow's `render` stage (the
+    share of the samples that hit the model and see a face's back), or None
+    (an older render.frames, or no such stage)."""
+    path = os.path.join(run_dir, "run.jsonl")
+    if not os.path.exists(path):
+        return None
+    share = None
+    with open(path) as f:
+        for line in f:
+            record = json.loads(line)
+            if record.get("stage") == "render":
+                share = (record.get("cached_run") or record).get("counters", {}).get("back_share", share)
+    return share
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out_dir")
@@ -188,6 +211,8 @@ def main():
     ap.add_argument("--background", default="",
                     help="R,G,B: the runs' render.frames were drawn on this (non-black) background; "
                          "check that the frames show it on at most --max-background of the scan's footprint")
+    ap.add_argument("--max-back", type=float, default=0.05,
+                    help="largest share of what a model's frames show that is a face's back (default 0.05)")
     ap.add_argument("--max-background", type=float, default=0.0,
                     help="largest fraction of the scan's footprint where the frames show the background (default 0)")
     args = ap.parse_args()
@@ -226,6 +251,13 @@ def main():
             check(holes is not None and holes < args.max_holes,
                   f"{scene}/{w}: hole pixels {100 * holes:.3f} % of the scan's sample footprint < "
                   f"{100 * args.max_holes:g} %" + (f" ({disk_text[2:]})" if disk_text else ""))
+            back = back_share(os.path.join(args.out_dir, "runs", scene, w))
+            if back is None:
+                print(f"skip  {scene}/{w}: no back_share counter (render.frames before version 2)")
+            else:
+                check(back <= args.max_back,
+                      f"{scene}/{w}: faces seen from the back on {100 * back:.2f} % of what the frames show "
+                      f"<= {100 * args.max_back:g} % (a headset culls back faces)")
             nearer = s.get("nearer_fraction")
             if nearer is None:
                 print(f"skip  {scene}/{w}: no depth maps (render.frames and render.splats depth: true), "

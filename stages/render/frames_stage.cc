@@ -180,7 +180,7 @@ Status Run(StageContext& ctx) {
   const RenderMaterial material{color ? &*color : nullptr, normal ? &*normal : nullptr};
   FrameSet frames;
   frames.width = frames.height = options.size;
-  size_t covered_samples = 0;
+  size_t covered_samples = 0, back_samples = 0;
   {
     PB_PHASE(ctx, "compute");
     tbb::task_arena arena(std::max(1, ctx.threads()));
@@ -195,6 +195,7 @@ Status Run(StageContext& ctx) {
       if (!image.ok())
         return image.status().WithContext(std::string(kId) + ": viewpoint '" + views[i].entry.name + "'");
       covered_samples += stats.covered_samples;
+      back_samples += stats.back_samples;
       FrameEntry entry = views[i].entry;
       if (options.depth) entry.depth_file = DepthFileName(entry.file);
       frames.frames.push_back(Frame{std::move(entry), std::move(*image), std::move(depth)});
@@ -216,10 +217,16 @@ Status Run(StageContext& ctx) {
                     {"textured", bool(color)},
                     {"normal_mapped", bool(normal)},
                     {"coverage", covered_samples / (pixels * render.supersample * render.supersample)}};
+  // The share of what the frames show that is a face's back: a headset,
+  // culling back faces, shows what lies behind there (a mesh's inside, or
+  // nothing). 0 for the truth, which has no sides.
+  const double back_share = covered_samples > 0 ? double(back_samples) / double(covered_samples) : 0.0;
+  if (has_mesh) meta["render"]["back_share"] = back_share;
   ctx.set_output_meta("frames", std::move(meta));
   ctx.counter("frames", double(views.size()));
   ctx.counter("triangles", scene ? 0.0 : double(mesh.face_count()));
   ctx.counter("pixels", pixels);
+  if (has_mesh) ctx.counter("back_share", back_share);
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -229,7 +236,7 @@ Status Run(StageContext& ctx) {
 StageType FramesStage() {
   StageType type;
   type.id = kId;
-  type.version = 1;
+  type.version = 2;  // 2: meta render.back_share and counter back_share (frames unchanged)
   type.summary = "Deterministic reference renders of a mesh or the ground truth from the scene's viewpoints";
   type.doc =
       "Draws `mesh` (with its color map `color` and tangent-space normal map `normal` when given; "
@@ -250,7 +257,10 @@ StageType FramesStage() {
       "also <name>.depth.exr (view depth in meters of the nearest surface per pixel, 0 on "
       "background; a mesh only).\n\n"
       "Counters: `frames`, `triangles` (faces drawn per frame; 0 for the analytic truth), "
-      "`pixels` (over all frames). Phases: `io`, `compute`.";
+      "`pixels` (over all frames), `back_share` (a mesh only: of the samples that hit it, the "
+      "share that sees a face's back; drawn here, but a headset, culling back faces as glTF's "
+      "single-sided materials make it, shows what lies behind there; also meta "
+      "`render.back_share`). Phases: `io`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);
   type.inputs = {
       {"mesh", "mesh", "The mesh to draw (mesh.ply; uvs and tangents for the maps).", true},

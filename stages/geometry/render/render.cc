@@ -449,6 +449,7 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
   const SrgbTables& srgb = Srgb();
   const double gray = srgb.decode[kDefaultGray];
   const double pixel_step = double(cam.supersample) / cam.focal;  // one output pixel, in ray units
+  std::atomic<size_t> back_samples{0};
   auto shade = [&](int sx, int sy, V3& rgb) {
     const uint64_t key = visibility[size_t(sy) * cam.samples + sx].load(std::memory_order_relaxed);
     if (key == kEmpty) return false;
@@ -463,6 +464,8 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
     const V3 d = cam.Ray(sx + 0.5, sy + 0.5);
     const Barycentric bc = RayBarycentric(corner_cross, d);
     const V3 geometric = Cross(Sub(q[1], q[0]), Sub(q[2], q[0]));
+    const bool back = Dot(geometric, d) > 0;  // seen from the back
+    if (back) back_samples.fetch_add(1, std::memory_order_relaxed);
 
     std::array<double, 2> uv{};
     std::array<double, 2> duv_dx{}, duv_dy{};
@@ -497,7 +500,7 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
       normal = Add(Add(Scale(t, c[0]), Scale(b, c[1])), Scale(n, c[2]));
     }
     normal = Normalize(normal);
-    if (Dot(geometric, d) > 0) normal = Scale(normal, -1.0);  // seen from the back
+    if (back) normal = Scale(normal, -1.0);
     for (int c = 0; c < 3; ++c) rgb[c] = Shade(options, cam, albedo[c], normal);
     return true;
   };
@@ -527,6 +530,7 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
     stats->triangles = mesh.face_count();
     stats->clipped = clipped.load();
     stats->covered_samples = covered;
+    stats->back_samples = back_samples.load();
   }
   return image;
 }

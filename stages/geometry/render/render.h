@@ -23,7 +23,8 @@
 // covered samples are found with edge functions evaluated in the
 // antisymmetric form orient(a, b, p) = (a - p) x (b - p), so two triangles
 // sharing an edge cover the samples on it with no gap. Both faces are drawn
-// (no culling: rooms are seen from inside). Visibility: each sample keeps
+// (no culling: rooms are seen from inside); RenderStats counts the samples
+// that see a face's back, which a viewer culling back faces would not show. Visibility: each sample keeps
 // the minimum of (float view depth, triangle index) as one 64-bit key,
 // so equal depths go to the lower triangle index and the picture does not
 // depend on the order or thread that drew the triangles.
@@ -146,6 +147,12 @@ struct RenderStats {
   size_t triangles = 0;        // faces submitted
   size_t clipped = 0;          // faces cut by the near plane
   size_t covered_samples = 0;  // samples that hit geometry
+  // Of those, the samples whose nearest face shows its back (its geometric
+  // normal, by the counter-clockwise winding, points away from the eye).
+  // Drawn here (both sides), but a viewer that culls back faces, as glTF's
+  // single-sided materials make every headset and Unity do, shows whatever
+  // lies behind there, often nothing. RenderMesh only.
+  size_t back_samples = 0;
 };
 
 // An RGBA kU8 image of camera.size squared. Status::Invalid for a bad camera

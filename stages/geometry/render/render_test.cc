@@ -302,6 +302,31 @@ TEST(RenderTest, ZBufferKeepsTheNearerQuadInEitherOrder) {
   EXPECT_EQ(tie.at_u8(size / 2, size / 2, 0), 0);
 }
 
+TEST(RenderTest, StatsCountTheSamplesThatSeeAFacesBack) {
+  const int size = 32;
+  RenderOptions options;
+  options.supersample = 2;
+  // The near quad faces the eye; the far one, behind it and larger, is wound
+  // the other way round: its ring around the near quad shows its back.
+  const Mesh near_quad = Quad(0.5, -0.5f, {255, 0, 0});
+  Mesh far_quad = Quad(2.0, 0.5f, {0, 0, 255});
+  for (size_t f = 0; f < far_quad.indices.size(); f += 3) std::swap(far_quad.indices[f + 1], far_quad.indices[f + 2]);
+  RenderStats front;
+  ASSERT_TRUE(RenderMesh(near_quad, {}, HeadOn(2.0, size), options, &front).ok());
+  EXPECT_GT(front.covered_samples, 0u);
+  EXPECT_EQ(front.back_samples, 0u);
+  RenderStats back;
+  ASSERT_TRUE(RenderMesh(far_quad, {}, HeadOn(2.0, size), options, &back).ok());
+  EXPECT_EQ(back.covered_samples, size_t(size * size * 4));  // it fills the frame
+  EXPECT_EQ(back.back_samples, back.covered_samples);
+  Mesh both = near_quad;
+  Append(both, far_quad);
+  RenderStats ring;
+  ASSERT_TRUE(RenderMesh(both, {}, HeadOn(2.0, size), options, &ring).ok());
+  EXPECT_EQ(ring.covered_samples, size_t(size * size * 4));
+  EXPECT_EQ(ring.back_samples, ring.covered_samples - front.covered_samples);
+}
+
 // A 200 m floor seen from 1.5 m up, looking level: its triangles reach
 // behind the eye and are clipped; the floor covers the lower half exactly.
 TEST(RenderTest, NearPlaneClipsTrianglesBehindTheEye) {
