@@ -81,6 +81,22 @@ TEST_F(RenderStagesTest, IsWellFormed) {
   EXPECT_EQ(type->outputs[0].type, "frames");
 }
 
+TEST_F(RenderStagesTest, SaysHowMuchOfWhatItShowsIsAFacesBack) {
+  // The quad faces the viewpoints: no back. Wound the other way round, all
+  // of it is its back (drawn the same, but a headset culls it).
+  for (const bool flipped : {false, true}) {
+    Mesh quad = Quad();
+    if (flipped)
+      for (size_t f = 0; f < quad.indices.size(); f += 3) std::swap(quad.indices[f + 1], quad.indices[f + 2]);
+    FakeContext ctx(dir_ / (flipped ? "flipped" : "front"), Params(Viewpoints()));
+    ctx.AddInput("mesh", "mesh", WriteInputMesh(flipped ? "flipped" : "front", quad),
+                 {{"origin", {300000.0, 5000000.0, 100.0}}});
+    ASSERT_TRUE(Run("render.frames", ctx).ok());
+    EXPECT_EQ(ctx.counters_["back_share"], flipped ? 1.0 : 0.0);
+    EXPECT_EQ(ctx.meta_["frames"]["render"]["back_share"], flipped ? 1.0 : 0.0);
+  }
+}
+
 TEST_F(RenderStagesTest, WritesFramesOfATexturedMesh) {
   FakeContext ctx(dir_, Params(Viewpoints()));
   ctx.AddInput("mesh", "mesh", WriteInputMesh("quad", Quad()), {{"origin", {300000.0, 5000000.0, 100.0}}});
