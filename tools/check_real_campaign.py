@@ -31,11 +31,12 @@ Reads report/results.json and, for every scene (or those named), checks:
     air");
   - every workflow's faces seen from the back (render.frames' back_share:
     of the samples that hit the model, the share whose face turns its back
-    to the eye) at most --max-back (default 0.05; the real scenes:
-    0.0-1.3 %, the synthetic rooms 0): render.frames draws both sides, a
-    headset culls back faces and shows what lies behind there, so a model
-    turned inside out (a statue's plinth with points.normals 3) looked
-    right in every other figure;
+    to the eye) at most --max-back (default 0.10; the real scenes: 0.0-4.0
+    %, the living room's oblique view seeing a side wall from outside; the
+    synthetic rooms 0): render.frames draws both sides, a headset culls
+    back faces and shows what lies behind there, so a model turned inside
+    out (a statue's plinth with points.normals 3), whose backs are most of
+    what a view from outside shows, looked right in every other figure;
   - the final low meshes' boundary edges per 1000 faces within 1.5x LPM's
     (met on the four real scenes: 1.06x, 1.12x, 1.02x, 0.93x with
     mesh.decimate version 5);
@@ -211,8 +212,8 @@ def main():
     ap.add_argument("--background", default="",
                     help="R,G,B: the runs' render.frames were drawn on this (non-black) background; "
                          "check that the frames show it on at most --max-background of the scan's footprint")
-    ap.add_argument("--max-back", type=float, default=0.05,
-                    help="largest share of what a model's frames show that is a face's back (default 0.05)")
+    ap.add_argument("--max-back", type=float, default=0.10,
+                    help="largest share of what a model's frames show that is a face's back (default 0.10)")
     ap.add_argument("--max-background", type=float, default=0.0,
                     help="largest fraction of the scan's footprint where the frames show the background (default 0)")
     args = ap.parse_args()
