@@ -24,10 +24,11 @@
 // antisymmetric form orient(a, b, p) = (a - p) x (b - p), so two triangles
 // sharing an edge cover the samples on it with no gap. Both faces are drawn
 // (no culling: rooms are seen from inside); RenderStats counts the samples
-// that see a face's back, which a viewer culling back faces would not show. Visibility: each sample keeps
-// the minimum of (float view depth, triangle index) as one 64-bit key,
-// so equal depths go to the lower triangle index and the picture does not
-// depend on the order or thread that drew the triangles.
+// that see a face's back, which a viewer culling back faces would not show.
+// Visibility: each sample keeps the minimum of (float view depth, triangle
+// index) as one 64-bit key, so equal depths go to the lower triangle index
+// and the picture does not depend on the order or thread that drew the
+// triangles.
 //
 // Attributes are interpolated perspective-correctly with barycentrics from
 // the exact ray-plane intersection of the sample's ray with the (unclipped)
