@@ -127,6 +127,7 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
   if (!(options.margin_range >= 0) || !std::isfinite(options.margin_range))
     return Status::Invalid("points seen through: margin_range must be >= 0");
   PB_RETURN_IF_ERROR(Validate(cloud));
+  PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "points seen through"));
   const size_t n = cloud.size();
   if (spacing.size() != n)
     return Status::Invalid("points seen through: " + std::to_string(spacing.size()) + " spacings for " +
@@ -140,11 +141,7 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
   const size_t station_count = cloud.stations.size();
   std::vector<std::vector<uint32_t>> members(station_count);
   for (size_t i = 0; i < n; ++i) {
-    const uint16_t s = cloud.station_ids[i];  // < station_count: Validate
-    for (int a = 0; a < 3; ++a)
-      if (!std::isfinite(cloud.positions[i * 3 + size_t(a)]))
-        return Status::Invalid("points seen through: point " + std::to_string(i) + " has a non-finite coordinate");
-    members[s].push_back(uint32_t(i));
+    members[cloud.station_ids[i]].push_back(uint32_t(i));  // < station_count: Validate
   }
   auto offset = [&](size_t i, const std::array<double, 3>& from) {
     return std::array<double, 3>{double(cloud.positions[i * 3]) - from[0], double(cloud.positions[i * 3 + 1]) - from[1],

@@ -26,14 +26,13 @@ namespace {
 Expected<std::vector<uint8_t>> AirPointsAndSpacing(const KnnIndex& index, const AirOptions& options,
                                                    AirReport* report, std::vector<float>* spacing);
 
-// The spacings over the air's k for SeenThroughPoints: the air's own when it
-// ran, else those over `k` when that is its k, else a k-NN pass of their own.
-Expected<std::vector<float>> AirSpacing(const KnnIndex& index, const AirOptions& options, std::vector<float> air,
-                                        std::span<const float> over_k, int k) {
-  if (!air.empty()) return air;
-  if (options.k == k && !over_k.empty()) return std::vector<float>(over_k.begin(), over_k.end());
-  return LocalSpacing(index, options.k);
-}
+// AirPoints over `index` and, given the `cloud` the index was built over
+// with two stations or more and options.seen_through, the points another
+// station saw through too (SeenThroughPoints, with the spacings of the air's
+// first pass): what RemoveAirPoints leaves out of the meshes and
+// LocalSpacingAndStrays out of the scan's render, the same points for both.
+Expected<std::vector<uint8_t>> AirAndSeenThrough(const KnnIndex& index, const AirOptions& options,
+                                                 const PointCloud* cloud, AirReport* report);
 
 }  // namespace
 
@@ -68,21 +67,12 @@ Expected<SpacingAndStrays> LocalSpacingAndStrays(const KnnIndex& index, const St
       for (size_t j = 0; j < k; ++j) links[size_t(i) * k + j] = neighbors[j].index;
     }
   });
-  std::vector<float> air_spacing;
-  if (options.min_cluster_points > 0 && options.air.spacing_ratio != 0 && n > size_t(options.air.k)) {
-    PB_ASSIGN_OR_RETURN(result.stray, AirPointsAndSpacing(index, options.air, nullptr, &air_spacing));
+  if (options.min_cluster_points > 0 && n > size_t(options.air.k)) {
+    AirReport air_report;
+    PB_ASSIGN_OR_RETURN(result.stray, AirAndSeenThrough(index, options.air, cloud, &air_report));
+    result.air = air_report.air;
+    result.seen_through = air_report.seen_through;
   }
-  if (options.min_cluster_points > 0 && options.air.seen_through && cloud && cloud->stations.size() >= 2) {
-    SeenThroughReport seen_report;
-    // The spacings over the air's k, as RemoveAirPoints takes them, so that
-    // the same points go from the meshes and from the scan's render.
-    PB_ASSIGN_OR_RETURN(air_spacing, AirSpacing(index, options.air, std::move(air_spacing), result.spacing, options.k));
-    PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> seen,
-                        SeenThroughPoints(*cloud, air_spacing, options.air.seen, &seen_report));
-    for (size_t i = 0; i < n; ++i) result.stray[i] |= seen[i];
-    result.seen_through = seen_report.seen_through;
-  }
-  for (uint8_t a : result.stray) result.air += a;
   if (options.min_cluster_points <= 1) return result;
   const std::vector<float>& spacing = result.spacing;
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
@@ -242,6 +232,32 @@ Expected<std::vector<uint8_t>> AirPoints(const KnnIndex& index, const AirOptions
 
 namespace {
 
+Expected<std::vector<uint8_t>> AirAndSeenThrough(const KnnIndex& index, const AirOptions& options,
+                                                 const PointCloud* cloud, AirReport* report) {
+  const bool look = cloud && options.seen_through && cloud->stations.size() >= 2;
+  AirReport local;
+  std::vector<float> spacing;
+  PB_ASSIGN_OR_RETURN(std::vector<uint8_t> air, AirPointsAndSpacing(index, options, &local, look ? &spacing : nullptr));
+  if (look) {
+    if (spacing.empty()) {  // spacing_ratio 0: the air ran no pass
+      PB_ASSIGN_OR_RETURN(spacing, LocalSpacing(index, options.k));
+    }
+    SeenThroughReport seen_report;
+    PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> seen,
+                        SeenThroughPoints(*cloud, spacing, options.seen, &seen_report));
+    local.seen_through = seen_report.seen_through;
+    local.seen_stations = seen_report.stations;
+    local.seen_decided = seen_report.decided;
+    local.air = 0;
+    for (size_t i = 0; i < air.size(); ++i) {
+      air[i] |= seen[i];
+      local.air += air[i];
+    }
+  }
+  if (report) *report = local;
+  return air;
+}
+
 Expected<std::vector<uint8_t>> AirPointsAndSpacing(const KnnIndex& index, const AirOptions& options,
                                                    AirReport* report, std::vector<float>* first_spacing) {
   PB_RETURN_IF_ERROR(CheckAirOptions(options));
@@ -309,40 +325,13 @@ Expected<PointCloud> RemoveAirPoints(const PointCloud& cloud, const AirOptions& 
   }
   PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
   Expected<std::vector<uint8_t>> air = Status::Internal("not run");
-  std::vector<float> air_spacing;
-  auto run = [&] { air = AirPointsAndSpacing(index, options, &local, &air_spacing); };
+  auto run = [&] { air = AirAndSeenThrough(index, options, &cloud, &local); };
   if (threads > 0) {
     tbb::task_arena(threads).execute(run);
   } else {
     run();
   }
   if (!air.ok()) return air.status();
-  if (look_through) {
-    Expected<std::vector<uint8_t>> seen = Status::Internal("not run");
-    SeenThroughReport seen_report;
-    auto look = [&] {
-      Expected<std::vector<float>> spacing = AirSpacing(index, options, std::move(air_spacing), {}, 0);
-      if (!spacing.ok()) {
-        seen = spacing.status();
-        return;
-      }
-      seen = SeenThroughPoints(cloud, *spacing, options.seen, &seen_report);
-    };
-    if (threads > 0) {
-      tbb::task_arena(threads).execute(look);
-    } else {
-      look();
-    }
-    if (!seen.ok()) return seen.status();
-    local.seen_through = seen_report.seen_through;
-    local.seen_stations = seen_report.stations;
-    local.seen_decided = seen_report.decided;
-    local.air = 0;
-    for (size_t i = 0; i < cloud.size(); ++i) {
-      (*air)[i] |= (*seen)[i];
-      local.air += (*air)[i];
-    }
-  }
   if (report) *report = local;
   if (local.air == 0) return cloud;
   std::vector<uint32_t> kept;
