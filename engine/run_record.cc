@@ -44,6 +44,11 @@ nlohmann::json RunRecordJson(const Workflow& wf, const std::vector<StageOutcome>
   j["workflow"] = wf.name;
   j["workflow_file"] = wf.file;
   j["stages"] = stages;
+  // Which stage output each named output is, so that a reader (the report)
+  // can find the figures of the stage that made, say, `frames`.
+  nlohmann::json named = nlohmann::json::object();
+  for (const auto& [name, ref] : wf.outputs) named[name] = ref.first + "." + ref.second;
+  j["outputs"] = named;
   if (!wf.disabled.empty()) j["disabled_stages"] = wf.disabled;
   return j;
 }

@@ -7,6 +7,8 @@
 //               (when the stage gave any: an array of one-line strings; for
 //               a hit, those of the run that made the entry), forced (true
 //               when --force made it run)}],
+//               outputs: {name: "<stage>.<port>"} (the workflow's named
+//               outputs, also those this run did not produce),
 //               disabled_stages: [ids left out by `when:`] (when any)}
 //   run.jsonl   one line per stage, same fields (for appending tools / jq)
 //   trace.json  Chrome trace events (chrome://tracing, Perfetto): one lane

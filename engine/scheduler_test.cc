@@ -191,6 +191,12 @@ stages:
   const nlohmann::json record = RunRecordJson(workflow_, first, nlohmann::json::object());
   EXPECT_EQ(record["stages"][0]["warnings"], nlohmann::json({"careful #0", "careful #1"}));
   EXPECT_FALSE(record["stages"][1].contains("warnings")) << record.dump();
+  // Every named output says which stage output it is.
+  ASSERT_TRUE(record.contains("outputs")) << record.dump();
+  for (const auto& [name, ref] : workflow_.outputs)
+    EXPECT_EQ(record["outputs"][name], ref.first + "." + ref.second) << name;
+  EXPECT_EQ(record["outputs"].size(), workflow_.outputs.size());
+  EXPECT_EQ(record["outputs"].value("len.out", ""), "len.out") << record["outputs"].dump();  // the target's
 
   auto second = Run(yaml);
   ASSERT_EQ(States(second)["w"], "hit");
