@@ -91,7 +91,9 @@
 //                  coverage_iou, hole_fraction, nearer_fraction,
 //                  farther_fraction, splat_hole_fraction}, scan_geometry:
 //                  {invented_area_fraction, missing_fraction,
-//                  boundary_edges_per_1000_faces}, warnings:
+//                  boundary_edges_per_1000_faces, back_face_fraction
+//                  (run.json: render.frames' counter back_share of the
+//                  stage "outputs" names for `frames`)}, warnings:
 //                  [{stage, warning}] (the stages' warnings from run.json,
 //                  failed runs included; [] when none), error (failed
 //                  runs only)}],

@@ -239,7 +239,9 @@ const char* kScanNote =
     "surface lies more than 5 % of the depth in front of (invented surface) or behind the scan's, % "
     "of the scan's pixels, left out of PSNR, SSIM and FLIP. Invented area: % of the mesh's area farther than "
     "max(3 local spacings, its mean edge) from every scan point; missing scan: % of scan points "
-    "farther than 3 local spacings from the mesh; boundary edges: edges with one face.";
+    "farther than 3 local spacings from the mesh; boundary edges: edges with one face; back faces: "
+    "% of the lit frames' samples on the model that see a face from behind (a headset culls those: "
+    "a high share means a model turned inside out).";
 
 TextTable FpsTable(const Campaign& c) {
   TextTable t;

@@ -44,18 +44,21 @@ constexpr std::array<const char*, kQualityCount> kQualityTitles = {"PSNR dB", "S
                                                                    "SSIM RGB", "MS-SSIM", "FLIP"};
 
 // Against the scan (issue 15): the covered-pixel figures of the metrics.image
-// table vs_scan.json (the first kScanImageCount) and the truth-free geometry
-// figures of geometry.json (the rest), with their titles.
-constexpr int kScanCount = 11;
+// table vs_scan.json (the first kScanImageCount), the truth-free geometry
+// figures of geometry.json, and the share of the frames' mesh samples that
+// see a face's back (render.frames' counter back_share of the stage that
+// made the named output `frames`, from run.json), with their titles.
+constexpr int kScanCount = 12;
 constexpr int kScanImageCount = 8;
+constexpr int kScanBackFace = 11;  // back_face_fraction
 constexpr std::array<const char*, kScanCount> kScanColumns = {
     "covered_psnr_db",        "covered_ssim_luma", "covered_flip_mean",
     "coverage_iou",           "hole_fraction",     "nearer_fraction",
     "farther_fraction",       "splat_hole_fraction", "invented_area_fraction", "missing_fraction",
-    "boundary_edges_per_1000_faces"};
+    "boundary_edges_per_1000_faces", "back_face_fraction"};
 constexpr std::array<const char*, kScanCount> kScanTitles = {
     "PSNR dB", "SSIM luma", "FLIP", "Coverage IoU", "Holes %", "In front %", "Behind %", "Disk holes %",
-    "Invented area %", "Missing scan %", "Boundary edges / 1000 faces"};
+    "Invented area %", "Missing scan %", "Boundary edges / 1000 faces", "Back faces %"};
 
 // One run of the campaign: its manifest entry and the figures read from its
 // folder (all null for a failed run).

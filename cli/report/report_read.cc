@@ -124,6 +124,20 @@ Status ReadRunTimes(const std::string& path, Row& row) {
     }
     if (any && total_known) row.total_s = total;
     row.peak_ram_bytes = peak;
+    // render.frames' back_share of the stage whose output is `frames`
+    // (run.json's "outputs" say which; records without them: unknown).
+    if (run.contains("outputs") && run["outputs"].is_object() && run["outputs"].contains("frames") &&
+        run["outputs"]["frames"].is_string()) {
+      const std::string ref = run["outputs"]["frames"].get<std::string>();
+      const std::string id = ref.substr(0, ref.rfind('.'));
+      for (const Json& stage : run["stages"]) {
+        if (!stage.is_object() || stage.value("stage", "") != id) continue;
+        const Json& figures =
+            stage.contains("cached_run") && stage["cached_run"].is_object() ? stage["cached_run"] : stage;
+        if (figures.contains("counters") && figures["counters"].is_object())
+          row.vs_scan[kScanBackFace] = JsonNumber(figures["counters"], "back_share");
+      }
+    }
   } catch (const Json::exception& e) {
     return Status::Corrupt(path + ": " + e.what());
   }

@@ -417,6 +417,34 @@ TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
   EXPECT_THAT(csv, HasSubstr("scan_invented_area_fraction"));
 }
 
+// Back faces: render.frames' counter back_share of the stage run.json's
+// "outputs" name for `frames` (its cached_run's for a hit); unknown without
+// "outputs" (records before them) or without the counter.
+TEST_F(ReportTest, BackFacesComeFromTheStageThatMadeTheFrames) {
+  WriteCampaign();
+  Json hit_render = {{"stage", "render"}, {"type", "render.frames"}, {"status", "hit"}, {"group", "evaluation"},
+                     {"wall_s", 0.01},     {"cached_run", Stage("render", "evaluation", 3, 0, 1e8)}};
+  hit_render["cached_run"]["counters"] = {{"back_share", 0.03125}};
+  Json truth_render = Stage("truth_render", "evaluation", 3, 0, 1e8);
+  truth_render["counters"] = {{"back_share", 0.5}};  // another render.frames: not the workflow's frames
+  WriteJson(RunDir("point_transfer") + "/run.json",
+            {{"format", "pointbake-run 1"},
+             {"workflow", "point_transfer"},
+             {"outputs", {{"frames", "render.frames"}, {"truth_frames", "truth_render.frames"}}},
+             {"stages", {Stage("decimate", "low_mesh", 1, 0, 5e8), truth_render, hit_render}}});
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+  const Json results = Results();
+  const Json& pt = results["rows"][2];
+  ASSERT_EQ(pt["workflow"], "point_transfer");
+  EXPECT_EQ(pt["scan_geometry"]["back_face_fraction"].get<double>(), 0.03125);
+  EXPECT_TRUE(results["rows"][0]["scan_geometry"]["back_face_fraction"].is_null());  // HPM: no "outputs"
+  EXPECT_THAT(ReadText(Path("report/report.html")), HasSubstr("<td>3.12</td>"));
+  EXPECT_THAT(ReadText(Path("report/report.md")), HasSubstr("Back faces %"));
+  const std::string csv = ReadText(Path("report/results.csv"));
+  EXPECT_THAT(csv, HasSubstr("scan_back_face_fraction"));
+  EXPECT_THAT(csv, HasSubstr(",0.03125,"));
+}
+
 TEST_F(ReportTest, CropIsWhereTransferAndLpmDifferMost) {
   WriteCampaign(/*lpm_ok=*/true);
   ReportOptions options;
