@@ -99,5 +99,95 @@ TEST_F(CompareCli, ListedInHelpAndPpdChangesFlip) {
   EXPECT_EQ(Json::parse(b.out)["flip_ppd"].get<double>(), 20.0);
 }
 
+// --covered: the frames' alpha says where there is surface. REF covers a
+// square; TEST the same square but for a 3 x 3 hole inside it and its last
+// column, and with a different color on its left half. Whole-frame metrics
+// count the background; covered ones only the surface.
+TEST_F(CompareCli, CoveredMeasuresTheSurfaceAndCountsHolesApart) {
+  constexpr int kSize = 200, kLo = 40, kHi = 160;  // square [kLo, kHi)
+  pb::Image ref = pb::Image::Make(kSize, kSize, 4, pb::Image::PixelType::kU8);
+  pb::Image test = ref;
+  pb::Image mask = pb::Image::Make(kSize, kSize, 1, pb::Image::PixelType::kU8);
+  for (int y = kLo; y < kHi; ++y)
+    for (int x = kLo; x < kHi; ++x) {
+      for (int c = 0; c < 3; ++c) ref.at_u8(x, y, c) = test.at_u8(x, y, c) = uint8_t(60 + (x + 2 * y + 30 * c) % 120);
+      if (x < 100) test.at_u8(x, y, 0) = uint8_t(test.at_u8(x, y, 0) + 20);
+      ref.at_u8(x, y, 3) = test.at_u8(x, y, 3) = 255;
+      if (x % 2 == 0) mask.at_u8(x, y, 0) = 255;  // every other column holds a sample
+    }
+  for (int y = 99; y < 102; ++y)
+    for (int x = 119; x < 122; ++x) test.at_u8(x, y, 3) = 0;  // the hole
+  for (int y = kLo; y < kHi; ++y) test.at_u8(kHi - 1, y, 3) = 0;  // the outline a pixel short
+  ASSERT_TRUE(pb::WritePng(P("ref.png"), ref).ok());
+  ASSERT_TRUE(pb::WritePng(P("test.png"), test).ok());
+  ASSERT_TRUE(pb::WritePng(P("ref.samples.png"), mask).ok());
+
+  RunResult r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered", "--json"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  Json j = Json::parse(r.out);
+  const size_t square = size_t(kHi - kLo) * size_t(kHi - kLo);
+  EXPECT_EQ(j["covered"]["reference_px"], square);
+  EXPECT_EQ(j["covered"]["test_px"], square - 9 - size_t(kHi - kLo));
+  EXPECT_EQ(j["covered"]["footprint"], "covered");
+  EXPECT_EQ(j["covered"]["hole_px"], 9 + size_t(kHi - kLo));
+  EXPECT_EQ(j["covered"]["enclosed_hole_px"], 9u);
+  EXPECT_EQ(j["covered"]["silhouette_hole_px"], size_t(kHi - kLo));
+  EXPECT_NEAR(j["covered"]["coverage_iou"].get<double>(), double(square - 9 - (kHi - kLo)) / double(square), 1e-12);
+  const double covered_psnr = j["psnr_db"].get<double>();
+  // Only the left half differs, by 20 in red: MSE 20^2 / 3 over it.
+  EXPECT_GT(covered_psnr, 10 * std::log10(255.0 * 255.0 / (400.0 / 3)) - 0.01);
+  EXPECT_LT(covered_psnr, 10 * std::log10(255.0 * 255.0 / (400.0 / 6)) + 0.01);
+  // Whole frames: the same difference over the whole frame, and the
+  // background pixels (equal: 0) in the mean.
+  const RunResult whole = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--json"});
+  ASSERT_EQ(whole.exit_code, 0) << whole.Describe();
+  EXPECT_FALSE(Json::parse(whole.out).contains("covered"));
+  EXPECT_NE(Json::parse(whole.out)["psnr_db"].get<double>(), covered_psnr);
+
+  // On the sample mask: every other column.
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered", "--json", "--samples", P("ref.samples.png")});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  j = Json::parse(r.out);
+  EXPECT_EQ(j["covered"]["footprint"], "samples");
+  EXPECT_EQ(j["covered"]["footprint_px"], square / 2);
+  // The hole's columns 120 and the last column 159 (odd: no sample) -> 3.
+  EXPECT_EQ(j["covered"]["hole_px"], 3u);
+
+  // The table says the same.
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_NE(r.out.find("holes              129 of 14400 covered px (0.8958 %): 9 enclosed, 120 at the outline, 0 open"),
+            std::string::npos)
+      << r.out;
+
+  // Depth maps: TEST's surface in front on the top rows.
+  pb::Image ref_depth = pb::Image::Make(kSize, kSize, 1, pb::Image::PixelType::kF32);
+  pb::Image test_depth = ref_depth;
+  for (int y = kLo; y < kHi; ++y)
+    for (int x = kLo; x < kHi; ++x) {
+      ref_depth.at_f32(x, y, 0) = 2.0f;
+      test_depth.at_f32(x, y, 0) = y < kLo + 10 ? 1.5f : 2.02f;
+    }
+  ASSERT_TRUE(pb::WriteExr(P("ref.depth.exr"), ref_depth).ok());
+  ASSERT_TRUE(pb::WriteExr(P("test.depth.exr"), test_depth).ok());
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered", "--json", "--depth", P("ref.depth.exr"),
+                   P("test.depth.exr")});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  j = Json::parse(r.out);
+  EXPECT_EQ(j["covered"]["nearer_px"], size_t(10 * (kHi - kLo - 1)));
+  EXPECT_EQ(j["covered"]["farther_px"], 0u);
+
+  // Options that need --covered; a missing mask; a mask of another size.
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--samples", P("ref.samples.png")});
+  EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_NE(r.err.find("need --covered"), std::string::npos) << r.Describe();
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered", "--samples", P("nope.png")});
+  EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_NE(r.err.find("nope.png"), std::string::npos) << r.Describe();
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered", "--samples", P("small.png")});
+  EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_TRUE(r.out.empty()) << r.Describe();
+}
+
 }  // namespace
 }  // namespace pbtest
