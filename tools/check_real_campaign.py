@@ -185,19 +185,21 @@ def uniform_grey_scan(run_dir):
 
 
 def back_share(run_dir):
-    """render.frames' counter back_share of the workflow's `render` stage (the
-    share of the samples that hit the model and see a face's back), or None
-    (an older render.frames, or no such stage)."""
-    path = os.path.join(run_dir, "run.jsonl")
+    """render.frames' counter back_share of the stage that made the run's
+    `frames` (run.json's "outputs"; records without them: the stage
+    `render`, as the shipped workflows name it): the share of the samples
+    that hit the model and see a face's back. None for an older
+    render.frames or no such stage."""
+    path = os.path.join(run_dir, "run.json")
     if not os.path.exists(path):
         return None
-    share = None
     with open(path) as f:
-        for line in f:
-            record = json.loads(line)
-            if record.get("stage") == "render":
-                share = (record.get("cached_run") or record).get("counters", {}).get("back_share", share)
-    return share
+        run = json.load(f)
+    stage_id = run.get("outputs", {}).get("frames", "render.frames").rsplit(".", 1)[0]
+    for record in run.get("stages", []):
+        if record.get("stage") == stage_id:
+            return (record.get("cached_run") or record).get("counters", {}).get("back_share")
+    return None
 
 
 def main():
