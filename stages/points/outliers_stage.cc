@@ -194,7 +194,8 @@ Status Run(StageContext& ctx) {
 StageType OutliersStage() {
   StageType type;
   type.id = kId;
-  type.version = 4;  // 2: method air; 3: its plane test allows the scan's noise; 4: and what another station saw through
+  type.version = 5;  // 2: method air; 3: its plane test allows the scan's noise; 4: and what another station saw through;
+                     // 5: the same points, each station reading only those within its reach (seen_through_decided: of those)
   type.summary = "Outlier removal: statistical (as PCL's StatisticalOutlierRemoval), or the points in the air";
   type.doc =
       "For every point, the mean distance to its `k` nearest other points (exact kd-tree "

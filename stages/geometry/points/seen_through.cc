@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <array>
+#include <atomic>
 #include <cmath>
 #include <limits>
 #include <numbers>
@@ -118,6 +119,34 @@ class RangePyramid {
   std::vector<Level> levels_;
 };
 
+// False when no cone of station s around `v` (a point's offset from s, at
+// `distance`, with its ball's `margin`) can be seen beyond, so that
+// RangePyramid::SawBeyond would say false without reading it:
+//  - no sample of s is farther than the ball (`reach`: the farthest one's
+//    range);
+//  - or the point lies farther from the box of s and its samples
+//    [box_lo, box_hi] than any point SawBeyond accepts can. For one it
+//    accepts, the cell of its direction u on the level read holds a sample q
+//    beyond the ball; the point at `distance` along q's direction lies on
+//    the segment from s to q, so in the box, and within distance x (the
+//    angle between u and q's direction) of the point. That angle is at most
+//    2 c for a cell of c radians (latitude and longitude each span c, and a
+//    radian of longitude is at most one of arc). The level read has c =
+//    `cell` (level 0), or else the level below spanned more than 3 cells of
+//    the cone's width in longitude, `across` = half / cos(widest latitude)
+//    <= 11.5 half (SawBeyond reads no cone reaching past 85 degrees), so
+//    c < 2 across / 3 <= 7.7 half; half = asin(margin / distance) <=
+//    1.021 margin / distance (SawBeyond reads no cone wider than 20 degrees).
+//    So the point lies within max(2 cell distance, 15.7 margin) of the box.
+bool WithinReach(const std::array<double, 3>& v, double distance, double margin, double reach,
+                 const std::array<double, 3>& box_lo, const std::array<double, 3>& box_hi, double cell) {
+  if (!(distance + margin < reach)) return false;
+  const double slack = std::max(2 * cell * distance, 16 * margin) + 1e-6 * (distance + 1);
+  for (size_t a = 0; a < 3; ++a)
+    if (v[a] < box_lo[a] - slack || v[a] > box_hi[a] + slack) return false;
+  return true;
+}
+
 }  // namespace
 
 Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::span<const float> spacing,
@@ -158,6 +187,10 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
     std::vector<float> ranges;
     std::vector<float> steps;
     directions.reserve(members[s].size());
+    // Its reach: the farthest sample's range (as stored, a float), and the
+    // box of the station and its samples, relative to the station.
+    double reach = 0;
+    std::array<double, 3> box_lo = {0, 0, 0}, box_hi = {0, 0, 0};
     for (uint32_t i : members[s]) {
       const std::array<double, 3> v = offset(i, at);
       const double range = norm(v);
@@ -165,6 +198,11 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
       directions.push_back(DirectionOf(v, range));
       ranges.push_back(float(range));
       steps.push_back(float(double(spacing[i]) / range));
+      reach = std::max(reach, double(ranges.back()));
+      for (int a = 0; a < 3; ++a) {
+        box_lo[size_t(a)] = std::min(box_lo[size_t(a)], v[size_t(a)]);
+        box_hi[size_t(a)] = std::max(box_hi[size_t(a)], v[size_t(a)]);
+      }
     }
     if (steps.size() < std::max<size_t>(options.min_station_points, 1)) continue;
     std::nth_element(steps.begin(), steps.begin() + ptrdiff_t(steps.size() / 2), steps.end());
@@ -173,20 +211,26 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
     while ((2 * kPi / cell) * (kPi / cell) > double(kMaxCells)) cell *= 1.25;
     const RangePyramid pyramid(cell, directions, ranges);
     ++local.stations;
+    std::atomic<size_t> cones_read{0};
     tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 4096), [&](const tbb::blocked_range<size_t>& range) {
+      size_t read_here = 0;
       for (size_t i = range.begin(); i < range.end(); ++i) {
         if (cloud.station_ids[i] == s) continue;
         const std::array<double, 3> v = offset(i, at);
         const double distance = norm(v);
         const double margin = std::max(options.margin_spacings * double(spacing[i]), options.margin_range * distance);
         if (!(distance > 2 * margin)) continue;  // the ball nearly holds the station
+        if (options.within_reach_only && !WithinReach(v, distance, margin, reach, box_lo, box_hi, cell)) continue;
+        ++read_here;
         bool decided = false;
         // Bit 0: seen through; bit 1: some station read its cone.
         if (pyramid.SawBeyond(DirectionOf(v, distance), std::asin(margin / distance), distance + margin, &decided))
           votes[i] |= 1;
         if (decided) votes[i] |= 2;
       }
+      cones_read += read_here;
     });
+    local.cones_read += cones_read;
   }
   for (size_t i = 0; i < n; ++i) {
     seen[i] = votes[i] & 1;

@@ -50,12 +50,21 @@ struct SeenThroughOptions {
   double margin_spacings = 3.0;  // >= 0: the ball's radius, at least this many local spacings of the point
   double margin_range = 0.01;    // >= 0: ... and at least this fraction of its distance to the other station
   size_t min_station_points = 100;  // a station with fewer samples sees through nothing
+  // A station reads only the points within its reach: nearer than its
+  // farthest sample, and near the box of its samples (how near, the .cc
+  // works out from how the cones are read). No other point can have every
+  // sample of its cone beyond it, so the same points are found either way;
+  // false reads every point's cone (bench/seen_through_bench compares the
+  // two on a site of many rooms).
+  bool within_reach_only = true;
 };
 
 struct SeenThroughReport {
   size_t seen_through = 0;  // points seen through by another station
   size_t stations = 0;      // stations whose samples were looked through (with min_station_points)
-  size_t decided = 0;       // points whose cone some other station's samples answered (every cell sampled)
+  size_t decided = 0;       // points whose cone some other station's samples answered (every cell sampled;
+                            // with within_reach_only, of the stations that reach past the point)
+  size_t cones_read = 0;    // (point, station) pairs whose cone was read
 };
 
 // Per point of `cloud`, 1 when another station saw through it (above), else
