@@ -104,7 +104,8 @@ Status RunAir(StageContext& ctx, int k) {
         input,
         {.k = k, .spacing_ratio = spacing_ratio, .plane_tolerance = plane_tolerance,
          .noise_tolerance = noise_tolerance, .seen_through = seen_through,
-         .seen = {.margin_spacings = seen_spacings, .margin_range = seen_range}},
+         .seen = {.margin_spacings = seen_spacings, .margin_range = seen_range},
+         .progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); }},
         ctx.threads(), &report);
     if (!kept.ok()) return kept.status().WithContext(std::string(kId) + ": " + in.path);
     output = std::move(*kept);

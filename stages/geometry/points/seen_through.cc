@@ -179,6 +179,7 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
   auto norm = [](const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
   std::vector<uint8_t> votes(n, 0);
   for (size_t s = 0; s < station_count; ++s) {
+    if (options.progress && s > 0) options.progress(double(s) / double(station_count));
     if (members[s].size() < std::max<size_t>(options.min_station_points, 1)) continue;
     const std::array<double, 3> at = {cloud.stations[s][0] - cloud.origin[0], cloud.stations[s][1] - cloud.origin[1],
                                       cloud.stations[s][2] - cloud.origin[2]};
@@ -232,6 +233,7 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
     });
     local.cones_read += cones_read;
   }
+  if (options.progress) options.progress(1.0);
   for (size_t i = 0; i < n; ++i) {
     seen[i] = votes[i] & 1;
     local.seen_through += seen[i];

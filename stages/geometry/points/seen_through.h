@@ -38,6 +38,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -57,6 +58,9 @@ struct SeenThroughOptions {
   // false reads every point's cone (bench/seen_through_bench compares the
   // two on a site of many rooms).
   bool within_reach_only = true;
+  // Called from the calling thread after each station, with the fraction of
+  // the stations done, in [0, 1].
+  std::function<void(double fraction)> progress;
 };
 
 struct SeenThroughReport {

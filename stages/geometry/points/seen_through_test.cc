@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -184,6 +185,33 @@ TEST(SeenThroughTest, ReadingOnlyThePointsWithinReachFindsTheSamePoints) {
   EXPECT_LT(double(culled.cones_read), 0.4 * double(every.cones_read))
       << culled.cones_read << " of " << every.cones_read;
   EXPECT_GT(culled.cones_read, scan.cloud.size() / 2);
+}
+
+// Progress: after each station, and, through RemoveAirPoints, after each
+// pass of the air too; never backwards, ending at 1.
+TEST(SeenThroughTest, SaysHowFarItIs) {
+  const Scan scan = ScanRoom(kStations, {true, false});
+  Expected<std::vector<float>> spacing = LocalSpacing(scan.cloud, 8);
+  ASSERT_TRUE(spacing.ok());
+  std::vector<double> seen_steps;
+  SeenThroughOptions options;
+  options.progress = [&](double f) { seen_steps.push_back(f); };
+  ASSERT_TRUE(SeenThroughPoints(scan.cloud, *spacing, options).ok());
+  EXPECT_EQ(seen_steps, (std::vector<double>{0.5, 1.0}));
+
+  std::vector<double> air_steps;
+  AirOptions air;
+  air.progress = [&](double f) { air_steps.push_back(f); };
+  AirReport report;
+  Expected<PointCloud> kept = RemoveAirPoints(scan.cloud, air, 0, &report);
+  ASSERT_TRUE(kept.ok()) << kept.status().message();
+  EXPECT_GT(report.seen_through, 800u);  // the person (963 of 1,069 with the air's spacings)
+  ASSERT_GE(air_steps.size(), 3u);  // the passes, then the two stations
+  EXPECT_TRUE(std::is_sorted(air_steps.begin(), air_steps.end()));
+  EXPECT_GT(air_steps.front(), 0.0);
+  EXPECT_LE(air_steps.front(), 0.5);
+  EXPECT_EQ(air_steps.back(), 1.0);
+  EXPECT_EQ(std::count(air_steps.begin(), air_steps.end(), 0.75), 1);  // the first station done
 }
 
 TEST(SeenThroughTest, OneStationOrNoneSeesThroughNothing) {

@@ -237,14 +237,21 @@ Expected<std::vector<uint8_t>> AirAndSeenThrough(const KnnIndex& index, const Ai
   const bool look = cloud && options.seen_through && cloud->stations.size() >= 2;
   AirReport local;
   std::vector<float> spacing;
-  PB_ASSIGN_OR_RETURN(std::vector<uint8_t> air, AirPointsAndSpacing(index, options, &local, look ? &spacing : nullptr));
+  // The passes take the first half of the progress when the stations are
+  // looked through, which take the rest.
+  AirOptions passes = options;
+  if (look && options.progress) passes.progress = [&options](double f) { options.progress(0.5 * f); };
+  PB_ASSIGN_OR_RETURN(std::vector<uint8_t> air, AirPointsAndSpacing(index, passes, &local, look ? &spacing : nullptr));
   if (look) {
     if (spacing.empty()) {  // spacing_ratio 0: the air ran no pass
       PB_ASSIGN_OR_RETURN(spacing, LocalSpacing(index, options.k));
     }
     SeenThroughReport seen_report;
+    SeenThroughOptions seen_options = options.seen;
+    seen_options.progress = nullptr;
+    if (options.progress) seen_options.progress = [&options](double f) { options.progress(0.5 + 0.5 * f); };
     PB_ASSIGN_OR_RETURN(const std::vector<uint8_t> seen,
-                        SeenThroughPoints(*cloud, spacing, options.seen, &seen_report));
+                        SeenThroughPoints(*cloud, spacing, seen_options, &seen_report));
     local.seen_through = seen_report.seen_through;
     local.seen_stations = seen_report.stations;
     local.seen_decided = seen_report.decided;
@@ -278,6 +285,12 @@ Expected<std::vector<uint8_t>> AirPointsAndSpacing(const KnnIndex& index, const 
   const double noise_floor = options.noise_tolerance * local.noise_m;
   MarkAir(index, options, spacing, limit, noise_floor, air);
   local.passes = 1;
+  // The first pass (with the spacings and the noise) is half the work; the
+  // later ones share the rest.
+  const auto report_progress = [&](double f) {
+    if (options.progress) options.progress(f);
+  };
+  report_progress(options.passes > 1 ? 0.5 : 1.0);
   // Later passes, without the points found: a return whose nearest were
   // other returns may have had a plane among them by chance.
   for (size_t found = size_t(std::count(air.begin(), air.end(), uint8_t{1}));
@@ -297,6 +310,7 @@ Expected<std::vector<uint8_t>> AirPointsAndSpacing(const KnnIndex& index, const 
     std::vector<uint8_t> more(rest.size(), 0);
     MarkAir(sub, options, sub_spacing, limit, noise_floor, more);
     ++local.passes;
+    report_progress(0.5 + 0.5 * double(local.passes - 1) / double(options.passes - 1));
     found = 0;
     for (size_t j = 0; j < rest.size(); ++j)
       if (more[j]) {
@@ -304,6 +318,7 @@ Expected<std::vector<uint8_t>> AirPointsAndSpacing(const KnnIndex& index, const 
         ++found;
       }
   }
+  report_progress(1.0);  // no more pass needed
   for (uint8_t a : air) local.air += a;
   if (report) *report = local;
   if (first_spacing) *first_spacing = std::move(spacing);

@@ -69,6 +69,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 #include <vector>
 
@@ -92,7 +93,11 @@ struct AirOptions {
   // air too, whatever their density; needs the cloud's stations (the
   // functions given only a KnnIndex cannot tell).
   bool seen_through = true;
-  SeenThroughOptions seen;
+  SeenThroughOptions seen;  // its `progress` is not called: `progress` below covers it
+  // Called from the calling thread after each pass and each station looked
+  // through, with the fraction done, in [0, 1] (RemoveAirPoints,
+  // LocalSpacingAndStrays).
+  std::function<void(double fraction)> progress;
 };
 
 struct StrayOptions {
