@@ -61,13 +61,17 @@ int RunCompare(const std::vector<std::string>& args) {
                  "REF's and TEST's depth maps (<view>.depth.exr): surfaces more than --depth-tolerance apart are "
                  "counted (in front / behind) and left out of the metrics (needs --covered)")
       ->expected(2);
+  std::string coverage_path;
+  app.add_option("--coverage-map", coverage_path,
+                 "Write the coverage map as a PNG: where the holes, the surfaces in front / behind and the "
+                 "pixels only one image covers are (needs --covered; colours in docs/metrics.md)");
   double depth_tolerance = ImageMetricsOptions{}.depth_tolerance;
   app.add_option("--depth-tolerance", depth_tolerance, "With --depth: the depth difference that counts, x REF's depth")
       ->check(CLI::PositiveNumber)
       ->capture_default_str();
   if (const std::optional<int> exit = ParseCommandArgs(app, args)) return *exit;
-  if (!covered && (!samples_path.empty() || !depth_paths.empty())) {
-    std::fprintf(stderr, "pointbake compare: --samples and --depth need --covered\n");
+  if (!covered && (!samples_path.empty() || !depth_paths.empty() || !coverage_path.empty())) {
+    std::fprintf(stderr, "pointbake compare: --samples, --depth and --coverage-map need --covered\n");
     return 2;
   }
 
@@ -91,11 +95,13 @@ int RunCompare(const std::vector<std::string>& args) {
   options.depth_tolerance = depth_tolerance;
   FlipResult flip;
   std::optional<CoverageStats> coverage;
+  Image coverage_map;
   Expected<ImageMetrics> m = ImageMetrics{};
   if (covered) {
     Expected<CoveredComparison> c =
         CompareCovered(images[0], images[1], options, &flip, depth_paths.empty() ? nullptr : &depths[0],
-                       depth_paths.empty() ? nullptr : &depths[1], samples_path.empty() ? nullptr : &samples);
+                       depth_paths.empty() ? nullptr : &depths[1], samples_path.empty() ? nullptr : &samples,
+                       coverage_path.empty() ? nullptr : &coverage_map);
     if (c.ok()) {
       coverage = c->coverage;
       m = c->metrics;
@@ -117,6 +123,13 @@ int RunCompare(const std::vector<std::string>& args) {
       return 2;
     }
   }
+  if (!coverage_path.empty()) {
+    const Status st = WritePng(coverage_path, coverage_map);
+    if (!st.ok()) {
+      std::fprintf(stderr, "pointbake compare: writing the coverage map: %s\n", st.message().c_str());
+      return 2;
+    }
+  }
   if (json) {
     nlohmann::json out = {{"reference", files[0]},
                           {"test", files[1]},
@@ -129,6 +142,7 @@ int RunCompare(const std::vector<std::string>& args) {
                           {"flip_mean", m->flip_mean},
                           {"flip_ppd", ppd}};
     if (!map_path.empty()) out["flip_map"] = map_path;
+    if (!coverage_path.empty()) out["coverage_map"] = coverage_path;
     if (coverage) {
       const CoverageStats& c = *coverage;
       out["covered"] = {{"reference_px", c.reference_px},
@@ -168,6 +182,7 @@ int RunCompare(const std::vector<std::string>& args) {
   std::printf("MS-SSIM luma       %s\n", Fixed(m->ms_ssim_luma, 6).c_str());
   std::printf("FLIP mean          %s (ppd %.4f)\n", Fixed(m->flip_mean, 6).c_str(), ppd);
   if (!map_path.empty()) std::printf("FLIP map           %s\n", map_path.c_str());
+  if (!coverage_path.empty()) std::printf("coverage map       %s\n", coverage_path.c_str());
   return 0;
 }
 

@@ -2,7 +2,9 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <filesystem>
 #include <string>
 
 #include "stages/geometry/core/image.h"
@@ -153,6 +155,22 @@ TEST_F(CompareCli, CoveredMeasuresTheSurfaceAndCountsHolesApart) {
   // The hole's columns 120 and the last column 159 (odd: no sample) -> 3.
   EXPECT_EQ(j["covered"]["hole_px"], 3u);
 
+  // The coverage map: the hole enclosed (yellow), the short outline (red),
+  // the model's gray inside, black outside.
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered", "--coverage-map", P("cov.png")});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  pb::Expected<pb::Image> map = pb::ReadPng(P("cov.png"));
+  ASSERT_TRUE(map.ok()) << map.status().message();
+  auto color = [&](int x, int y) {
+    return std::array<int, 3>{map->at_u8(x, y, 0), map->at_u8(x, y, 1), map->at_u8(x, y, 2)};
+  };
+  EXPECT_EQ(color(120, 100), (std::array<int, 3>{255, 230, 0}));
+  EXPECT_EQ(color(kHi - 1, 70), (std::array<int, 3>{255, 0, 0}));
+  EXPECT_EQ(color(10, 10), (std::array<int, 3>{0, 0, 0}));
+  const std::array<int, 3> model = color(60, 60);
+  EXPECT_EQ(model[0], model[1]);
+  EXPECT_GE(model[0], 96);
+
   // The table says the same.
   r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered"});
   ASSERT_EQ(r.exit_code, 0) << r.Describe();
@@ -181,6 +199,9 @@ TEST_F(CompareCli, CoveredMeasuresTheSurfaceAndCountsHolesApart) {
   r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--samples", P("ref.samples.png")});
   EXPECT_EQ(r.exit_code, 2) << r.Describe();
   EXPECT_NE(r.err.find("need --covered"), std::string::npos) << r.Describe();
+  r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--coverage-map", P("cov2.png")});
+  EXPECT_EQ(r.exit_code, 2) << r.Describe();
+  EXPECT_FALSE(std::filesystem::exists(P("cov2.png")));
   r = pbtest::Run({"compare", P("ref.png"), P("test.png"), "--covered", "--samples", P("nope.png")});
   EXPECT_EQ(r.exit_code, 2) << r.Describe();
   EXPECT_NE(r.err.find("nope.png"), std::string::npos) << r.Describe();

@@ -64,6 +64,8 @@
 //                     splat_hole_fraction of row "mean"
 //     flip_scan/      its covered-pixel FLIP maps (shown for scenes without
 //                     ground truth, instead of flip_hpm)
+//     coverage_scan/  its coverage maps (metrics.image `coverage`), shown
+//                     under every run's frame, downscaled by rank
 //     geometry.json   metrics.geometry (v2) with the scan: beyond_fraction of
 //                     rows mesh_to_scan (invented area) and scan_to_mesh
 //                     (missing), boundary_edges_per_1000_faces

@@ -228,6 +228,25 @@ TextTable ScanTable(const Campaign& c) {
   return t;
 }
 
+// The coverage maps' caption (metrics.image output `coverage`, the run's
+// `coverage_scan`), and their key, said once per report.
+const char* kCoverageTitle = "Coverage vs scan";
+const char* kCoverageKey =
+    "Coverage vs scan: gray, the model where the scan has it too; red, a hole pixel at the model's "
+    "outline (a scan sample the model leaves as background); orange, a deeper open hole; yellow, a "
+    "hole the model encloses; magenta, the model's surface in front of the scan's (invented); cyan, "
+    "behind it; blue, the model where the scan shows nothing; dark gray, only the scan's splat disks; "
+    "black, neither. In the thumbnails each pixel shows the most telling colour of the pixels it "
+    "stands for, in that order, so single hole pixels stay visible.";
+
+bool AnyCoverage(const std::vector<SceneImages>& images) {
+  for (const SceneImages& s : images)
+    for (const ViewSection& v : s.views)
+      for (const FrameCell& cell : v.cells)
+        if (cell.coverage) return true;
+  return false;
+}
+
 const char* kScanNote =
     "Each workflow's model drawn unlit against the scan itself drawn as splats from the same "
     "viewpoints (render.splats; the scan's colors are already lit, so both sides are unlit). "
@@ -410,6 +429,7 @@ std::string ReportMarkdown(const Campaign& c, const TextTable& times, const Text
     for (const auto& [stage, text] : r.warnings)
       md += "- " + EscapeMd(DisplayName(r)) + " on " + EscapeMd(r.scene) + ", stage `" + stage +
             "`: " + EscapeMd(text) + "\n";
+  if (AnyCoverage(images)) md += "\n" + std::string(kCoverageKey) + "\n";
   for (const SceneImages& s : images) {
     for (const ViewSection& v : s.views) {
       md += "\n## " + EscapeMd(s.scene) + ", view " + EscapeMd(v.view) + "\n\n";
@@ -420,6 +440,7 @@ std::string ReportMarkdown(const Campaign& c, const TextTable& times, const Text
         if (cell.thumb) md += "![" + EscapeMd(cell.title) + "](" + cell.thumb->file + ") ";
         if (cell.crop) md += "![crop](" + cell.crop->file + ") ";
         if (cell.flip) md += "![" + EscapeMd(cell.flip_title) + "](" + cell.flip->file + ")";
+        if (cell.coverage) md += " ![" + std::string(kCoverageTitle) + "](" + cell.coverage->file + ")";
         md += "\n\n";
       }
     }
@@ -485,6 +506,7 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
       h += "<li>" + EscapeMarkup(DisplayName(r)) + " on " + EscapeMarkup(r.scene) + ", stage <code>" +
            EscapeMarkup(stage) + "</code>: " + EscapeMarkup(text) + "</li>";
   if (AnyWarnings(c)) h += "</ul>";
+  if (AnyCoverage(images)) h += "\n<p>" + EscapeMarkup(kCoverageKey) + "</p>";
   for (const SceneImages& s : images) {
     for (const ViewSection& v : s.views) {
       h +=
@@ -502,6 +524,8 @@ std::string ReportHtml(const Campaign& c, const TextTable& times, const TextTabl
         if (cell.crop) h += "<div>Crop</div>" + Img(cell.crop, cell.title + " crop", "crop");
         if (cell.flip)
           h += "<div>" + EscapeMarkup(cell.flip_title) + "</div>" + Img(cell.flip, cell.flip_title);
+        if (cell.coverage)
+          h += "<div>" + EscapeMarkup(kCoverageTitle) + "</div>" + Img(cell.coverage, kCoverageTitle);
         h += "</div>";
       }
       h += "</div>";

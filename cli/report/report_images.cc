@@ -16,6 +16,7 @@
 #include "base/env.h"
 #include "stages/geometry/io/frames.h"
 #include "stages/geometry/core/image.h"
+#include "stages/geometry/metrics/image_metrics.h"
 #include "cli/report/report_internal.h"
 
 namespace pb::report_internal {
@@ -67,6 +68,43 @@ Image BoxDownscale(const Image& in, int max_side) {
           for (int c = 0; c < 3; ++c) sum[c] += in.at_u8(sx, sy, c);
       const uint32_t n = uint32_t((y1 - y0) * (x1 - x0));
       for (int c = 0; c < 3; ++c) out.at_u8(x, y, c) = uint8_t((sum[c] + n / 2) / n);
+    }
+  }
+  return out;
+}
+
+// A coverage map (image_metrics.h) made smaller: each pixel takes the most
+// telling colour of its box (kCoverageMapRanked), so that a single hole
+// pixel stays in sight where averaging would wash it out.
+Image RankedDownscale(const Image& in, int max_side) {
+  const int longest = std::max(in.width, in.height);
+  if (longest <= max_side || max_side <= 0) return in;
+  const int w = std::max(1, int(int64_t(in.width) * max_side / longest));
+  const int h = std::max(1, int(int64_t(in.height) * max_side / longest));
+  Image out = Image::Make(w, h, 3, Image::PixelType::kU8);
+  // Rank of a pixel's colour: its place in kCoverageMapRanked, except that
+  // the model's gray comes just before kCoverageMapReferenceOnly (the last),
+  // and black after everything.
+  const int last = int(kCoverageMapRanked.size()) - 1;
+  auto rank = [&](int x, int y) {
+    const std::array<uint8_t, 3> c = {in.at_u8(x, y, 0), in.at_u8(x, y, 1), in.at_u8(x, y, 2)};
+    for (int k = 0; k < last; ++k)
+      if (c == kCoverageMapRanked[size_t(k)]) return k;
+    if (c == kCoverageMapRanked[size_t(last)]) return last + 1;
+    if (c == kCoverageMapNeither) return last + 2;
+    return last;  // a gray of the model
+  };
+  for (int y = 0; y < h; ++y) {
+    const int y0 = int(int64_t(y) * in.height / h),
+              y1 = std::max(y0 + 1, int(int64_t(y + 1) * in.height / h));
+    for (int x = 0; x < w; ++x) {
+      const int x0 = int(int64_t(x) * in.width / w),
+                x1 = std::max(x0 + 1, int(int64_t(x + 1) * in.width / w));
+      int best = -1, best_x = x0, best_y = y0;
+      for (int sy = y0; sy < y1; ++sy)
+        for (int sx = x0; sx < x1; ++sx)
+          if (const int r = rank(sx, sy); best < 0 || r < best) best = r, best_x = sx, best_y = sy;
+      for (int c = 0; c < 3; ++c) out.at_u8(x, y, c) = in.at_u8(best_x, best_y, c);
     }
   }
   return out;
@@ -180,7 +218,7 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
                                        const ReportOptions& options) {
   struct Column {
     std::string title, note, flip_title;
-    std::optional<FrameSet> frames, flip;
+    std::optional<FrameSet> frames, flip, coverage;
     const Row* row = nullptr;
   };
   std::vector<Column> columns;
@@ -189,7 +227,7 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
     if (r.scene != scene || !r.ok() || truth) continue;
     PB_ASSIGN_OR_RETURN(truth, MaybeReadFrames(JoinPath(r.run_dir, "truth_frames")));
   }
-  if (truth) columns.push_back({"Ground truth", "", "", std::move(truth), std::nullopt, nullptr});
+  if (truth) columns.push_back({"Ground truth", "", "", std::move(truth), std::nullopt, std::nullopt, nullptr});
   const bool has_truth = !columns.empty();
   // The scan itself as splats (render.splats, the same in every run).
   std::optional<FrameSet> scan;
@@ -197,15 +235,16 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
     if (r.scene != scene || !r.ok() || scan) continue;
     PB_ASSIGN_OR_RETURN(scan, MaybeReadFrames(JoinPath(r.run_dir, "scan_frames")));
   }
-  if (scan) columns.push_back({"Scan (splats)", "", "", std::move(scan), std::nullopt, nullptr});
+  if (scan) columns.push_back({"Scan (splats)", "", "", std::move(scan), std::nullopt, std::nullopt, nullptr});
   for (const Row& r : c.rows) {
     if (r.scene != scene) continue;
-    Column col{DisplayName(r), "", "", std::nullopt, std::nullopt, &r};
+    Column col{DisplayName(r), "", "", std::nullopt, std::nullopt, std::nullopt, &r};
     if (!r.ok()) {
       col.note = "run failed";
     } else {
       PB_ASSIGN_OR_RETURN(col.frames, MaybeReadFrames(JoinPath(r.run_dir, "frames")));
       if (!col.frames) col.note = "no frames";
+      PB_ASSIGN_OR_RETURN(col.coverage, MaybeReadFrames(JoinPath(r.run_dir, "coverage_scan")));
       if (has_truth) {
         PB_ASSIGN_OR_RETURN(col.flip, MaybeReadFrames(JoinPath(r.run_dir, "flip_truth")));
         col.flip_title = "FLIP vs ground truth";
@@ -251,7 +290,7 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
     const int scale = std::max(1, options.thumbnail_px / section.window.size);
     for (size_t k = 0; k < columns.size(); ++k) {
       const Column& col = columns[k];
-      FrameCell cell{col.title, col.note, std::nullopt, std::nullopt, std::nullopt, col.flip_title};
+      FrameCell cell{col.title, col.note, std::nullopt, std::nullopt, std::nullopt, col.flip_title, std::nullopt};
       const std::string base =
           Slug(scene) + "__" + Slug(col.row ? col.row->name : k == 0 && has_truth ? "truth" : "scan") + "__" +
           Slug(view);
@@ -271,6 +310,10 @@ Expected<SceneImages> BuildSceneImages(const Campaign& c, const std::string& sce
       if (std::optional<Image> flip = rgb_of(col.flip ? &*col.flip : nullptr)) {
         PB_ASSIGN_OR_RETURN(cell.flip, SaveImage(report_dir, base + "_flip",
                                                  BoxDownscale(*flip, options.thumbnail_px)));
+      }
+      if (std::optional<Image> coverage = rgb_of(col.coverage ? &*col.coverage : nullptr)) {
+        PB_ASSIGN_OR_RETURN(cell.coverage, SaveImage(report_dir, base + "_coverage",
+                                                     RankedDownscale(*coverage, options.thumbnail_px)));
       }
       section.cells.push_back(std::move(cell));
     }

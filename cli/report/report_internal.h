@@ -144,6 +144,7 @@ struct FrameCell {
   std::string note;   // why there is no image ("run failed", "no frames")
   std::optional<ReportImage> thumb, crop, flip;
   std::string flip_title;
+  std::optional<ReportImage> coverage;  // the coverage map against the scan (metrics.image)
 };
 struct ViewSection {
   std::string view;

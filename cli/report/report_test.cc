@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "stages/geometry/io/frames.h"
+#include "stages/geometry/metrics/image_metrics.h"
 #include "stages/geometry/core/table.h"
 #include "stages/geometry/testing/test_data.h"
 
@@ -385,6 +386,24 @@ TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
   geometry.rows.push_back({std::string("scan_to_mesh"), 0.0625, 3.5});
   ASSERT_TRUE(WriteTable(RunDir("point_transfer") + "/geometry.json", geometry).ok());
   WriteFrameSet(RunDir("point_transfer") + "/scan_frames", TestFrame(7));
+  // Its coverage map: the model's gray with one hole pixel at the outline.
+  Image coverage = Image::Make(kW, kH, 3, Image::PixelType::kU8);
+  for (int y = 0; y < kH; ++y)
+    for (int x = 0; x < kW; ++x)
+      for (int c = 0; c < 3; ++c) coverage.at_u8(x, y, c) = uint8_t(x < kW / 2 ? 150 : 0);
+  for (int c = 0; c < 3; ++c) coverage.at_u8(kW / 2, 13, c) = kCoverageMapHoleOutline[size_t(c)];
+  WriteFrameSet(RunDir("point_transfer") + "/coverage_scan", coverage);
+  ReportOptions small;
+  small.thumbnail_px = kW / 4;  // every thumbnail pixel stands for 4 x 4
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report_small"), small).ok());
+  Expected<Image> thumb = ReadPng(Path("report_small/images/room__room_point_transfer__front_coverage.png"));
+  ASSERT_TRUE(thumb.ok()) << thumb.status().message();
+  EXPECT_EQ(thumb->width, kW / 4);
+  // The one red pixel stays red where averaging would have made it gray.
+  EXPECT_EQ(thumb->at_u8(kW / 8, 13 / 4, 0), 255);
+  EXPECT_EQ(thumb->at_u8(kW / 8, 13 / 4, 1), 0);
+  EXPECT_EQ(thumb->at_u8(kW / 8 - 1, 13 / 4, 0), 150);  // the model beside it
+  EXPECT_EQ(thumb->at_u8(kW / 8 + 1, 13 / 4, 0), 0);    // black beyond
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
 
   const Json results = Results();
@@ -410,7 +429,10 @@ TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
   // FLIP each).
   size_t images = 0;
   for (size_t at = html.find("<img "); at != std::string::npos; at = html.find("<img ", at + 1)) ++images;
-  EXPECT_EQ(images, 10u);
+  EXPECT_EQ(images, 11u);  // and point transfer's coverage map
+  EXPECT_THAT(html, HasSubstr("Coverage vs scan"));
+  EXPECT_THAT(html, HasSubstr("red, a hole pixel at the model"));
+  EXPECT_THAT(ReadText(Path("report/report.md")), HasSubstr("room__room_point_transfer__front_coverage.png"));
   EXPECT_TRUE(std::filesystem::exists(Path("report/images/room__scan__front_frame.png")));
   const std::string csv = ReadText(Path("report/results.csv"));
   EXPECT_THAT(csv, HasSubstr("vs_scan_covered_psnr_db"));

@@ -124,9 +124,9 @@ Status Run(StageContext& ctx) {
   Table table;
   table.columns = {"frame"};
   for (const char* name : kColumns) table.columns.push_back(name);
-  FrameSet maps, covered_maps;
-  maps.width = covered_maps.width = test.width;
-  maps.height = covered_maps.height = test.height;
+  FrameSet maps, covered_maps, coverage_maps;
+  maps.width = covered_maps.width = coverage_maps.width = test.width;
+  maps.height = covered_maps.height = coverage_maps.height = test.height;
   std::vector<double> sums(std::size(kColumns), 0.0);
   size_t sample_masks = 0;  // frames whose holes were counted on the reference's sample mask
   {
@@ -140,6 +140,7 @@ Status Run(StageContext& ctx) {
       options.depth_tolerance = depth_tolerance;
       const bool depth = frame.depth.width > 0 && ref.depth.width > 0;
       FlipResult flip, covered_flip;
+      Image coverage_map;
       Expected<ImageMetrics> m = Status::Internal("not run");
       Expected<CoveredComparison> c = Status::Internal("not run");
       arena.execute([&] {
@@ -147,7 +148,8 @@ Status Run(StageContext& ctx) {
         m = CompareImages(ref_image, test_image, options, &flip);
         if (m.ok())
           c = CompareCovered(ref_image, test_image, options, &covered_flip, depth ? &ref.depth : nullptr,
-                             depth ? &frame.depth : nullptr, ref.samples.width > 0 ? &ref.samples : nullptr);
+                             depth ? &frame.depth : nullptr, ref.samples.width > 0 ? &ref.samples : nullptr,
+                             &coverage_map);
       });
       if (!m.ok()) return m.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
       if (!c.ok()) return c.status().WithContext(std::string(kId) + ": frame '" + frame.entry.name + "'");
@@ -190,6 +192,7 @@ Status Run(StageContext& ctx) {
       map_entry.samples_file.clear();
       maps.frames.push_back(Frame{map_entry, FlipErrorColorMap(flip), {}});
       covered_maps.frames.push_back(Frame{map_entry, FlipErrorColorMap(covered_flip), {}});
+      coverage_maps.frames.push_back(Frame{map_entry, std::move(coverage_map), {}});
       ctx.progress(0.1 + 0.8 * double(i + 1) / double(test.frames.size()));
     }
   }
@@ -215,6 +218,9 @@ Status Run(StageContext& ctx) {
     PB_RETURN_IF_ERROR(WriteFrames(covered_maps, [&ctx](const std::string& file) {
       return ctx.output_path("flip_covered", file);
     }));
+    PB_RETURN_IF_ERROR(WriteFrames(coverage_maps, [&ctx](const std::string& file) {
+      return ctx.output_path("coverage", file);
+    }));
   }
   ctx.set_output_meta("table", {{"kind", "image_metrics"},
                                 {"ppd", ppd},
@@ -228,7 +234,10 @@ Status Run(StageContext& ctx) {
   flip_meta["ppd"] = ppd;
   ctx.set_output_meta("flip", flip_meta);
   flip_meta["kind"] = "flip_error_maps_covered";
-  ctx.set_output_meta("flip_covered", std::move(flip_meta));
+  ctx.set_output_meta("flip_covered", flip_meta);
+  flip_meta.erase("ppd");
+  flip_meta["kind"] = "coverage_maps";
+  ctx.set_output_meta("coverage", std::move(flip_meta));
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -238,7 +247,7 @@ Status Run(StageContext& ctx) {
 StageType ImageMetricsStage() {
   StageType type;
   type.id = kId;
-  type.version = 5;  // 5: whole frames compared as drawn on black; 4: holes on the sample mask
+  type.version = 6;  // 6: output coverage (maps); 5: whole frames compared as drawn on black; 4: holes on the sample mask
   type.summary = "Image quality of rendered frames against reference frames: PSNR, SSIM, MS-SSIM, FLIP";
   type.doc =
       "Compares every frame of `frames` with the frame of the same name in `reference` (a frame "
@@ -283,7 +292,12 @@ StageType ImageMetricsStage() {
       "`farther_fraction`, `footprint_px`, `splat_hole_px`, `splat_hole_fraction`, `silhouette_hole_px`; one row per frame in the order of `frames`, then a row `mean` "
       "with the arithmetic mean of each column. Output `flip`: the whole-frame FLIP error map of "
       "every frame, magma color-mapped, same names and files; `flip_covered`: the map of the "
-      "covered-pixel comparison.\n\n"
+      "covered-pixel comparison; `coverage`: per frame a map of where the figures come from "
+      "(8-bit RGB): a gray of the frame's luma where both cover and agree in depth; magenta where "
+      "the frame's surface lies in front of the reference's (invented), cyan behind; blue where "
+      "only the frame covers, dark gray where only the reference's disks do; the hole pixels red "
+      "at the frame's outline, orange when open and deeper, yellow when the frame encloses them; "
+      "black where neither covers (image_metrics.h, kCoverageMap*).\n\n"
       "Counters: `frames`, `pixels_per_frame`, `sample_mask_frames` (frames whose holes were counted "
       "on the reference's sample mask), and the mean of every column (left out when not "
       "finite: identical frames give an infinite PSNR). Phases: `io`, `compute`.";
@@ -295,7 +309,8 @@ StageType ImageMetricsStage() {
   type.outputs = {
       {"table", "table", "Per-frame and mean PSNR, SSIM, MS-SSIM and FLIP, whole-frame and on covered pixels, and coverage.", false},
       {"flip", "frames", "FLIP error maps (magma colormap), one per frame.", false},
-      {"flip_covered", "frames", "FLIP error maps of the covered-pixel comparison, one per frame.", false}};
+      {"flip_covered", "frames", "FLIP error maps of the covered-pixel comparison, one per frame.", false},
+      {"coverage", "frames", "Coverage maps: holes, invented and missing surface, one per frame.", false}};
   type.run = &Run;
   return type;
 }

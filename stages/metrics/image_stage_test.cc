@@ -262,10 +262,12 @@ TEST_F(ImageStageTest, SchemaDefaultPpdIsFlipDefault) {
   ASSERT_NE(type, nullptr);
   const nlohmann::json schema = CheckedSchema(*type, true);
   EXPECT_EQ(schema["properties"]["ppd"]["default"].get<double>(), FlipDefaultPpd());
-  ASSERT_EQ(type->outputs.size(), 3u);
+  ASSERT_EQ(type->outputs.size(), 4u);
   EXPECT_EQ(type->outputs[1].type, "frames");
   EXPECT_EQ(type->outputs[2].name, "flip_covered");
-  EXPECT_EQ(type->version, 5);
+  EXPECT_EQ(type->outputs[3].name, "coverage");
+  EXPECT_EQ(type->outputs[3].type, "frames");
+  EXPECT_EQ(type->version, 6);
 }
 
 TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
@@ -328,6 +330,17 @@ TEST_F(ImageStageTest, CoveredColumnsAndHolesBesideTheWholeFrame) {
   Expected<FrameSet> maps = ReadFrames(with_depth.files_.at("flip_covered/frames.json"));
   ASSERT_TRUE(maps.ok()) << maps.status().message();
   EXPECT_TRUE(maps->frames[0].entry.depth_file.empty());
+  // The coverage map: the hole yellow (enclosed), the nearer block magenta.
+  Expected<FrameSet> coverage = ReadFrames(with_depth.files_.at("coverage/frames.json"));
+  ASSERT_TRUE(coverage.ok()) << coverage.status().message();
+  ASSERT_EQ(coverage->frames.size(), 1u);
+  const Image& map = coverage->frames[0].image;
+  ASSERT_EQ(map.width, 64);
+  auto at = [&](int x, int y) { return std::array<uint8_t, 3>{map.at_u8(x, y, 0), map.at_u8(x, y, 1), map.at_u8(x, y, 2)}; };
+  EXPECT_EQ(at(32, 31), kCoverageMapHoleEnclosed);
+  EXPECT_EQ(at(12, 12), kCoverageMapNearer);
+  EXPECT_EQ(at(2, 2), kCoverageMapNeither);
+  EXPECT_EQ(with_depth.meta_.at("coverage")["kind"], "coverage_maps");
 }
 
 TEST_F(ImageStageTest, TheWholeFrameDoesNotDependOnTheBackgroundTheFramesWereDrawnOn) {

@@ -367,7 +367,7 @@ std::vector<uint8_t> DownsampleMask(const std::vector<uint8_t>& mask, int width,
 Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
                                            const ImageMetricsOptions& options, FlipResult* flip,
                                            const Image* reference_depth, const Image* test_depth,
-                                           const Image* reference_samples) {
+                                           const Image* reference_samples, Image* map) {
   PB_ASSIGN_OR_RETURN(auto pair, ToRgb8Pair(reference, test));
   Rgb8& a = pair.first;
   Rgb8& b = pair.second;
@@ -384,6 +384,10 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
   CoveredComparison r;
   r.coverage.sample_mask = samples != nullptr;
   std::vector<uint8_t> both(pixels);
+  // The map's class of each pixel (CoverageClass); nearer / farther below.
+  enum CoverageClass : uint8_t { kNeither, kReferenceOnly, kTestOnly, kBoth, kNearer, kFarther, kHoleOutline,
+                                 kHoleOpen, kHoleEnclosed };
+  std::vector<uint8_t> classes(map ? pixels : 0, kNeither);
   for (size_t i = 0; i < pixels; ++i) {
     both[i] = ref_covered[i] && test_covered[i];
     r.coverage.reference_px += ref_covered[i];
@@ -393,9 +397,15 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
     r.coverage.splat_hole_px += ref_covered[i] && !test_covered[i];
     const bool footprint = samples ? samples[i] > 0 : ref_covered[i] != 0;
     r.coverage.footprint_px += footprint;
+    if (map)
+      classes[i] = both[i]            ? kBoth
+                   : test_covered[i]  ? kTestOnly
+                   : ref_covered[i]   ? kReferenceOnly
+                                      : kNeither;
     if (footprint && !test_covered[i]) {
       ++r.coverage.hole_px;
       r.coverage.enclosed_hole_px += enclosed[i];
+      if (map) classes[i] = enclosed[i] ? kHoleEnclosed : kHoleOpen;
       if (!enclosed[i]) {
         const int x = int(i % size_t(w)), y = int(i / size_t(w));
         bool touches = false;
@@ -405,6 +415,7 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
             touches = nx >= 0 && ny >= 0 && nx < w && ny < h && test_covered[size_t(ny) * w + nx];
           }
         r.coverage.silhouette_hole_px += touches;
+        if (map && touches) classes[i] = kHoleOutline;
       }
     }
   }
@@ -430,10 +441,29 @@ Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& 
       if (double(dt[i]) < double(dr[i]) - band) {
         ++r.coverage.nearer_px;
         both[i] = 0;
+        if (map) classes[i] = kNearer;
       } else if (double(dt[i]) > double(dr[i]) + band) {
         ++r.coverage.farther_px;
         both[i] = 0;
+        if (map) classes[i] = kFarther;
       }
+    }
+  }
+  if (map) {
+    *map = Image::Make(w, h, 3, Image::PixelType::kU8);
+    static constexpr std::array<std::array<uint8_t, 3>, 9> kColors = {
+        kCoverageMapNeither,  kCoverageMapReferenceOnly, kCoverageMapTestOnly,    kCoverageMapNeither /* kBoth */,
+        kCoverageMapNearer,   kCoverageMapFarther,       kCoverageMapHoleOutline, kCoverageMapHoleOpen,
+        kCoverageMapHoleEnclosed};
+    uint8_t* out = map->u8();
+    for (size_t i = 0; i < pixels; ++i) {
+      std::array<uint8_t, 3> color = kColors[classes[i]];
+      if (classes[i] == kBoth) {  // the model, as a gray from its luma
+        const double luma = 0.299 * b.rgb[i * 3] + 0.587 * b.rgb[i * 3 + 1] + 0.114 * b.rgb[i * 3 + 2];
+        const uint8_t gray = uint8_t(std::lround(96 + luma * (128.0 / 255.0)));
+        color = {gray, gray, gray};
+      }
+      for (int c = 0; c < 3; ++c) out[i * 3 + size_t(c)] = color[size_t(c)];
     }
   }
   // Compared: covered in both, and so are the 4 neighbours (inside the frame):

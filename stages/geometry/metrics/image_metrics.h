@@ -200,10 +200,32 @@ struct CoveredComparison {
 // `reference_samples` (optional): the reference's sample mask, one kU8
 // channel of the frames' size, > 0 on sample pixels (Status::Invalid
 // otherwise); hole pixels are counted on it.
+// `map` (optional) receives the coverage map: an 8-bit RGB picture of the
+// frames' size with one colour per class of pixel (the kCoverageMap*
+// colours below), so a person sees where the figures come from.
 Expected<CoveredComparison> CompareCovered(const Image& reference, const Image& test,
                                            const ImageMetricsOptions& options = {},
                                            FlipResult* flip = nullptr, const Image* reference_depth = nullptr,
                                            const Image* test_depth = nullptr,
-                                           const Image* reference_samples = nullptr);
+                                           const Image* reference_samples = nullptr, Image* map = nullptr);
+
+// The coverage map's classes, in the order a reader that must merge pixels
+// (a thumbnail) keeps them, most telling first. A pixel covered in both
+// frames and not in front or behind shows the test frame's luma as a gray
+// in [96, 224] (the model, for orientation); the other classes have fixed
+// colours.
+inline constexpr std::array<uint8_t, 3> kCoverageMapHoleEnclosed = {255, 230, 0};  // a hole the test frame encloses
+inline constexpr std::array<uint8_t, 3> kCoverageMapHoleOpen = {255, 128, 0};      // open, deeper than a pixel
+inline constexpr std::array<uint8_t, 3> kCoverageMapHoleOutline = {255, 0, 0};     // at the test's outline
+inline constexpr std::array<uint8_t, 3> kCoverageMapNearer = {255, 0, 255};   // the test's surface in front
+inline constexpr std::array<uint8_t, 3> kCoverageMapFarther = {0, 200, 255};  // the test's surface behind
+inline constexpr std::array<uint8_t, 3> kCoverageMapTestOnly = {40, 90, 255};  // the test covers, the reference not
+inline constexpr std::array<uint8_t, 3> kCoverageMapReferenceOnly = {64, 64, 64};  // reference, not a footprint pixel
+inline constexpr std::array<uint8_t, 3> kCoverageMapNeither = {0, 0, 0};
+// The fixed colours from most to least telling (the gray of the model ranks
+// after kCoverageMapTestOnly, before kCoverageMapReferenceOnly).
+inline constexpr std::array<std::array<uint8_t, 3>, 7> kCoverageMapRanked = {
+    kCoverageMapHoleEnclosed, kCoverageMapHoleOpen, kCoverageMapHoleOutline, kCoverageMapNearer,
+    kCoverageMapFarther,      kCoverageMapTestOnly, kCoverageMapReferenceOnly};
 
 }  // namespace pb

@@ -10,6 +10,7 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <limits>
 
 namespace pb {
@@ -431,6 +432,60 @@ TEST(CoveredTest, DepthMapsSetSurfacesInFrontOrBehindApart) {
   EXPECT_EQ(r->coverage.compared_px, size_t(size * size - 100 - 40 - 36 - 24));
   EXPECT_EQ(r->metrics.psnr_db, std::numeric_limits<double>::infinity());
   EXPECT_FALSE(CompareCovered(reference, test, {}, nullptr, &reference_depth, nullptr).ok());
+}
+
+// The coverage map: one colour per class of pixel, counted the same as the
+// figures. Reference: the left 48 columns. Test: columns 3..55 (the strip
+// 0..2 an outline miss, 48..55 only the test's), with an enclosed 4 x 4 hole
+// and a 5 x 5 block 0.5 m in front, a 3 x 3 block 1 m behind; with depth.
+TEST(CoveredTest, TheCoverageMapShowsEachClassOfPixel) {
+  const int size = 64;
+  const Image reference = Frame(size, [](int x, int) { return x < 48; });
+  const Image test = Frame(size, [](int x, int y) {
+    const bool hole = x >= 20 && x < 24 && y >= 20 && y < 24;
+    return !hole && x >= 3 && x < 56;
+  });
+  Image reference_depth = Image::Make(size, size, 1, Image::PixelType::kF32);
+  Image test_depth = Image::Make(size, size, 1, Image::PixelType::kF32);
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      reference_depth.at_f32(x, y, 0) = x < 48 ? 2.0f : 0.0f;
+      const bool front = x >= 30 && x < 35 && y >= 40 && y < 45, behind = x >= 10 && x < 13 && y >= 50 && y < 53;
+      test_depth.at_f32(x, y, 0) = front ? 1.5f : behind ? 3.0f : 2.0f;
+    }
+  Image map;
+  Expected<CoveredComparison> r =
+      CompareCovered(reference, test, {}, nullptr, &reference_depth, &test_depth, nullptr, &map);
+  ASSERT_TRUE(r.ok()) << r.status().message();
+  ASSERT_EQ(map.width, size);
+  ASSERT_EQ(map.channels, 3);
+  std::map<std::array<uint8_t, 3>, size_t> counts;
+  size_t gray = 0;
+  for (int y = 0; y < size; ++y)
+    for (int x = 0; x < size; ++x) {
+      const std::array<uint8_t, 3> c = {map.at_u8(x, y, 0), map.at_u8(x, y, 1), map.at_u8(x, y, 2)};
+      const bool is_gray = c[0] == c[1] && c[1] == c[2] && c[0] >= 96 && c[0] <= 224;
+      gray += is_gray;
+      if (!is_gray) ++counts[c];
+    }
+  EXPECT_EQ(counts[kCoverageMapHoleEnclosed], r->coverage.enclosed_hole_px);
+  EXPECT_EQ(counts[kCoverageMapHoleEnclosed], 16u);
+  EXPECT_EQ(counts[kCoverageMapHoleOutline], r->coverage.silhouette_hole_px);
+  EXPECT_EQ(counts[kCoverageMapHoleOutline], 64u);  // column 2
+  EXPECT_EQ(counts[kCoverageMapHoleOpen], r->coverage.hole_px - 16u - 64u);
+  EXPECT_EQ(counts[kCoverageMapHoleOpen], 128u);  // columns 0 and 1
+  EXPECT_EQ(counts[kCoverageMapNearer], r->coverage.nearer_px);
+  EXPECT_EQ(counts[kCoverageMapNearer], 25u);
+  EXPECT_EQ(counts[kCoverageMapFarther], 9u);
+  EXPECT_EQ(counts[kCoverageMapTestOnly], size_t(8 * size));
+  EXPECT_EQ(counts[kCoverageMapNeither], size_t(8 * size));
+  EXPECT_EQ(counts[kCoverageMapReferenceOnly], 0u);  // every reference pixel is a footprint pixel here
+  EXPECT_EQ(gray, r->coverage.both_px - 25u - 9u);
+  // Without a map asked the figures are the same.
+  Expected<CoveredComparison> plain = CompareCovered(reference, test, {}, nullptr, &reference_depth, &test_depth);
+  ASSERT_TRUE(plain.ok());
+  EXPECT_EQ(plain->coverage.hole_px, r->coverage.hole_px);
+  EXPECT_EQ(plain->metrics.psnr_db, r->metrics.psnr_db);
 }
 
 }  // namespace
