@@ -48,9 +48,12 @@ Image ToRgb8(const Image& in) {
   return out;
 }
 
-// Box filter: each output pixel averages the source pixels it covers
-// (integer bounds), so every source pixel counts once.
-Image BoxDownscale(const Image& in, int max_side) {
+// `in` made smaller so its longest side is `max_side` (unchanged when it is
+// already): each output pixel is `pick(x0, x1, y0, y1)` of the source box
+// [x0, x1) x [y0, y1) it stands for (integer bounds, so every source pixel
+// belongs to one box).
+template <typename Pick>
+Image DownscaleByBoxes(const Image& in, int max_side, Pick pick) {
   const int longest = std::max(in.width, in.height);
   if (longest <= max_side || max_side <= 0) return in;
   const int w = std::max(1, int(int64_t(in.width) * max_side / longest));
@@ -62,52 +65,53 @@ Image BoxDownscale(const Image& in, int max_side) {
     for (int x = 0; x < w; ++x) {
       const int x0 = int(int64_t(x) * in.width / w),
                 x1 = std::max(x0 + 1, int(int64_t(x + 1) * in.width / w));
-      std::array<uint32_t, 3> sum{};
-      for (int sy = y0; sy < y1; ++sy)
-        for (int sx = x0; sx < x1; ++sx)
-          for (int c = 0; c < 3; ++c) sum[c] += in.at_u8(sx, sy, c);
-      const uint32_t n = uint32_t((y1 - y0) * (x1 - x0));
-      for (int c = 0; c < 3; ++c) out.at_u8(x, y, c) = uint8_t((sum[c] + n / 2) / n);
+      const std::array<uint8_t, 3> rgb = pick(x0, x1, y0, y1);
+      for (int c = 0; c < 3; ++c) out.at_u8(x, y, c) = rgb[size_t(c)];
     }
   }
   return out;
+}
+
+// Box filter: each output pixel is the rounded mean of the source pixels it
+// covers.
+Image BoxDownscale(const Image& in, int max_side) {
+  return DownscaleByBoxes(in, max_side, [&](int x0, int x1, int y0, int y1) {
+    std::array<uint32_t, 3> sum{};
+    for (int sy = y0; sy < y1; ++sy)
+      for (int sx = x0; sx < x1; ++sx)
+        for (int c = 0; c < 3; ++c) sum[size_t(c)] += in.at_u8(sx, sy, c);
+    const uint32_t n = uint32_t((y1 - y0) * (x1 - x0));
+    std::array<uint8_t, 3> mean{};
+    for (int c = 0; c < 3; ++c) mean[size_t(c)] = uint8_t((sum[size_t(c)] + n / 2) / n);
+    return mean;
+  });
 }
 
 // A coverage map (image_metrics.h) made smaller: each pixel takes the most
 // telling colour of its box (kCoverageMapRanked), so that a single hole
 // pixel stays in sight where averaging would wash it out.
 Image RankedDownscale(const Image& in, int max_side) {
-  const int longest = std::max(in.width, in.height);
-  if (longest <= max_side || max_side <= 0) return in;
-  const int w = std::max(1, int(int64_t(in.width) * max_side / longest));
-  const int h = std::max(1, int(int64_t(in.height) * max_side / longest));
-  Image out = Image::Make(w, h, 3, Image::PixelType::kU8);
-  // Rank of a pixel's colour: its place in kCoverageMapRanked, except that
-  // the model's gray comes just before kCoverageMapReferenceOnly (the last),
-  // and black after everything.
+  // Rank of a colour: its place in kCoverageMapRanked, except that the
+  // model's gray comes just before kCoverageMapReferenceOnly (the last), and
+  // black after everything.
   const int last = int(kCoverageMapRanked.size()) - 1;
-  auto rank = [&](int x, int y) {
-    const std::array<uint8_t, 3> c = {in.at_u8(x, y, 0), in.at_u8(x, y, 1), in.at_u8(x, y, 2)};
+  auto rank = [&](const std::array<uint8_t, 3>& c) {
     for (int k = 0; k < last; ++k)
       if (c == kCoverageMapRanked[size_t(k)]) return k;
     if (c == kCoverageMapRanked[size_t(last)]) return last + 1;
     if (c == kCoverageMapNeither) return last + 2;
     return last;  // a gray of the model
   };
-  for (int y = 0; y < h; ++y) {
-    const int y0 = int(int64_t(y) * in.height / h),
-              y1 = std::max(y0 + 1, int(int64_t(y + 1) * in.height / h));
-    for (int x = 0; x < w; ++x) {
-      const int x0 = int(int64_t(x) * in.width / w),
-                x1 = std::max(x0 + 1, int(int64_t(x + 1) * in.width / w));
-      int best = -1, best_x = x0, best_y = y0;
-      for (int sy = y0; sy < y1; ++sy)
-        for (int sx = x0; sx < x1; ++sx)
-          if (const int r = rank(sx, sy); best < 0 || r < best) best = r, best_x = sx, best_y = sy;
-      for (int c = 0; c < 3; ++c) out.at_u8(x, y, c) = in.at_u8(best_x, best_y, c);
-    }
-  }
-  return out;
+  return DownscaleByBoxes(in, max_side, [&](int x0, int x1, int y0, int y1) {
+    int best = -1;
+    std::array<uint8_t, 3> chosen{};
+    for (int sy = y0; sy < y1; ++sy)
+      for (int sx = x0; sx < x1; ++sx) {
+        const std::array<uint8_t, 3> c = {in.at_u8(sx, sy, 0), in.at_u8(sx, sy, 1), in.at_u8(sx, sy, 2)};
+        if (const int r = rank(c); best < 0 || r < best) best = r, chosen = c;
+      }
+    return chosen;
+  });
 }
 
 // The crop_px window where frames `a` and `b` differ most (sum of absolute
