@@ -128,8 +128,8 @@ class RangePyramid {
 //    [box_lo, box_hi] than any point SawBeyond accepts can. For one it
 //    accepts, the cell of its direction u on the level read holds a sample q
 //    beyond the ball; the point at `distance` along q's direction lies on
-//    the segment from s to q, so in the box, and within distance x (the
-//    angle between u and q's direction) of the point. That angle is at most
+//    the segment from s to q, so in the box, and within `distance` times the
+//    angle between u and q's direction of the point. That angle is at most
 //    2 c for a cell of c radians (latitude and longitude each span c, and a
 //    radian of longitude is at most one of arc). The level read has c =
 //    `cell` (level 0), or else the level below spanned more than 3 cells of
