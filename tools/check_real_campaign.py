@@ -29,7 +29,8 @@ Reads report/results.json and, for every scene (or those named), checks:
     the invented area, which counts those returns as scan points, stays
     low (a statue stand-in: 36-68 %, docs/real-scans.md, "Points in the
     air");
-  - every workflow's faces seen from the back (render.frames' back_share:
+  - every workflow's faces seen from the back (back_face_fraction, the report's
+    "Back faces %": render.frames' back_share:
     of the samples that hit the model, the share whose face turns its back
     to the eye) at most --max-back (default 0.10; the real scenes: 0.0-4.0
     %, the living room's oblique view seeing a side wall from outside; the
@@ -184,24 +185,6 @@ def uniform_grey_scan(run_dir):
     return False
 
 
-def back_share(run_dir):
-    """render.frames' counter back_share of the stage that made the run's
-    `frames` (run.json's "outputs"; records without them: the stage
-    `render`, as the shipped workflows name it): the share of the samples
-    that hit the model and see a face's back. None for an older
-    render.frames or no such stage."""
-    path = os.path.join(run_dir, "run.json")
-    if not os.path.exists(path):
-        return None
-    with open(path) as f:
-        run = json.load(f)
-    stage_id = run.get("outputs", {}).get("frames", "render.frames").rsplit(".", 1)[0]
-    for record in run.get("stages", []):
-        if record.get("stage") == stage_id:
-            return (record.get("cached_run") or record).get("counters", {}).get("back_share")
-    return None
-
-
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("out_dir")
@@ -254,9 +237,10 @@ def main():
             check(holes is not None and holes < args.max_holes,
                   f"{scene}/{w}: hole pixels {100 * holes:.3f} % of the scan's sample footprint < "
                   f"{100 * args.max_holes:g} %" + (f" ({disk_text[2:]})" if disk_text else ""))
-            back = back_share(os.path.join(args.out_dir, "runs", scene, w))
+            back = g.get("back_face_fraction")  # render.frames' back_share (the report reads it)
             if back is None:
-                print(f"skip  {scene}/{w}: no back_share counter (render.frames before version 2)")
+                print(f"skip  {scene}/{w}: no back faces figure (render.frames before version 2, or a report "
+                      f"before the figure)")
             else:
                 check(back <= args.max_back,
                       f"{scene}/{w}: faces seen from the back on {100 * back:.2f} % of what the frames show "
