@@ -115,10 +115,14 @@ double Shade(const RenderOptions& options, const CameraFrame& cam, double albedo
   return albedo * (options.ambient + options.diffuse * lambert);
 }
 
-// Resolves every pixel from its samples: `shade(px, py, rgb)` returns whether
-// the sample hit geometry and sets its linear color.
+// What a sample hit: nothing, a face's front, or its back (RenderStats).
+enum class SampleHit { kNone, kFront, kBack };
+
+// Resolves every pixel from its samples: `shade(px, py, rgb)` says what the
+// sample hit and, when it hit something, sets its linear color. `covered`
+// and `back` receive the samples that hit something, and a face's back.
 template <typename ShadeSample>
-Image Resolve(const CameraFrame& cam, int size, const RenderOptions& options, size_t* covered,
+Image Resolve(const CameraFrame& cam, int size, const RenderOptions& options, size_t* covered, size_t* back,
               const ShadeSample& shade) {
   Image image = Image::Make(size, size, 4, Image::PixelType::kU8);
   const SrgbTables& srgb = Srgb();
@@ -126,9 +130,9 @@ Image Resolve(const CameraFrame& cam, int size, const RenderOptions& options, si
                          srgb.decode[options.background[2]]};
   const int ss = cam.supersample;
   const double inv_count = 1.0 / double(ss * ss);
-  std::atomic<size_t> covered_total{0};
+  std::atomic<size_t> covered_total{0}, back_total{0};
   tbb::parallel_for(tbb::blocked_range<int>(0, size), [&](const tbb::blocked_range<int>& rows) {
-    size_t covered_here = 0;
+    size_t covered_here = 0, back_here = 0;
     for (int y = rows.begin(); y < rows.end(); ++y) {
       for (int x = 0; x < size; ++x) {
         V3 sum = {0, 0, 0};
@@ -137,8 +141,9 @@ Image Resolve(const CameraFrame& cam, int size, const RenderOptions& options, si
           for (int i = 0; i < ss; ++i) {
             const int sx = x * ss + i, sy = y * ss + j;
             V3 rgb;
-            if (shade(sx, sy, rgb)) {
+            if (const SampleHit hit = shade(sx, sy, rgb); hit != SampleHit::kNone) {
               ++hits;
+              back_here += hit == SampleHit::kBack ? 1 : 0;
               sum = Add(sum, rgb);
             } else {
               sum = Add(sum, background);
@@ -152,8 +157,10 @@ Image Resolve(const CameraFrame& cam, int size, const RenderOptions& options, si
       }
     }
     covered_total += covered_here;
+    back_total += back_here;
   });
   if (covered) *covered = covered_total.load();
+  if (back) *back = back_total.load();
   return image;
 }
 
@@ -449,10 +456,9 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
   const SrgbTables& srgb = Srgb();
   const double gray = srgb.decode[kDefaultGray];
   const double pixel_step = double(cam.supersample) / cam.focal;  // one output pixel, in ray units
-  std::atomic<size_t> back_samples{0};
   auto shade = [&](int sx, int sy, V3& rgb) {
     const uint64_t key = visibility[size_t(sy) * cam.samples + sx].load(std::memory_order_relaxed);
-    if (key == kEmpty) return false;
+    if (key == kEmpty) return SampleHit::kNone;
     const uint32_t face = uint32_t(key & 0xffffffffu);
     const uint32_t* idx = &mesh.indices[size_t(face) * 3];
     V3 q[3];
@@ -465,7 +471,7 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
     const Barycentric bc = RayBarycentric(corner_cross, d);
     const V3 geometric = Cross(Sub(q[1], q[0]), Sub(q[2], q[0]));
     const bool back = Dot(geometric, d) > 0;  // seen from the back
-    if (back) back_samples.fetch_add(1, std::memory_order_relaxed);
+    const SampleHit hit = back ? SampleHit::kBack : SampleHit::kFront;
 
     std::array<double, 2> uv{};
     std::array<double, 2> duv_dx{}, duv_dy{};
@@ -487,7 +493,7 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
     }
     if (options.lighting == RenderLighting::kUnlit) {
       rgb = albedo;
-      return true;
+      return hit;
     }
     V3 n = mesh.has_normals() ? Normalize(Interpolate<3>(mesh.normals, idx, 3, bc)) : V3{0, 0, 0};
     if (Dot(n, n) == 0) n = Normalize(geometric);
@@ -502,10 +508,10 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
     normal = Normalize(normal);
     if (back) normal = Scale(normal, -1.0);
     for (int c = 0; c < 3; ++c) rgb[c] = Shade(options, cam, albedo[c], normal);
-    return true;
+    return hit;
   };
-  size_t covered = 0;
-  Image image = Resolve(cam, camera.size, options, &covered, shade);
+  size_t covered = 0, back_samples = 0;
+  Image image = Resolve(cam, camera.size, options, &covered, &back_samples, shade);
   if (depth_m) {
     // The visibility keys hold the float depth in their upper 32 bits.
     *depth_m = Image::Make(camera.size, camera.size, 1, Image::PixelType::kF32);
@@ -530,7 +536,7 @@ Expected<Image> RenderMesh(const Mesh& mesh, const RenderMaterial& material, con
     stats->triangles = mesh.face_count();
     stats->clipped = clipped.load();
     stats->covered_samples = covered;
-    stats->back_samples = back_samples.load();
+    stats->back_samples = back_samples;
   }
   return image;
 }
@@ -541,15 +547,15 @@ Expected<Image> RenderSynthScene(const SynthScene& scene, const RenderCamera& ca
   auto shade = [&](int sx, int sy, V3& rgb) {
     const V3 d = Normalize(cam.Ray(sx + 0.5, sy + 0.5));
     const std::optional<SynthHit> hit = Intersect(scene, cam.eye, d);
-    if (!hit) return false;
+    if (!hit) return SampleHit::kNone;
     const std::array<double, 3> albedo = HitAlbedo(scene, *hit);
     V3 normal = Normalize(SampleSurface(scene, hit->point).normal);
     if (Dot(normal, d) > 0) normal = Scale(normal, -1.0);
     for (int c = 0; c < 3; ++c) rgb[c] = Shade(options, cam, SrgbDecodeExact(albedo[c]), normal);
-    return true;
+    return SampleHit::kFront;  // the truth's surfaces have no sides
   };
   size_t covered = 0;
-  Image image = Resolve(cam, camera.size, options, &covered, shade);
+  Image image = Resolve(cam, camera.size, options, &covered, nullptr, shade);
   if (stats) {
     *stats = RenderStats{};
     stats->covered_samples = covered;
