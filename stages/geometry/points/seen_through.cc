@@ -14,6 +14,8 @@
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
 
+#include "stages/geometry/core/vec3.h"
+
 namespace pb {
 namespace {
 
@@ -172,11 +174,9 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
   for (size_t i = 0; i < n; ++i) {
     members[cloud.station_ids[i]].push_back(uint32_t(i));  // < station_count: Validate
   }
-  auto offset = [&](size_t i, const std::array<double, 3>& from) {
-    return std::array<double, 3>{double(cloud.positions[i * 3]) - from[0], double(cloud.positions[i * 3 + 1]) - from[1],
-                                 double(cloud.positions[i * 3 + 2]) - from[2]};
+  auto offset = [&](size_t i, const vec3::V3& from) {
+    return vec3::Sub({cloud.positions[i * 3], cloud.positions[i * 3 + 1], cloud.positions[i * 3 + 2]}, from);
   };
-  auto norm = [](const std::array<double, 3>& v) { return std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]); };
   std::vector<uint8_t> votes(n, 0);
   for (size_t s = 0; s < station_count; ++s) {
     if (options.progress && s > 0) options.progress(double(s) / double(station_count));
@@ -194,7 +194,7 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
     std::array<double, 3> box_lo = {0, 0, 0}, box_hi = {0, 0, 0};
     for (uint32_t i : members[s]) {
       const std::array<double, 3> v = offset(i, at);
-      const double range = norm(v);
+      const double range = vec3::Norm(v);
       if (!(range > 0)) continue;
       directions.push_back(DirectionOf(v, range));
       ranges.push_back(float(range));
@@ -218,7 +218,7 @@ Expected<std::vector<uint8_t>> SeenThroughPoints(const PointCloud& cloud, std::s
       for (size_t i = range.begin(); i < range.end(); ++i) {
         if (cloud.station_ids[i] == s) continue;
         const std::array<double, 3> v = offset(i, at);
-        const double distance = norm(v);
+        const double distance = vec3::Norm(v);
         const double margin = std::max(options.margin_spacings * double(spacing[i]), options.margin_range * distance);
         if (!(distance > 2 * margin)) continue;  // the ball nearly holds the station
         if (options.within_reach_only && !WithinReach(v, distance, margin, reach, box_lo, box_hi, cell)) continue;
