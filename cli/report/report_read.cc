@@ -65,12 +65,19 @@ Expected<Json> ReadJsonFile(const std::string& path) {
 
 // ---- Reading the campaign folder -----------------------------------------
 
-// Fills time_s, total_s and peak_ram_bytes from the stage entries of run.json.
-Status ReadRunTimes(const std::string& path, Row& row) {
+// A run.json as read: an object with a "stages" array, or Status::Corrupt
+// naming `path`.
+Expected<Json> ReadRunRecord(const std::string& path) {
   PB_ASSIGN_OR_RETURN(Json run, ReadJsonFile(path));
+  if (!run.is_object() || !run.contains("stages") || !run["stages"].is_array())
+    return Status::Corrupt(path + ": no \"stages\" array");
+  return run;
+}
+
+// Fills time_s, total_s and peak_ram_bytes from the stage entries of `run`
+// (ReadRunRecord of `path`).
+Status ReadRunTimes(const Json& run, const std::string& path, Row& row) {
   try {
-    if (!run.is_object() || !run.contains("stages") || !run["stages"].is_array())
-      return Status::Corrupt(path + ": no \"stages\" array");
     std::array<double, kGroupCount> sum{};
     std::array<bool, kGroupCount> present{}, unknown{};
     std::optional<double> peak;
@@ -144,13 +151,8 @@ Status ReadRunTimes(const std::string& path, Row& row) {
   return Status::Ok();
 }
 
-// The stages' `warnings` of run.json; a run without run.json (it did not
-// load) has none.
-Status ReadRunWarnings(const std::string& path, Row& row) {
-  if (!Env::Default()->Exists(path)) return Status::Ok();
-  PB_ASSIGN_OR_RETURN(Json run, ReadJsonFile(path));
-  if (!run.is_object() || !run.contains("stages") || !run["stages"].is_array())
-    return Status::Corrupt(path + ": no \"stages\" array");
+// The stages' `warnings` of `run` (ReadRunRecord).
+void ReadRunWarnings(const Json& run, Row& row) {
   for (const Json& stage : run["stages"]) {
     if (!stage.is_object() || !stage.contains("warnings") || !stage["warnings"].is_array())
       continue;
@@ -160,7 +162,6 @@ Status ReadRunWarnings(const std::string& path, Row& row) {
     for (const Json& w : stage["warnings"])
       if (w.is_string()) row.warnings.emplace_back(id, w.get<std::string>());
   }
-  return Status::Ok();
 }
 
 // The "mean" row of a metrics.image table; absent file = all null.
@@ -266,9 +267,13 @@ Expected<Campaign> ReadCampaign(const std::string& campaign_dir) {
     return Status::Corrupt(path + ": " + e.what());
   }
   for (Row& row : c.rows) {
-    PB_RETURN_IF_ERROR(ReadRunWarnings(JoinPath(row.run_dir, "run.json"), row));
+    // A failed run may have no run.json (it did not load): no warnings then.
+    const std::string run_path = JoinPath(row.run_dir, "run.json");
+    if (!row.ok() && !Env::Default()->Exists(run_path)) continue;
+    PB_ASSIGN_OR_RETURN(Json run, ReadRunRecord(run_path));
+    ReadRunWarnings(run, row);
     if (!row.ok()) continue;  // failed runs: a row of nulls
-    PB_RETURN_IF_ERROR(ReadRunTimes(JoinPath(row.run_dir, "run.json"), row));
+    PB_RETURN_IF_ERROR(ReadRunTimes(run, run_path, row));
     PB_RETURN_IF_ERROR(ReadQuality(JoinPath(row.run_dir, "vs_hpm.json"), row.vs_hpm));
     PB_RETURN_IF_ERROR(ReadQuality(JoinPath(row.run_dir, "vs_truth.json"), row.vs_truth));
     PB_RETURN_IF_ERROR(

@@ -286,6 +286,19 @@ TEST_F(ReportTest, WarningsOfEveryRunAreListed) {
   EXPECT_EQ(header.substr(header.rfind(',') + 1), "warnings");
   EXPECT_THAT(csv, HasSubstr(",2\n"));  // lpm's count ends its row
 
+  // A failed run that did not load wrote no record: no warnings, and the
+  // report is still written. A finished run without one is an error.
+  std::filesystem::rename(RunDir("lpm") + "/run.json", Path("lpm-run.json"));
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+  EXPECT_EQ(Results()["rows"][1]["warnings"], Json::array());
+  std::filesystem::rename(Path("lpm-run.json"), RunDir("lpm") + "/run.json");
+  std::filesystem::rename(RunDir("hpm") + "/run.json", Path("hpm-run.json"));
+  const Status missing = WriteCampaignReport(Campaign(), Path("report"));
+  EXPECT_FALSE(missing.ok());
+  EXPECT_THAT(missing.message(), HasSubstr("runs/room/hpm/run.json"));
+  std::filesystem::rename(Path("hpm-run.json"), RunDir("hpm") + "/run.json");
+  ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
+
   const std::string md = ReadText(Path("report/report.md"));
   EXPECT_THAT(md, HasSubstr("## Warnings"));
   EXPECT_THAT(md, HasSubstr("- LPM on room, stage `bake`: first"));
