@@ -87,30 +87,50 @@ Image BoxDownscale(const Image& in, int max_side) {
   });
 }
 
-// A coverage map (image_metrics.h) made smaller: each pixel takes the most
-// telling colour of its box (kCoverageMapRanked), so that a single hole
-// pixel stays in sight where averaging would wash it out.
+// A coverage map (image_metrics.h) made smaller. A box with a defect in it
+// (a hole, surface in front of or behind the scan) takes the most telling
+// one (kCoverageMapRanked), so that a single hole pixel stays in sight where
+// averaging would wash it out. Any other box takes what most of its pixels
+// show (ties in this order): the model, as the mean of its grays; model
+// only; splat disks only; neither. So the one-pixel gaps between a sparse
+// scan's splats do not speckle a wall blue, and what a box shows is what
+// most of it is.
 Image RankedDownscale(const Image& in, int max_side) {
-  // Rank of a colour: its place in kCoverageMapRanked, except that the
-  // model's gray comes just before kCoverageMapReferenceOnly (the last), and
-  // black after everything.
-  const int last = int(kCoverageMapRanked.size()) - 1;
-  auto rank = [&](const std::array<uint8_t, 3>& c) {
-    for (int k = 0; k < last; ++k)
-      if (c == kCoverageMapRanked[size_t(k)]) return k;
-    if (c == kCoverageMapRanked[size_t(last)]) return last + 1;
-    if (c == kCoverageMapNeither) return last + 2;
-    return last;  // a gray of the model
-  };
+  constexpr size_t kDefects = 5;  // kCoverageMapRanked's holes, in front, behind
+  static_assert(kCoverageMapRanked[kDefects] == kCoverageMapTestOnly &&
+                kCoverageMapRanked[kDefects + 1] == kCoverageMapReferenceOnly);
   return DownscaleByBoxes(in, max_side, [&](int x0, int x1, int y0, int y1) {
-    int best = -1;
-    std::array<uint8_t, 3> chosen{};
+    size_t defect = kDefects;
+    std::array<uint32_t, 4> count{};  // the model, model only, disks only, neither
+    uint32_t gray_sum = 0;
     for (int sy = y0; sy < y1; ++sy)
       for (int sx = x0; sx < x1; ++sx) {
         const std::array<uint8_t, 3> c = {in.at_u8(sx, sy, 0), in.at_u8(sx, sy, 1), in.at_u8(sx, sy, 2)};
-        if (const int r = rank(c); best < 0 || r < best) best = r, chosen = c;
+        size_t k = 0;
+        while (k < kDefects && c != kCoverageMapRanked[k]) ++k;
+        if (k < kDefects) {
+          defect = std::min(defect, k);
+        } else if (c == kCoverageMapTestOnly) {
+          ++count[1];
+        } else if (c == kCoverageMapReferenceOnly) {
+          ++count[2];
+        } else if (c == kCoverageMapNeither) {
+          ++count[3];
+        } else {  // a gray of the model
+          ++count[0];
+          gray_sum += c[0];
+        }
       }
-    return chosen;
+    if (defect < kDefects) return kCoverageMapRanked[defect];
+    switch (std::max_element(count.begin(), count.end()) - count.begin()) {
+      case 0: {
+        const uint8_t gray = uint8_t((gray_sum + count[0] / 2) / count[0]);
+        return std::array<uint8_t, 3>{gray, gray, gray};
+      }
+      case 1: return kCoverageMapTestOnly;
+      case 2: return kCoverageMapReferenceOnly;
+      default: return kCoverageMapNeither;
+    }
   });
 }
 

@@ -405,6 +405,14 @@ TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
     for (int x = 0; x < kW; ++x)
       for (int c = 0; c < 3; ++c) coverage.at_u8(x, y, c) = uint8_t(x < kW / 2 ? 150 : 0);
   for (int c = 0; c < 3; ++c) coverage.at_u8(kW / 2, 13, c) = kCoverageMapHoleOutline[size_t(c)];
+  // Rows 20-23: one model-only pixel in every 4 x 4 box of the model (the
+  // gaps between sparse splats); rows 28-31, x 0-7: model only throughout.
+  auto paint = [&](int x, int y, const std::array<uint8_t, 3>& rgb) {
+    for (int c = 0; c < 3; ++c) coverage.at_u8(x, y, c) = rgb[size_t(c)];
+  };
+  for (int x = 1; x < kW / 2; x += 4) paint(x, 21, kCoverageMapTestOnly);
+  for (int y = 28; y < 32; ++y)
+    for (int x = 0; x < 8; ++x) paint(x, y, kCoverageMapTestOnly);
   WriteFrameSet(RunDir("point_transfer") + "/coverage_scan", coverage);
   ReportOptions small;
   small.thumbnail_px = kW / 4;  // every thumbnail pixel stands for 4 x 4
@@ -417,6 +425,11 @@ TEST_F(ReportTest, AgainstTheScanTableAndSplatFrames) {
   EXPECT_EQ(thumb->at_u8(kW / 8, 13 / 4, 1), 0);
   EXPECT_EQ(thumb->at_u8(kW / 8 - 1, 13 / 4, 0), 150);  // the model beside it
   EXPECT_EQ(thumb->at_u8(kW / 8 + 1, 13 / 4, 0), 0);    // black beyond
+  // Boxes that are mostly the model show it, one blue pixel or not; a box
+  // that is all model only shows blue.
+  for (int x = 0; x < kW / 8; ++x) EXPECT_EQ(thumb->at_u8(x, 21 / 4, 2), 150) << x;
+  for (int x = 0; x < 2; ++x) EXPECT_EQ(thumb->at_u8(x, 28 / 4, 2), kCoverageMapTestOnly[2]) << x;
+  EXPECT_EQ(thumb->at_u8(2, 28 / 4, 2), 150);
   ASSERT_TRUE(WriteCampaignReport(Campaign(), Path("report")).ok());
 
   const Json results = Results();

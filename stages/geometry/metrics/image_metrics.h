@@ -222,8 +222,10 @@ inline constexpr std::array<uint8_t, 3> kCoverageMapFarther = {0, 200, 255};  //
 inline constexpr std::array<uint8_t, 3> kCoverageMapTestOnly = {40, 90, 255};  // the test covers, the reference not
 inline constexpr std::array<uint8_t, 3> kCoverageMapReferenceOnly = {64, 64, 64};  // reference, not a footprint pixel
 inline constexpr std::array<uint8_t, 3> kCoverageMapNeither = {0, 0, 0};
-// The fixed colours from most to least telling (the gray of the model ranks
-// after kCoverageMapTestOnly, before kCoverageMapReferenceOnly).
+// The fixed colours from most to least telling: the defects (the holes, the
+// surface in front, behind), then model only and disks only. The report's
+// thumbnails keep a defect wherever one falls in a box, and else show what
+// most of the box is (cli/report/report_images.cc, RankedDownscale).
 inline constexpr std::array<std::array<uint8_t, 3>, 7> kCoverageMapRanked = {
     kCoverageMapHoleEnclosed, kCoverageMapHoleOpen, kCoverageMapHoleOutline, kCoverageMapNearer,
     kCoverageMapFarther,      kCoverageMapTestOnly, kCoverageMapReferenceOnly};
