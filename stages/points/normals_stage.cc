@@ -25,6 +25,11 @@ constexpr const char* kSchema = R"({
       "default": 16,
       "description": "Points in each PCA neighbourhood, the point itself included. Larger is smoother and slower; 16 suits scans with about 2 mm spacing and sub-millimeter noise."
     },
+    "widen_dense": {
+      "type": "boolean",
+      "default": true,
+      "description": "With implementation 'own': a point whose k nearest lie closer together than a typical point's (the cloud's median distance to the k-th nearest) takes every point within that distance instead (at most 32k, the nearest), so that no neighbourhood is smaller than a typical one. Where a scanner's lines converge (the ceiling above a station) the k nearest lie on one short arc across the lines and the range noise stands the fitted plane on edge; a typical neighbourhood spans several lines. false: always the k nearest (version 4)."
+    },
     "orientation": {
       "type": "string",
       "enum": ["auto", "stations", "input", "propagate", "none"],
@@ -77,6 +82,7 @@ const char* OrientationName(NormalOrientation orientation) {
 
 Status Run(StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(const int64_t k, IntegerParam(ctx, kId, "k", {3, 100}));
+  PB_ASSIGN_OR_RETURN(const bool widen_dense, BoolParam(ctx, kId, "widen_dense"));
   PB_ASSIGN_OR_RETURN(const std::string orientation_name, StringParam(ctx, kId, "orientation"));
   PB_ASSIGN_OR_RETURN(const NormalOrientation orientation,
                       Choice<NormalOrientation>("orientation", orientation_name, kOrientations));
@@ -99,6 +105,7 @@ Status Run(StageContext& ctx) {
     PB_PHASE(ctx, "compute");
     NormalOptions options;
     options.k = static_cast<int>(k);
+    options.widen_dense = widen_dense && solver == NormalImplementation::kOwn;
     options.orientation = orientation;
     options.interior = interior;
     options.implementation = solver;
@@ -118,6 +125,10 @@ Status Run(StageContext& ctx) {
   if (report.input_sides_checked) ctx.counter("input_sides_disagree", report.input_sides_disagree);
   ctx.counter("points", static_cast<double>(report.points));
   ctx.counter("flipped", static_cast<double>(report.flipped));
+  if (widen_dense && solver == NormalImplementation::kOwn) {
+    ctx.counter("widened", static_cast<double>(report.widened));
+    ctx.counter("widen_to_m", report.widen_to_m);
+  }
   if (report.orientation_used == NormalOrientation::kPropagate && interior == NormalInterior::kAuto) {
     ctx.counter("enclosed_volume_m3", report.enclosed_volume_m3);
     ctx.counter("facing_enclosure", static_cast<double>(report.facing_enclosure));
@@ -139,7 +150,7 @@ Status Run(StageContext& ctx) {
 StageType NormalsStage() {
   StageType type;
   type.id = kId;
-  type.version = 4;
+  type.version = 5;
   type.summary = "k-NN PCA normals, oriented toward the scanner, like the file's own, or by propagation";
   type.doc =
       "Estimates a unit normal per point: the eigenvector of the smallest eigenvalue of the "
@@ -163,7 +174,13 @@ StageType NormalsStage() {
       "for campaigns that compare implementations.\n\n"
       "Meta added: `has_normals`, `normals_k`, `normals_orientation` (the method used), "
       "`normals_implementation`. "
-      "Counters: `points`, `flipped` (normals whose sign orientation reversed); with "
+      "Since version 5 (`widen_dense`, default true), a point whose `k` nearest lie closer "
+      "together than a typical point's takes every point within the typical radius instead "
+      "(at most 32k): where a scanner's lines converge, above a station, the k nearest lie on one "
+      "short arc and the range noise stood their plane on edge. "
+      "Counters: `points`, `flipped` (normals whose sign orientation reversed), with "
+      "`widen_dense` `widened` (points whose neighbourhood was widened) and `widen_to_m` (the "
+      "typical radius); with "
       "propagation and `interior: auto`, `enclosed_volume_m3` (the enclosed space found, 0 for "
       "none; stages/geometry/points/enclosure.h) and `facing_enclosure` (points oriented to face "
       "it; the rest by propagation from them) and `facing_rays` (points whose side rays decided, "

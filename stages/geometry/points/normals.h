@@ -77,6 +77,17 @@ enum class NormalImplementation { kOwn, kPcl, kOpen3d };
 struct NormalOptions {
   NormalImplementation implementation = NormalImplementation::kOwn;
   int k = 16;  // points in each PCA neighbourhood, the point included; 3..100
+  // kOwn only. A point whose k nearest lie closer together than a typical
+  // point's (the cloud's median distance to the k-th nearest) takes every
+  // point within that median distance instead (at most 32k of them: the nearest), so that
+  // no neighbourhood is smaller than a typical one. Where a scanner's lines
+  // converge (the ceiling above a station: lines a fraction of a millimetre
+  // apart, their points a centimetre apart along them) the k nearest lie on
+  // one short arc across the lines, the range noise along the ray is as
+  // large as the arc, and the fitted plane stands on edge; the typical
+  // neighbourhood spans several lines. false: every neighbourhood is the k
+  // nearest (points.normals version 4).
+  bool widen_dense = true;
   NormalOrientation orientation = NormalOrientation::kAuto;
   NormalInterior interior = NormalInterior::kAuto;  // kPropagate only
   int threads = 0;  // worker threads; 0 = TBB's default (all cores)
@@ -87,6 +98,10 @@ struct NormalOptions {
 struct NormalReport {
   size_t points = 0;
   size_t flipped = 0;  // normals whose sign orientation reversed
+  // widen_dense: the radius neighbourhoods were widened to (0: none), and
+  // the points whose neighbourhood was.
+  double widen_to_m = 0.0;
+  size_t widened = 0;
   NormalOrientation orientation_used = NormalOrientation::kNone;  // kAuto resolved
   // kPropagate with interior kAuto: the enclosed space found (0: none), and
   // the points oriented to face it (the rest by propagation).

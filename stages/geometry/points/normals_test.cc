@@ -293,6 +293,51 @@ TEST(NormalsTest, SameNormalsWithOneAndTwoThreads) {
   EXPECT_EQ(report_one.flipped, report_two.flipped);
 }
 
+// A ceiling 1.7 m above a scanner, swept as a laser scanner sweeps it:
+// vertical lines through the zenith every 6 mrad of azimuth, a sample every
+// 6 mrad along each, 2 mm range noise along the ray. Near the zenith the
+// lines lie a fraction of a millimetre apart and their samples a centimetre
+// apart along them: a point's 16 nearest lie on one short arc across the
+// lines, the noise is as deep as the arc is long, and their plane stands on
+// edge. Widened to a typical neighbourhood, it spans several lines.
+TEST(NormalsTest, WhereScanLinesConvergeTheNeighbourhoodIsWidened) {
+  PointCloud cloud;
+  std::mt19937 rng(11);
+  std::normal_distribution<double> noise(0.0, 0.002);
+  const double step = 0.006, height = 1.7;
+  for (double azimuth = 0; azimuth < 2 * std::numbers::pi; azimuth += step) {
+    for (double zenith = step; zenith < 0.4; zenith += step) {
+      const double d[3] = {std::sin(zenith) * std::cos(azimuth), std::sin(zenith) * std::sin(azimuth),
+                           std::cos(zenith)};
+      const double range = height / d[2] + noise(rng);
+      cloud.positions.insert(cloud.positions.end(),
+                             {float(range * d[0]), float(range * d[1]), float(range * d[2])});
+    }
+  }
+  // Off by more than 25 degrees from the ceiling's normal, within 0.2 m of
+  // the zenith and beyond.
+  auto tilted = [&](const PointCloud& c, bool near) {
+    size_t count = 0;
+    for (size_t i = 0; i < c.size(); ++i) {
+      const float* p = &c.positions[3 * i];
+      if ((std::hypot(p[0], p[1]) < 0.2) == near) count += std::fabs(c.normals[3 * i + 2]) < 0.9;
+    }
+    return count;
+  };
+  PointCloud narrow = cloud;
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(narrow, {.widen_dense = false, .orientation = NormalOrientation::kNone}, &report).ok());
+  EXPECT_EQ(report.widened, 0u);
+  EXPECT_GT(tilted(narrow, true), 15000u);  // of the 19,912 within 0.2 m
+  EXPECT_GT(tilted(narrow, false), 1000u);
+  ASSERT_TRUE(EstimateNormals(cloud, {.orientation = NormalOrientation::kNone}, &report).ok());
+  EXPECT_GT(report.widened, cloud.size() / 4);
+  EXPECT_GT(report.widen_to_m, 0.005);
+  // 19,877 and 1,396 tilted before; 213 and 5 (at the disc's rim) after.
+  EXPECT_LT(tilted(cloud, true), 400u);
+  EXPECT_LT(tilted(cloud, false), 20u);
+}
+
 // The share of the room's wall, floor and ceiling points whose normals face
 // into the room (toward the box's center side of their face), and of the
 // table's facing out of it.
