@@ -85,6 +85,11 @@ constexpr const char* kSchema = R"({
       "default": 16,
       "description": "Neighbours of a point's plane fit and of its border test (points/surfels.h)."
     },
+    "widen_dense": {
+      "type": "boolean",
+      "default": true,
+      "description": "A point whose `surfel_k` nearest lie closer together than a typical point's (the cloud's median distance to the `surfel_k`-th nearest) takes every point within that distance for its plane fit, border test and sample projection instead (at most 32 `surfel_k`), as points.normals does: where a scanner's lines converge (the ceiling above a station) the nearest lie on one arc across the lines, the fitted plane stood on edge and the disks left the scan's render full of gaps there. false: always the nearest (version 8)."
+    },
     "max_surface_variation": {
       "type": "number",
       "minimum": 0,
@@ -151,6 +156,7 @@ struct Options {
   bool orient = true;
   bool clip_border = true;
   int surfel_k = 16;
+  bool widen_dense = true;
   double border_clip_spacings = 1;
   double max_surface_variation = 0.05;
   double max_radius_spacings = 0;
@@ -173,6 +179,7 @@ Expected<Options> ReadOptions(const StageContext& ctx) {
   PB_ASSIGN_OR_RETURN(options.clip_border, BoolParam(ctx, kId, "clip_border"));
   PB_ASSIGN_OR_RETURN(const int64_t surfel_k, IntegerParam(ctx, kId, "surfel_k", {3, 64}));
   options.surfel_k = int(surfel_k);
+  PB_ASSIGN_OR_RETURN(options.widen_dense, BoolParam(ctx, kId, "widen_dense"));
   PB_ASSIGN_OR_RETURN(options.border_clip_spacings, NumberParam(ctx, kId, "border_clip_spacings"));
   PB_ASSIGN_OR_RETURN(options.max_surface_variation, NumberParam(ctx, kId, "max_surface_variation"));
   if (!(options.max_surface_variation >= 0))
@@ -268,7 +275,8 @@ Status Run(StageContext& ctx) {
     Expected<Surfels> estimated = Status::Internal("not run");
     const KnnIndex* same_points = strays == 0 ? &*index : nullptr;
     arena.execute([&] {
-      estimated = EstimateSurfels(cloud, {.k = options.surfel_k, .project = project}, same_points);
+      estimated = EstimateSurfels(
+          cloud, {.k = options.surfel_k, .project = project, .widen_dense = options.widen_dense}, same_points);
     });
     if (!estimated.ok())
       return estimated.status().WithContext(std::string(kId) + ": input 'points' (" + input.path + ")");
@@ -368,6 +376,10 @@ Status Run(StageContext& ctx) {
   ctx.counter("radii_capped", double(capped));
   ctx.counter("border_points", options.orient ? double(surfels.border_points) : 0.0);
   ctx.counter("oriented_points", double(oriented_points));
+  if (options.widen_dense && (options.orient || project)) {
+    ctx.counter("widened_points", double(surfels.widened));
+    ctx.counter("widen_to_m", surfels.widen_to_m);
+  }
   ctx.counter("median_radius_m", median_radius_m);
   ctx.counter("pixels", pixels);
   if (options.samples) ctx.counter("sample_pixels", double(sample_pixels));
@@ -392,8 +404,10 @@ StageType SplatsStage() {
   // (points/strays.h, AirPoints); 7: their plane test allows the scan's
   // noise (AirOptions::noise_tolerance): a sparse, noisy surface is drawn;
   // 8: the points another station saw through are strays too
-  // (points/seen_through.h: a person or a clump one station recorded).
-  type.version = 8;
+  // (points/seen_through.h: a person or a clump one station recorded);
+  // 9: the surfels' neighbourhoods are no smaller than a typical one
+  // (`widen_dense`, knn.h WidenNeighborhood).
+  type.version = 9;
   type.summary = "Renders the colored scan itself as splats from the scene's viewpoints: what the scanner saw";
   type.doc =
       "Leaves out the stray points (clusters of fewer than `stray_cluster_points` linked samples, "
@@ -418,7 +432,8 @@ StageType SplatsStage() {
       "where it lies once moved onto the quadric fitted to its neighbourhood (`samples_on_surface`), "
       "so that range noise scattering points past a silhouette does not count as evidence.\n\n"
       "Counters: `frames`, `points`, `stray_points` (left out), `air_points` (of them, points in the air), `seen_through_points` (of those, points another station saw through), `splats_drawn` (over all frames), "
-      "`radii_capped`, `border_points`, "
+      "`radii_capped`, `border_points`, `widened_points` and `widen_to_m` (with `widen_dense`: the "
+      "points whose surfel neighbourhood was widened, and to what radius), "
       "`median_radius_m`, `pixels`, `sample_pixels` (over all frames, with `samples`), `projected_points`, "
       "`mean_projection_m` (with `samples_on_surface`: points moved, mean distance over all points). "
       "Phases: `io`, `spacing`, `surfels`, `compute`.";

@@ -8,6 +8,8 @@
 // balanced and implicit, so no node pointers are stored.
 #include "stages/geometry/points/knn.h"
 
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
@@ -221,6 +223,25 @@ int KnnIndex::Search(const float position[3], int k, int64_t exclude_slot,
   };
   descend(descend, 0, 0, size(), 0.0);
   return count;
+}
+
+double MedianNeighborhoodRadius(const KnnIndex& index, int k) {
+  constexpr size_t kSamples = size_t{1} << 16;
+  const size_t n = index.size();
+  if (n == 0 || k < 1) return 0.0;
+  const size_t step = std::max<size_t>(1, n / kSamples);
+  std::vector<double> squared((n + step - 1) / step, 0.0);
+  tbb::parallel_for(tbb::blocked_range<size_t>(0, squared.size(), 256),
+                    [&](const tbb::blocked_range<size_t>& range) {
+                      std::vector<Neighbor> neighbors(static_cast<size_t>(k));
+                      for (size_t s = range.begin(); s < range.end(); ++s) {
+                        const std::array<float, 3> p = index.PositionAtSlot(s * step);
+                        const int count = index.Query(p.data(), k, neighbors);
+                        squared[s] = count > 0 ? neighbors[size_t(count - 1)].squared_distance_m2 : 0.0;
+                      }
+                    });
+  std::nth_element(squared.begin(), squared.begin() + ptrdiff_t(squared.size() / 2), squared.end());
+  return std::sqrt(squared[squared.size() / 2]);
 }
 
 }  // namespace pb

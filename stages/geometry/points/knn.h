@@ -23,7 +23,9 @@
 // not depend on the thread count; queries are const and thread-safe.
 #pragma once
 
+#include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <span>
@@ -79,5 +81,43 @@ class KnnIndex {
   std::vector<float> split_;       // per implicit node: split coordinate
   std::vector<uint8_t> axis_;      // per implicit node: split axis 0..2
 };
+
+// ---- Neighbourhoods no smaller than a typical one -------------------------
+// The plane fits (points.normals, render.splats' surfels) take a point's k
+// nearest. Where a scanner's lines converge (the ceiling above a station)
+// the lines lie a fraction of a millimetre apart and their samples a
+// centimetre apart along them, so the k nearest lie on one short arc across
+// the lines, the range noise along the ray is as deep as the arc is long,
+// and the fitted plane stands on edge. No test on the k points tells (the
+// noise makes the arc look like a plane); their radius does: it is far
+// smaller than a typical point's. docs/points.md, "Where scan lines
+// converge".
+
+// A widened neighbourhood holds at most this many times k points.
+inline constexpr int kWidenedNeighbors = 32;
+
+// The median, over at most 65,536 points spread over the cloud, of the
+// distance from a point to the k-th point of Query (the point itself
+// counted): the radius of a typical k-neighbourhood. 0 for an empty index.
+double MedianNeighborhoodRadius(const KnnIndex& index, int k);
+
+// Widens a neighbourhood of `count` points found for k (out[0..count),
+// nearest first) by `query(want, out)`, a Query or QueryPoint of the same
+// point: when count == k and all of them lie within `radius_m`, queries
+// enough points to fill that radius at their density, at most
+// kWidenedNeighbors * k (out must hold that many), and keeps those within
+// it (at least k). Returns the new count, or `count` when it did nothing.
+template <typename QueryFn>
+int WidenNeighborhood(const QueryFn& query, int k, int count, double radius_m, std::span<Neighbor> out) {
+  const double radius_m2 = radius_m * radius_m;
+  if (count != k || k < 1 || !(out[size_t(k - 1)].squared_distance_m2 < radius_m2)) return count;
+  const int most = kWidenedNeighbors * k;
+  // Points within a radius grow with its square at one density.
+  const double fill = double(k) * radius_m2 / std::max(out[size_t(k - 1)].squared_distance_m2, 1e-300);
+  const int want = int(std::min<double>(most, std::ceil(fill)));
+  int widened = query(want, out);
+  while (widened > k && out[size_t(widened - 1)].squared_distance_m2 > radius_m2) --widened;
+  return widened;
+}
 
 }  // namespace pb

@@ -43,38 +43,12 @@ namespace pb {
 namespace {
 
 constexpr int kMaxK = 100;
-// A widened neighbourhood (NormalOptions::widen_dense) holds at most this
-// many times k points.
-constexpr int kWidenedNeighbors = 32;
 // Out-degree of the propagation graph: enough to cross sampling gaps, small
 // enough that the graph stays at 32 bytes per point.
 constexpr int kPropagationNeighbors = 8;
 constexpr uint32_t kNoNeighbor = std::numeric_limits<uint32_t>::max();
 // Points per progress step; each step is one parallel_for.
 constexpr size_t kChunk = size_t{1} << 20;
-
-// Points the median neighbourhood radius is taken from (spread over the
-// tree's slots, so over the whole cloud).
-constexpr size_t kRadiusSamples = size_t{1} << 16;
-
-// The median over the cloud of the distance to a point's k-th nearest (the
-// point itself counted), from at most kRadiusSamples points: the radius of a
-// typical k-neighbourhood.
-double MedianNeighborhoodRadius(const KnnIndex& index, int k) {
-  const size_t n = index.size();
-  const size_t step = std::max<size_t>(1, n / kRadiusSamples);
-  std::vector<double> squared((n + step - 1) / step, 0.0);
-  tbb::parallel_for(tbb::blocked_range<size_t>(0, squared.size(), 256), [&](const tbb::blocked_range<size_t>& range) {
-    std::vector<Neighbor> neighbors(static_cast<size_t>(k));
-    for (size_t s = range.begin(); s < range.end(); ++s) {
-      const std::array<float, 3> p = index.PositionAtSlot(s * step);
-      const int count = index.Query(p.data(), k, neighbors);
-      squared[s] = count > 0 ? neighbors[size_t(count - 1)].squared_distance_m2 : 0.0;
-    }
-  });
-  std::nth_element(squared.begin(), squared.begin() + squared.size() / 2, squared.end());
-  return std::sqrt(squared[squared.size() / 2]);
-}
 
 // PCA normal of each point; fills `graph` (kPropagationNeighbors per point,
 // self excluded) when it is not empty. With `widen_to_m` > 0, a point whose
@@ -85,7 +59,6 @@ size_t EstimateUnoriented(const KnnIndex& index, int k, double widen_to_m, std::
                           std::vector<uint32_t>& graph, const std::function<void(double)>& progress) {
   const size_t n = index.size();
   const bool want_graph = !graph.empty();
-  const double widen_m2 = widen_to_m * widen_to_m;
   const int most = widen_to_m > 0 ? kWidenedNeighbors * k : k;
   std::atomic<size_t> widened{0};
   for (size_t chunk = 0; chunk < n; chunk += kChunk) {
@@ -101,13 +74,11 @@ size_t EstimateUnoriented(const KnnIndex& index, int k, double widen_to_m, std::
         const uint32_t i = index.PointAtSlot(slot);
         const std::array<float, 3> p = index.PositionAtSlot(slot);
         int count = index.Query(p.data(), k, neighbors);
-        if (count == k && most > k && neighbors[size_t(k - 1)].squared_distance_m2 < widen_m2) {
-          // Enough points to fill the radius at this density (area ~ count).
-          const double fill = double(k) * widen_m2 / std::max(neighbors[size_t(k - 1)].squared_distance_m2, 1e-300);
-          const int want = int(std::min<double>(most, std::ceil(fill)));
-          count = index.Query(p.data(), want, neighbors);
-          while (count > k && neighbors[size_t(count - 1)].squared_distance_m2 > widen_m2) --count;
-          ++range_widened;
+        if (widen_to_m > 0) {
+          const int found = count;
+          count = WidenNeighborhood([&](int want, std::span<Neighbor> out) { return index.Query(p.data(), want, out); },
+                                    k, count, widen_to_m, neighbors);
+          range_widened += count != found;
         }
         // Covariance about the neighbourhood's mean, relative to p for
         // precision far from the origin; the sums are double because a

@@ -24,6 +24,7 @@ double Dot(const float* n, const double v[3]) { return n[0] * v[0] + n[1] * v[1]
 
 using testing::AddBoxFaces;
 using testing::AddSphere;
+using testing::AddZenithCeiling;
 
 TEST(NormalsTest, SmallestEigenvector) {
   const double diagonal[9] = {3, 0, 0, 0, 1, 0, 0, 0, 2};
@@ -293,27 +294,14 @@ TEST(NormalsTest, SameNormalsWithOneAndTwoThreads) {
   EXPECT_EQ(report_one.flipped, report_two.flipped);
 }
 
-// A ceiling 1.7 m above a scanner, swept as a laser scanner sweeps it:
-// vertical lines through the zenith every 6 mrad of azimuth, a sample every
-// 6 mrad along each, 2 mm range noise along the ray. Near the zenith the
-// lines lie a fraction of a millimetre apart and their samples a centimetre
-// apart along them: a point's 16 nearest lie on one short arc across the
-// lines, the noise is as deep as the arc is long, and their plane stands on
-// edge. Widened to a typical neighbourhood, it spans several lines.
+// A ceiling 1.7 m above a scanner, swept as a laser scanner sweeps it
+// (AddZenithCeiling), 2 mm range noise along the ray. Near the zenith a
+// point's 16 nearest lie on one short arc across the lines, the noise is as
+// deep as the arc is long, and their plane stands on edge. Widened to a
+// typical neighbourhood, it spans several lines.
 TEST(NormalsTest, WhereScanLinesConvergeTheNeighbourhoodIsWidened) {
   PointCloud cloud;
-  std::mt19937 rng(11);
-  std::normal_distribution<double> noise(0.0, 0.002);
-  const double step = 0.006, height = 1.7;
-  for (double azimuth = 0; azimuth < 2 * std::numbers::pi; azimuth += step) {
-    for (double zenith = step; zenith < 0.4; zenith += step) {
-      const double d[3] = {std::sin(zenith) * std::cos(azimuth), std::sin(zenith) * std::sin(azimuth),
-                           std::cos(zenith)};
-      const double range = height / d[2] + noise(rng);
-      cloud.positions.insert(cloud.positions.end(),
-                             {float(range * d[0]), float(range * d[1]), float(range * d[2])});
-    }
-  }
+  AddZenithCeiling(cloud, 1.7, 0.006, 0.4, 0.002, 11);
   // Off by more than 25 degrees from the ceiling's normal, within 0.2 m of
   // the zenith and beyond.
   auto tilted = [&](const PointCloud& c, bool near) {

@@ -69,14 +69,22 @@ Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& 
   surfels.outward.assign(n * 3, 0.0f);
   surfels.variation.assign(n, 0.0f);
   if (options.project) surfels.on_surface = cloud.positions;
-  std::atomic<size_t> border{0};
+  std::atomic<size_t> border{0}, widened{0};
   const int k = options.k;
+  // The point and its k nearest others: Query's k + 1.
+  if (options.widen_dense) surfels.widen_to_m = MedianNeighborhoodRadius(index, k + 1);
   tbb::parallel_for(tbb::blocked_range<size_t>(0, n, 1024), [&](const tbb::blocked_range<size_t>& range) {
-    std::vector<Neighbor> neighbors(static_cast<size_t>(k));
-    size_t border_here = 0;
+    std::vector<Neighbor> neighbors(static_cast<size_t>(options.widen_dense ? kWidenedNeighbors * k : k));
+    size_t border_here = 0, widened_here = 0;
     for (size_t slot = range.begin(); slot < range.end(); ++slot) {
       const uint32_t i = index.PointAtSlot(slot);
-      const int found = index.QueryPoint(i, k, neighbors);
+      int found = index.QueryPoint(i, k, neighbors);
+      if (surfels.widen_to_m > 0) {
+        const int nearest = found;
+        found = WidenNeighborhood([&](int want, std::span<Neighbor> out) { return index.QueryPoint(i, want, out); },
+                                  k, found, surfels.widen_to_m, neighbors);
+        widened_here += found != nearest;
+      }
       const float* p = &cloud.positions[size_t(i) * 3];
       // Offsets from the point, so the covariance does not lose digits far
       // from the origin.
@@ -169,8 +177,10 @@ Expected<Surfels> EstimateSurfels(const PointCloud& cloud, const SurfelOptions& 
       }
     }
     border += border_here;
+    widened += widened_here;
   });
   surfels.border_points = border.load();
+  surfels.widened = widened.load();
   return surfels;
 }
 

@@ -56,6 +56,13 @@ struct SurfelOptions {
   int k = 16;                 // neighbours of the plane fit and the border test, 3..64
   double border_shift = 0.25;  // in r_k, > 0
   bool project = false;        // also compute `on_surface`
+  // A point whose k nearest others lie closer than a typical point's (the
+  // cloud's median distance to the k-th other) takes every point within
+  // that distance instead, at most kWidenedNeighbors * k (knn.h,
+  // WidenNeighborhood): where a scanner's lines converge the k nearest lie
+  // on one arc and the fitted plane stands on edge. r_k below is then the
+  // widened radius. false: always the k nearest.
+  bool widen_dense = false;
 };
 
 struct Surfels {
@@ -64,6 +71,8 @@ struct Surfels {
   std::vector<float> variation;  // 1 per point, surface variation in [0, 1/3]
   std::vector<float> on_surface;  // with `project`: 3 per point, the cloud's frame; else empty
   size_t border_points = 0;
+  double widen_to_m = 0;  // with widen_dense: the typical radius
+  size_t widened = 0;     // points whose neighbourhood was widened
 };
 
 // Status::Invalid if an option is out of range, the cloud has at most k

@@ -29,6 +29,29 @@ inline void AddSphere(PointCloud& cloud, const double center[3], double radius_m
   }
 }
 
+// A horizontal ceiling `height_m` above a scanner at the origin, swept as a
+// laser scanner sweeps it: vertical lines through the zenith every `step`
+// rad of azimuth, a sample every `step` rad along each out to `max_zenith`
+// rad from the zenith, Gaussian range noise of `noise_m` along the ray,
+// appended to `cloud`. Near the zenith the lines lie a fraction of a
+// millimetre apart and their samples a centimetre apart along them (at
+// step 6 mrad, 1.7 m up): a point's 16 nearest lie on one arc across them.
+inline void AddZenithCeiling(PointCloud& cloud, double height_m, double step, double max_zenith,
+                             double noise_m, uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, noise_m > 0 ? noise_m : 1.0);
+  for (double azimuth = 0; azimuth < 2 * std::numbers::pi; azimuth += step) {
+    for (double zenith = step; zenith < max_zenith; zenith += step) {
+      const double d[3] = {std::sin(zenith) * std::cos(azimuth), std::sin(zenith) * std::sin(azimuth),
+                           std::cos(zenith)};
+      const double range = height_m / d[2] + (noise_m > 0 ? noise(rng) : 0.0);
+      cloud.positions.insert(cloud.positions.end(), {static_cast<float>(range * d[0]),
+                                                     static_cast<float>(range * d[1]),
+                                                     static_cast<float>(range * d[2])});
+    }
+  }
+}
+
 // The six faces of the box [lo, hi] sampled every `spacing_m` (a jittered
 // grid, Gaussian noise of `noise_m` across each face), without the points
 // for which `skip(x, y, z)` holds (a door, a window), appended to `cloud`.
