@@ -28,7 +28,7 @@ constexpr const char* kSchema = R"({
     "widen_dense": {
       "type": "boolean",
       "default": true,
-      "description": "With implementation 'own': a point whose k nearest lie closer together than a typical point's (the cloud's median distance to the k-th nearest) takes every point within that distance instead (at most 32k, the nearest), so that no neighbourhood is smaller than a typical one. Where a scanner's lines converge (the ceiling above a station) the k nearest lie on one short arc across the lines and the range noise stands the fitted plane on edge; a typical neighbourhood spans several lines. false: always the k nearest (version 4)."
+      "description": "With implementation 'own': a point whose k nearest lie closer together than a typical point's (the cloud's median distance to the k-th nearest) takes its nearest points out to that distance instead (as many as the density of its k nearest puts within it, at most 32k), so that no neighbourhood is smaller than a typical one. Where a scanner's lines converge (the ceiling above a station) the k nearest lie on one short arc across the lines and the range noise stands the fitted plane on edge; a typical neighbourhood spans several lines. false: always the k nearest (version 4)."
     },
     "orientation": {
       "type": "string",
@@ -175,7 +175,7 @@ StageType NormalsStage() {
       "Meta added: `has_normals`, `normals_k`, `normals_orientation` (the method used), "
       "`normals_implementation`. "
       "Since version 5 (`widen_dense`, default true), a point whose `k` nearest lie closer "
-      "together than a typical point's takes every point within the typical radius instead "
+      "together than a typical point's takes its nearest points out to the typical radius instead "
       "(at most 32k): where a scanner's lines converge, above a station, the k nearest lie on one "
       "short arc and the range noise stood their plane on edge. "
       "Counters: `points`, `flipped` (normals whose sign orientation reversed), with "

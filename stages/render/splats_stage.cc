@@ -88,7 +88,7 @@ constexpr const char* kSchema = R"({
     "widen_dense": {
       "type": "boolean",
       "default": true,
-      "description": "A point whose `surfel_k` nearest lie closer together than a typical point's (the cloud's median distance to the `surfel_k`-th nearest) takes every point within that distance for its plane fit, border test and sample projection instead (at most 32 `surfel_k`), as points.normals does: where a scanner's lines converge (the ceiling above a station) the nearest lie on one arc across the lines, the fitted plane stood on edge and the disks left the scan's render full of gaps there. false: always the nearest (version 8)."
+      "description": "A point whose `surfel_k` nearest lie closer together than a typical point's (the cloud's median distance to the `surfel_k`-th nearest) takes its nearest points out to that distance for its plane fit, border test and sample projection instead (as many as the density of its `surfel_k` nearest puts within it, at most 32 `surfel_k`), as points.normals does: where a scanner's lines converge (the ceiling above a station) the nearest lie on one arc across the lines, the fitted plane stood on edge and the disks left the scan's render full of gaps there. false: always the nearest (version 8)."
     },
     "max_surface_variation": {
       "type": "number",

@@ -52,9 +52,9 @@ constexpr size_t kChunk = size_t{1} << 20;
 
 // PCA normal of each point; fills `graph` (kPropagationNeighbors per point,
 // self excluded) when it is not empty. With `widen_to_m` > 0, a point whose
-// k nearest all lie within that radius takes every point within it instead,
-// at most kWidenedNeighbors times k of them (NormalOptions::widen_dense);
-// returns how many points did.
+// k nearest all lie within that radius takes its nearest points out to it
+// instead (knn.h, WidenNeighborhood; NormalOptions::widen_dense); returns
+// how many points gained neighbours.
 size_t EstimateUnoriented(const KnnIndex& index, int k, double widen_to_m, std::vector<float>& normals,
                           std::vector<uint32_t>& graph, const std::function<void(double)>& progress) {
   const size_t n = index.size();

@@ -78,9 +78,10 @@ struct NormalOptions {
   NormalImplementation implementation = NormalImplementation::kOwn;
   int k = 16;  // points in each PCA neighbourhood, the point included; 3..100
   // kOwn only. A point whose k nearest lie closer together than a typical
-  // point's (the cloud's median distance to the k-th nearest) takes every
-  // point within that median distance instead (at most 32k of them: the nearest), so that
-  // no neighbourhood is smaller than a typical one. Where a scanner's lines
+  // point's (the cloud's median distance to the k-th nearest) takes its
+  // nearest points out to that distance instead: as many as the density of
+  // its k nearest puts within it, at most 32k (knn.h, WidenNeighborhood), so
+  // that no neighbourhood is smaller than a typical one. Where a scanner's lines
   // converge (the ceiling above a station: lines a fraction of a millimetre
   // apart, their points a centimetre apart along them) the k nearest lie on
   // one short arc across the lines, the range noise along the ray is as

@@ -57,9 +57,8 @@ struct SurfelOptions {
   double border_shift = 0.25;  // in r_k, > 0
   bool project = false;        // also compute `on_surface`
   // A point whose k nearest others lie closer than a typical point's (the
-  // cloud's median distance to the k-th other) takes every point within
-  // that distance instead, at most kWidenedNeighbors * k (knn.h,
-  // WidenNeighborhood): where a scanner's lines converge the k nearest lie
+  // cloud's median distance to the k-th other) takes its nearest points out
+  // to that distance instead (knn.h, WidenNeighborhood): where a scanner's lines converge the k nearest lie
   // on one arc and the fitted plane stands on edge. r_k below is then the
   // widened radius. false: always the k nearest.
   bool widen_dense = false;
