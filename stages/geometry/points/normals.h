@@ -81,12 +81,12 @@ struct NormalOptions {
   // point's (the cloud's median distance to the k-th nearest) takes its
   // nearest points out to that distance instead: as many as the density of
   // its k nearest puts within it, at most 32k (knn.h, WidenNeighborhood), so
-  // that no neighbourhood is smaller than a typical one. Where a scanner's lines
-  // converge (the ceiling above a station: lines a fraction of a millimetre
-  // apart, their points a centimetre apart along them) the k nearest lie on
-  // one short arc across the lines, the range noise along the ray is as
-  // large as the arc, and the fitted plane stands on edge; the typical
-  // neighbourhood spans several lines. false: every neighbourhood is the k
+  // that no neighbourhood is smaller than a typical one. Where a scanner's
+  // lines converge (the ceiling above a station: lines a fraction of a
+  // millimetre apart, their points a centimetre apart along them) the k
+  // nearest lie on one short arc across the lines, the range noise along
+  // the ray is as large as the arc, and the fitted plane stands on edge; the
+  // typical neighbourhood spans several lines. false: every neighbourhood is the k
   // nearest (points.normals version 4).
   bool widen_dense = true;
   NormalOrientation orientation = NormalOrientation::kAuto;
@@ -100,7 +100,7 @@ struct NormalReport {
   size_t points = 0;
   size_t flipped = 0;  // normals whose sign orientation reversed
   // widen_dense: the radius neighbourhoods were widened to (0: none), and
-  // the points whose neighbourhood was.
+  // the points that gained neighbours by it.
   double widen_to_m = 0.0;
   size_t widened = 0;
   NormalOrientation orientation_used = NormalOrientation::kNone;  // kAuto resolved

@@ -58,9 +58,10 @@ struct SurfelOptions {
   bool project = false;        // also compute `on_surface`
   // A point whose k nearest others lie closer than a typical point's (the
   // cloud's median distance to the k-th other) takes its nearest points out
-  // to that distance instead (knn.h, WidenNeighborhood): where a scanner's lines converge the k nearest lie
-  // on one arc and the fitted plane stands on edge. r_k below is then the
-  // widened radius. false: always the k nearest.
+  // to that distance instead (knn.h, WidenNeighborhood): where a scanner's
+  // lines converge the k nearest lie on one arc and the fitted plane stands
+  // on edge. r_k below is then the widened radius. false: always the k
+  // nearest.
   bool widen_dense = false;
 };
 
@@ -71,7 +72,7 @@ struct Surfels {
   std::vector<float> on_surface;  // with `project`: 3 per point, the cloud's frame; else empty
   size_t border_points = 0;
   double widen_to_m = 0;  // with widen_dense: the typical radius
-  size_t widened = 0;     // points whose neighbourhood was widened
+  size_t widened = 0;     // points that gained neighbours by widening
 };
 
 // Status::Invalid if an option is out of range, the cloud has at most k
