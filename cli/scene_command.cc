@@ -87,7 +87,8 @@ bool ParseVector(const std::string& text, std::array<double, 3>* out) {
 
 std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
                       const std::string& scan_path, const std::string& units, double unit_m,
-                      const ScanReadResult& read, const SceneSurvey& survey) {
+                      const ScanReadResult& read, const SceneSurvey& survey,
+                      const std::string& station_text) {
   const std::array<double, 3> extent = survey.robust_bounds.extent_m();
   std::string y;
   y += "# Written by `pointbake scene` from " + scan_path + " (" + read.format + "):\n";
@@ -104,6 +105,10 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
     y += "# The points enclose " + Number(std::round(survey.enclosed_volume_m3)) +
          " m3 of free space (0.75 m or more from them): an interior,\n"
          "# viewed from inside; points.normals (interior: auto) faces its normals in.\n";
+  if (survey.stations == 0 && !(survey.enclosed_volume_m3 > 0))
+    y += "# No scanner station: nothing says which side of an open surface was scanned. If\n"
+         "# this is one scan exported without its position, give --station x,y,z (where the\n"
+         "# scanner stood); render.frames warns when the views see faces from behind.\n";
   y += "# The parameters follow the shipped scenes' proportions and the viewpoints are a\n";
   y += "# guess (stages/geometry/points/scene_survey.h): check them by drawing the scan,\n";
   y += "#   pointbake run configs/workflows/point_transfer.yaml --scene THIS_FILE --until "
@@ -119,7 +124,10 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
   y += "truth: false  # a real scan: the workflows are compared with the scan itself\n";
   y += "source:\n";
   y += "  uses: io.read_points\n";
-  y += "  with: { path: " + Quoted(scan_in_file) + " }\n";
+  y += "  with: { path: " + Quoted(scan_in_file) +
+       (station_text.empty() ? std::string() : ", station: [" + station_text + "]") + " }\n";
+  if (!station_text.empty())
+    y += "  # station: where the scanner stood, as --station declared it (file coordinates and units)\n";
   y += "viewpoints:  # in " + units + ", like the scan\n";
   for (const SurveyViewpoint& view : survey.viewpoints) {
     y += "  # " + view.why + "\n";
@@ -144,7 +152,7 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
 
 int RunScene(const std::vector<std::string>& args) {
   CLI::App app{kDescription, "pointbake scene"};
-  std::string scan_path, out_path, units = "m", up_text = "0,0,1", name, format = "auto";
+  std::string scan_path, out_path, units = "m", up_text = "0,0,1", name, format = "auto", station_text;
   bool force = false;
   app.add_option("SCAN", scan_path, "The scan file (PLY, PCD, XYZ/TXT/CSV/PTS, PTX, E57, LAS, LAZ)")
       ->required();
@@ -160,6 +168,11 @@ int RunScene(const std::vector<std::string>& args) {
   app.add_option("--name", name, "The scene's name (default: the scan file's stem)");
   app.add_option("--format", format, "The scan's format, as io.read_points' `format`")
       ->capture_default_str();
+  app.add_option("--station", station_text,
+                 "Where the scanner stood, x,y,z in the scan's coordinates and units: a scan from one "
+                 "station exported without it (PLY, XYZ, PTS, LAS). It says which side was scanned: "
+                 "the views look from it, and the scene declares it to io.read_points (`station`), "
+                 "which orients the normals toward it");
   app.add_flag("--force", force, "Replace an existing -o file");
   if (const std::optional<int> exit = ParseCommandArgs(app, args)) return *exit;
 
@@ -170,6 +183,9 @@ int RunScene(const std::vector<std::string>& args) {
   SceneSurveyOptions options;
   if (!ParseVector(up_text, &options.up))
     return fail("--up " + up_text + ": expected three numbers x,y,z");
+  std::array<double, 3> station{};
+  if (!station_text.empty() && !ParseVector(station_text, &station))
+    return fail("--station " + station_text + ": expected three numbers x,y,z");
   Env* env = Env::Default();
   if (!out_path.empty() && !force && env->Exists(out_path))
     return fail(out_path + " exists; give --force to replace it, or another -o");
@@ -180,10 +196,20 @@ int RunScene(const std::vector<std::string>& args) {
   std::fprintf(stderr, "pointbake scene: reading %s\n", scan_path.c_str());
   ScanReadOptions read_options;
   read_options.drop_invalid_points = true;
+  // A declared station replaces whatever the file's grid would show, as in
+  // io.read_points.
+  read_options.infer_stations = station_text.empty();
   Expected<ScanReadResult> read = ReadScan(scan_path, format, read_options);
   if (!read.ok()) return fail(read.status().message());
   for (const std::string& warning : read->warnings)
     std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  if (!station_text.empty()) {
+    if (read->points.has_stations())
+      std::fprintf(stderr, "warning: the file's %zu station(s) replaced by --station\n",
+                   read->points.stations.size());
+    read->points.stations = {station};
+    read->points.station_ids.assign(read->points.size(), 0);
+  }
   const double unit_m = *MetersPerUnit(units);
   ConvertToMeters(unit_m, &read->points);
   std::fprintf(stderr, "pointbake scene: surveying %s points\n",
@@ -192,6 +218,11 @@ int RunScene(const std::vector<std::string>& args) {
   if (!survey.ok()) return fail(scan_path + ": " + survey.status().message());
   for (const std::string& warning : survey->warnings)
     std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  if (survey->stations == 0 && !(survey->enclosed_volume_m3 > 0))
+    std::fprintf(stderr,
+                 "note: no scanner station: if this is one scan exported without its position, give "
+                 "--station x,y,z (where the scanner stood, in the file's coordinates and units), so "
+                 "that the normals and the views face the side it scanned\n");
   if (units == "m" && survey->spacing_m > 0.2)
     std::fprintf(stderr,
                  "warning: the median spacing is %s, more than a scanner leaves: if the file is in "
@@ -203,7 +234,10 @@ int RunScene(const std::vector<std::string>& args) {
     const fs::path folder = fs::absolute(out_path).parent_path();
     scan_in_file = fs::absolute(scan_path).lexically_normal().lexically_relative(folder).string();
   }
-  const std::string yaml = SceneYaml(name, scan_in_file, scan_path, units, unit_m, *read, *survey);
+  const std::string yaml = SceneYaml(name, scan_in_file, scan_path, units, unit_m, *read, *survey,
+                                     station_text.empty() ? std::string()
+                                                          : Number(station[0]) + ", " + Number(station[1]) +
+                                                                ", " + Number(station[2]));
   if (out_path.empty()) {
     std::fputs(yaml.c_str(), stdout);
     return 0;

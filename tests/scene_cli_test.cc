@@ -56,6 +56,35 @@ TEST_F(SceneCli, WritesASceneTheWorkflowsLoad) {
   }
 }
 
+// A scan from one station exported without it: without --station the
+// scene says so and how to give it; with it, the views look from the
+// station and the scene declares it to io.read_points, which the workflows
+// read (a real run of the read, not only a dry run).
+TEST_F(SceneCli, AStationTheFileLost) {
+  const std::string scan = WriteSphereMm();
+  const RunResult lost = pbtest::Run({"scene", scan, "-o", P("lost.yaml"), "--units", "mm"});
+  ASSERT_EQ(lost.exit_code, 0) << lost.Describe();
+  EXPECT_NE(lost.err.find("note: no scanner station"), std::string::npos) << lost.err;
+  EXPECT_NE(ReadFile(P("lost.yaml")).find("# No scanner station: nothing says which side"), std::string::npos);
+  const RunResult r =
+      pbtest::Run({"scene", scan, "-o", P("station.yaml"), "--units", "mm", "--station", "2500,2000,300.5"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_EQ(r.err.find("note: no scanner station"), std::string::npos) << r.err;
+  const std::string yaml = ReadFile(P("station.yaml"));
+  EXPECT_NE(yaml.find("1 scanner station"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("station: [2500, 2000, 300.5] }"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("name: station1, eye: [2500, 2000"), std::string::npos) << yaml;
+  const RunResult read = pbtest::Run({"run", SourceDir() + "/configs/workflows/point_transfer.yaml", "--scene",
+                                      P("station.yaml"), "--until", "scan", "--cache", P("cache"), "--out",
+                                      P("out")});
+  ASSERT_EQ(read.exit_code, 0) << read.Describe();
+  // In meters in the cloud, like its points.
+  EXPECT_NE(ReadFile(P("out/scan.points.ply")).find("comment station 0 2.5 2 0.3004999"), std::string::npos);
+  const RunResult bad = pbtest::Run({"scene", scan, "--station", "1,2"});
+  EXPECT_EQ(bad.exit_code, 2);
+  EXPECT_NE(bad.err.find("--station 1,2: expected three numbers x,y,z"), std::string::npos) << bad.err;
+}
+
 TEST_F(SceneCli, KeepsAnExistingFileUnlessForced) {
   const std::string scan = WriteSphereMm();
   WriteFile(P("mine.yaml"), "name: mine\n");

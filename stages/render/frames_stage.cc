@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <set>
 #include <string>
@@ -24,6 +25,10 @@
 
 namespace pb {
 namespace {
+
+// Over this share of faces seen from behind, a warning (tools/check_real_campaign.py
+// holds the shipped workflows to the same bound).
+constexpr double kMaxBackShare = 0.1;
 
 constexpr const char* kId = "render.frames";
 
@@ -227,6 +232,19 @@ Status Run(StageContext& ctx) {
   ctx.counter("triangles", scene ? 0.0 : double(mesh.face_count()));
   ctx.counter("pixels", pixels);
   if (has_mesh) ctx.counter("back_share", back_share);
+  if (has_mesh && back_share > kMaxBackShare) {
+    char share[32];
+    std::snprintf(share, sizeof share, "%.1f", 100.0 * back_share);
+    ctx.warning(std::string(kId) + ": " + share +
+                " % of what the frames show are faces seen from behind (over 10 %): a headset, culling "
+                "back faces, shows what lies behind them. Either the model is turned inside out, or "
+                "the viewpoints look at the scan from a side the scanner never saw. A scan without its "
+                "scanner stations cannot say which side was scanned, and an open scene scanned from "
+                "one station (neither a room nor an object) is oriented only by propagation: declare "
+                "where the scanner stood (io.read_points `station`), keep the file's own normals, or "
+                "move the viewpoints to the scanned side (docs/real-scans.md, \"Faces seen from "
+                "behind\")");
+  }
   ctx.progress(1.0);
   return Status::Ok();
 }
@@ -236,7 +254,9 @@ Status Run(StageContext& ctx) {
 StageType FramesStage() {
   StageType type;
   type.id = kId;
-  type.version = 2;  // 2: meta render.back_share and counter back_share (frames unchanged)
+  // 2: meta render.back_share and counter back_share (frames unchanged);
+  // 3: a warning when back_share is over kMaxBackShare (frames unchanged).
+  type.version = 3;
   type.summary = "Deterministic reference renders of a mesh or the ground truth from the scene's viewpoints";
   type.doc =
       "Draws `mesh` (with its color map `color` and tangent-space normal map `normal` when given; "
@@ -260,7 +280,8 @@ StageType FramesStage() {
       "`pixels` (over all frames), `back_share` (a mesh only: of the samples that hit it, the "
       "share that sees a face's back; drawn here, but a headset, culling back faces as glTF's "
       "single-sided materials make it, shows what lies behind there; also meta "
-      "`render.back_share`). Phases: `io`, `compute`.";
+      "`render.back_share`; over 0.1, version 3, a warning says what it means and what to do). "
+      "Phases: `io`, `compute`.";
   type.params_schema = WithViewpointsSchema(kSchema);
   type.inputs = {
       {"mesh", "mesh", "The mesh to draw (mesh.ply; uvs and tangents for the maps).", true},

@@ -94,6 +94,13 @@ TEST_F(RenderStagesTest, SaysHowMuchOfWhatItShowsIsAFacesBack) {
     ASSERT_TRUE(Run("render.frames", ctx).ok());
     EXPECT_EQ(ctx.counters_["back_share"], flipped ? 1.0 : 0.0);
     EXPECT_EQ(ctx.meta_["frames"]["render"]["back_share"], flipped ? 1.0 : 0.0);
+    // Over 10 %, a warning says what it means and what to do.
+    ASSERT_EQ(ctx.warnings_.size(), flipped ? 1u : 0u);
+    if (flipped) {
+      EXPECT_NE(ctx.warnings_[0].find("100.0 % of what the frames show are faces seen from behind"), std::string::npos)
+          << ctx.warnings_[0];
+      EXPECT_NE(ctx.warnings_[0].find("io.read_points `station`"), std::string::npos) << ctx.warnings_[0];
+    }
   }
 }
 
