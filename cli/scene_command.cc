@@ -234,10 +234,16 @@ int RunScene(const std::vector<std::string>& args) {
     const fs::path folder = fs::absolute(out_path).parent_path();
     scan_in_file = fs::absolute(scan_path).lexically_normal().lexically_relative(folder).string();
   }
-  const std::string yaml = SceneYaml(name, scan_in_file, scan_path, units, unit_m, *read, *survey,
-                                     station_text.empty() ? std::string()
-                                                          : Number(station[0]) + ", " + Number(station[1]) +
-                                                                ", " + Number(station[2]));
+  // The station as given, to 15 digits: a georeferenced position in
+  // millimetres has 10 or more before the point.
+  std::string station_yaml;
+  if (!station_text.empty()) {
+    char buf[128];
+    std::snprintf(buf, sizeof buf, "%.15g, %.15g, %.15g", station[0], station[1], station[2]);
+    station_yaml = buf;
+  }
+  const std::string yaml =
+      SceneYaml(name, scan_in_file, scan_path, units, unit_m, *read, *survey, station_yaml);
   if (out_path.empty()) {
     std::fputs(yaml.c_str(), stdout);
     return 0;
