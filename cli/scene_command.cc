@@ -203,13 +203,9 @@ int RunScene(const std::vector<std::string>& args) {
   if (!read.ok()) return fail(read.status().message());
   for (const std::string& warning : read->warnings)
     std::fprintf(stderr, "warning: %s\n", warning.c_str());
-  if (!station_text.empty()) {
-    if (read->points.has_stations())
-      std::fprintf(stderr, "warning: the file's %zu station(s) replaced by --station\n",
-                   read->points.stations.size());
-    read->points.stations = {station};
-    read->points.station_ids.assign(read->points.size(), 0);
-  }
+  if (!station_text.empty())
+    for (const std::string& warning : DeclareStation(station, &read->points))
+      std::fprintf(stderr, "warning: %s\n", warning.c_str());
   const double unit_m = *MetersPerUnit(units);
   ConvertToMeters(unit_m, &read->points);
   std::fprintf(stderr, "pointbake scene: surveying %s points\n",

@@ -236,8 +236,9 @@ const char* kCoverageKey =
     "outline (a scan sample the model leaves as background); orange, a deeper open hole; yellow, a "
     "hole the model encloses; magenta, the model's surface in front of the scan's (invented); cyan, "
     "behind it; blue, the model where the scan shows nothing; dark gray, only the scan's splat disks; "
-    "black, neither. In the thumbnails each pixel shows the most telling colour of the pixels it "
-    "stands for, in that order, so single hole pixels stay visible.";
+    "black, neither. In the thumbnails a pixel whose pixels hold a hole, or surface in front or "
+    "behind, shows the most telling of them, in that order, so single hole pixels stay visible; any "
+    "other shows what most of its pixels are.";
 
 bool AnyCoverage(const std::vector<SceneImages>& images) {
   for (const SceneImages& s : images)

@@ -201,33 +201,7 @@ std::string ApplyStation(const StationChoice& choice, const std::string& path, S
     case StationChoice::Kind::kDeclared:
       break;
   }
-  if (points->has_stations()) {
-    ctx.warning(path + ": the file's " + std::to_string(points->stations.size()) +
-                " station(s) replaced by the declared `station`");
-  }
-  points->stations = {choice.position};
-  points->station_ids.assign(points->size(), 0);
-  if (!points->empty()) {
-    // The scanner stands among what it scanned: farther from the scan's
-    // bounding box than its diagonal is a frame or unit mistake, most likely.
-    const Bounds bounds = AbsoluteBounds(*points);
-    double outside = 0, diagonal = 0;
-    for (int axis = 0; axis < 3; ++axis) {
-      const double c = choice.position[axis];
-      const double gap = std::max({bounds.min_m[axis] - c, c - bounds.max_m[axis], 0.0});
-      outside += gap * gap;
-      const double extent = bounds.max_m[axis] - bounds.min_m[axis];
-      diagonal += extent * extent;
-    }
-    if (std::sqrt(outside) > std::sqrt(diagonal)) {
-      char text[200];
-      std::snprintf(text, sizeof text,
-                    ": the declared station lies %.3g from the scan's bounding box, farther than "
-                    "its diagonal (%.3g, file units): another frame or unit?",
-                    std::sqrt(outside), std::sqrt(diagonal));
-      ctx.warning(path + text);
-    }
-  }
+  for (const std::string& warning : DeclareStation(choice.position, points)) ctx.warning(path + ": " + warning);
   return "declared";
 }
 

@@ -1,5 +1,9 @@
 #include "stages/geometry/io/scan_read.h"
 
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
 #include "stages/geometry/core/text_parse.h"
 #include "stages/geometry/io/e57.h"
 #include "stages/geometry/io/las.h"
@@ -82,6 +86,37 @@ Expected<ScanReadResult> ReadScan(const std::string& path, std::string_view form
                                   const ScanReadOptions& options) {
   PB_ASSIGN_OR_RETURN(const ScanFormat* chosen, FindScanFormat(path, format));
   return chosen->read(path, options);
+}
+
+std::vector<std::string> DeclareStation(const std::array<double, 3>& position, PointCloud* points) {
+  std::vector<std::string> warnings;
+  if (points->has_stations())
+    warnings.push_back("the file's " + std::to_string(points->stations.size()) +
+                       " station(s) replaced by the declared `station`");
+  points->stations = {position};
+  points->station_ids.assign(points->size(), 0);
+  if (!points->empty()) {
+    // The scanner stands among what it scanned: farther from the scan's
+    // bounding box than its diagonal is a frame or unit mistake, most likely.
+    const Bounds bounds = AbsoluteBounds(*points);
+    double outside = 0, diagonal = 0;
+    for (int axis = 0; axis < 3; ++axis) {
+      const double c = position[axis];
+      const double gap = std::max({bounds.min_m[axis] - c, c - bounds.max_m[axis], 0.0});
+      outside += gap * gap;
+      const double extent = bounds.max_m[axis] - bounds.min_m[axis];
+      diagonal += extent * extent;
+    }
+    if (std::sqrt(outside) > std::sqrt(diagonal)) {
+      char text[200];
+      std::snprintf(text, sizeof text,
+                    "the declared station lies %.3g from the scan's bounding box, farther than its "
+                    "diagonal (%.3g, file units): another frame or unit?",
+                    std::sqrt(outside), std::sqrt(diagonal));
+      warnings.emplace_back(text);
+    }
+  }
+  return warnings;
 }
 
 }  // namespace pb

@@ -6,6 +6,7 @@
 // extension, for io.read_points and its parameter schema.
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <span>
@@ -69,6 +70,15 @@ std::string SupportedScanFormats();
 // `path`'s (case-insensitive). Status::Unsupported naming the file, the
 // unknown name or extension, and the supported formats otherwise.
 Expected<const ScanFormat*> FindScanFormat(const std::string& path, std::string_view name);
+
+// Declares one scanner station at `position` (the points' own coordinates
+// and units, as read) for every point of `points`, replacing the file's (a
+// one-station scan exported without its pose). Returns what to warn of,
+// without the file's name: that the file's stations were replaced, and that
+// the position lies farther from the scan's bounding box than its diagonal
+// (another frame or unit, most likely). io.read_points `station` and
+// `pointbake scene --station` both declare through it.
+std::vector<std::string> DeclareStation(const std::array<double, 3>& position, PointCloud* points);
 
 // Reads `path` with FindScanFormat(path, format)'s reader.
 Expected<ScanReadResult> ReadScan(const std::string& path, std::string_view format,
