@@ -11,6 +11,7 @@
 #include "cli/command_args.h"
 #include "engine/workflow.h"
 #include "stages/geometry/io/scan_read.h"
+#include "stages/geometry/points/lost_station.h"
 #include "stages/geometry/points/scene_survey.h"
 
 namespace pb {
@@ -54,6 +55,27 @@ std::string Length(double meters) {
   return buf;
 }
 
+// `text` as comment lines of at most `width` characters, each starting with
+// `prefix` except the first (which continues a line already begun), words kept
+// whole.
+std::string WrapComment(const std::string& text, const std::string& prefix, size_t width) {
+  std::string out, line;
+  size_t begun = prefix.size() + 30;  // the first line continues one
+  for (size_t start = 0; start < text.size();) {
+    size_t end = text.find(' ', start);
+    if (end == std::string::npos) end = text.size();
+    const std::string word = text.substr(start, end - start);
+    if (!line.empty() && begun + line.size() + 1 + word.size() > width) {
+      out += line + "\n" + prefix;
+      line.clear();
+      begun = prefix.size();
+    }
+    line += (line.empty() ? "" : " ") + word;
+    start = end + 1;
+  }
+  return out + line + "\n";
+}
+
 // A YAML double-quoted scalar: file names may hold quotes or backslashes.
 std::string Quoted(const std::string& text) {
   std::string out = "\"";
@@ -88,7 +110,7 @@ bool ParseVector(const std::string& text, std::array<double, 3>* out) {
 std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
                       const std::string& scan_path, const std::string& units, double unit_m,
                       const ScanReadResult& read, const SceneSurvey& survey,
-                      const std::string& station_text) {
+                      const std::string& station_text, const std::string& station_found) {
   const std::array<double, 3> extent = survey.robust_bounds.extent_m();
   std::string y;
   y += "# Written by `pointbake scene` from " + scan_path + " (" + read.format + "):\n";
@@ -97,8 +119,9 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
     y += " (and " + WithThousands(read.no_return_points) + " grid cells without a return)";
   if (read.dropped_points > 0)
     y += " (" + WithThousands(read.dropped_points) + " with NaN or infinite coordinates, dropped)";
-  y += ", " + std::to_string(survey.stations) + " scanner station" +
-       (survey.stations == 1 ? "" : "s") + ", median spacing " + Length(survey.spacing_m) + ",\n";
+  y += ", " + std::to_string(survey.stations) + " scanner station" + (survey.stations == 1 ? "" : "s") +
+       (station_found.empty() ? "" : " (not in the file: found in the points)") + ", median spacing " +
+       Length(survey.spacing_m) + ",\n";
   y += "# robust extent " + Length(extent[0]) + " x " + Length(extent[1]) + " x " +
        Length(extent[2]) + " (1st to 99th percentile per axis).\n";
   if (survey.enclosed_volume_m3 > 0)
@@ -126,7 +149,12 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
   y += "  uses: io.read_points\n";
   y += "  with: { path: " + Quoted(scan_in_file) +
        (station_text.empty() ? std::string() : ", station: [" + station_text + "]") + " }\n";
-  if (!station_text.empty())
+  if (!station_found.empty())
+    y += "  # station: not in the file. Where the scanner stood, as pointbake scene found it in the\n"
+         "  # points (stages/geometry/points/lost_station.h; file coordinates and units). Check it,\n"
+         "  # edit it if you know better. Its figures: " +
+         WrapComment(station_found + ".", "  # ", 88);
+  else if (!station_text.empty())
     y += "  # station: where the scanner stood, as --station declared it (file coordinates and units)\n";
   y += "viewpoints:  # in " + units + ", like the scan\n";
   for (const SurveyViewpoint& view : survey.viewpoints) {
@@ -153,7 +181,7 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
 int RunScene(const std::vector<std::string>& args) {
   CLI::App app{kDescription, "pointbake scene"};
   std::string scan_path, out_path, units = "m", up_text = "0,0,1", name, format = "auto", station_text;
-  bool force = false;
+  bool force = false, no_find_station = false;
   app.add_option("SCAN", scan_path, "The scan file (PLY, PCD, XYZ/TXT/CSV/PTS, PTX, E57, LAS, LAZ)")
       ->required();
   app.add_option("-o,--out", out_path,
@@ -173,6 +201,10 @@ int RunScene(const std::vector<std::string>& args) {
                  "station exported without it (PLY, XYZ, PTS, LAS). It says which side was scanned: "
                  "the views look from it, and the scene declares it to io.read_points (`station`), "
                  "which orients the normals toward it");
+  app.add_flag("--no-find-station", no_find_station,
+               "Do not look in the points for where the scanner stood when the file has no station "
+               "and the points enclose no room (by default the place found, if any, is declared as "
+               "the scan's station)");
   app.add_flag("--force", force, "Replace an existing -o file");
   if (const std::optional<int> exit = ParseCommandArgs(app, args)) return *exit;
 
@@ -214,11 +246,42 @@ int RunScene(const std::vector<std::string>& args) {
   if (!survey.ok()) return fail(scan_path + ": " + survey.status().message());
   for (const std::string& warning : survey->warnings)
     std::fprintf(stderr, "warning: %s\n", warning.c_str());
+  // No station and no room around the points: one scan exported without its
+  // position, perhaps. Its points tell where it stood (lost_station.h); the
+  // scene declares that place as the file's station, as --station would.
+  std::string station_found, station_sought;
+  if (station_text.empty() && !no_find_station && survey->stations == 0 && !(survey->enclosed_volume_m3 > 0)) {
+    std::fprintf(stderr, "pointbake scene: looking in the points for where the scanner stood\n");
+    LostStationOptions lost_options;
+    lost_options.up = options.up;
+    Expected<LostStation> lost = FindLostStation(read->points, lost_options);
+    if (!lost.ok()) return fail(scan_path + ": " + lost.status().message());
+    if (lost->found) {
+      std::array<double, 3> at;  // to a millimetre: the search is good to about a decimetre
+      for (int a = 0; a < 3; ++a) at[a] = std::round(lost->position[a] * 1000) / 1000;
+      for (const std::string& warning : DeclareStation(at, &read->points))
+        std::fprintf(stderr, "warning: %s\n", warning.c_str());
+      survey = SurveyScene(read->points, options);
+      if (!survey.ok()) return fail(scan_path + ": " + survey.status().message());
+      station_text = Vector(at, unit_m);
+      station_text = station_text.substr(1, station_text.size() - 2);
+      station_found = lost->figures;
+      std::fprintf(stderr,
+                   "note: no scanner station in the file, but %s: the scanner stood at %s (the file's "
+                   "coordinates and units; %s). The scene declares it as the scan's station, so that the "
+                   "normals and the views face the side it scanned. Check it: give --station x,y,z if "
+                   "you know better, or --no-find-station\n",
+                   lost->verdict.c_str(), station_text.c_str(), lost->figures.c_str());
+    } else {
+      station_sought = lost->verdict + " (" + lost->figures + ")";
+    }
+  }
   if (survey->stations == 0 && !(survey->enclosed_volume_m3 > 0))
     std::fprintf(stderr,
-                 "note: no scanner station: if this is one scan exported without its position, give "
+                 "note: no scanner station%s: if this is one scan exported without its position, give "
                  "--station x,y,z (where the scanner stood, in the file's coordinates and units), so "
-                 "that the normals and the views face the side it scanned\n");
+                 "that the normals and the views face the side it scanned\n",
+                 station_sought.empty() ? "" : (" (" + station_sought + ")").c_str());
   if (units == "m" && survey->spacing_m > 0.2)
     std::fprintf(stderr,
                  "warning: the median spacing is %s, more than a scanner leaves: if the file is in "
@@ -232,14 +295,14 @@ int RunScene(const std::vector<std::string>& args) {
   }
   // The station as given, to 15 digits: a georeferenced position in
   // millimetres has 10 or more before the point.
-  std::string station_yaml;
-  if (!station_text.empty()) {
+  std::string station_yaml = station_text;
+  if (station_found.empty() && !station_text.empty()) {
     char buf[128];
     std::snprintf(buf, sizeof buf, "%.15g, %.15g, %.15g", station[0], station[1], station[2]);
     station_yaml = buf;
   }
   const std::string yaml =
-      SceneYaml(name, scan_in_file, scan_path, units, unit_m, *read, *survey, station_yaml);
+      SceneYaml(name, scan_in_file, scan_path, units, unit_m, *read, *survey, station_yaml, station_found);
   if (out_path.empty()) {
     std::fputs(yaml.c_str(), stdout);
     return 0;

@@ -1,11 +1,14 @@
 // End-to-end tests of `pointbake scene`: the real binary on scan files.
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
 #include <string>
 
+#include "stages/geometry/synth/scanner.h"
+#include "stages/geometry/synth/scene.h"
 #include "tests/cli_test_util.h"
 
 namespace pbtest {
@@ -83,6 +86,63 @@ TEST_F(SceneCli, AStationTheFileLost) {
   const RunResult bad = pbtest::Run({"scene", scan, "--station", "1,2"});
   EXPECT_EQ(bad.exit_code, 2);
   EXPECT_NE(bad.err.find("--station 1,2: expected three numbers x,y,z"), std::string::npos) << bad.err;
+}
+
+// One scan exported without its station (a PLY of x, y, z in millimetres,
+// georeferenced): the synthetic facade scanned from one station. The scene
+// command finds where it stood (lost_station.h), says so, and declares it;
+// --no-find-station leaves it out. Three stations' scans merged get none.
+TEST_F(SceneCli, FindsWhereOneScanWasTaken) {
+  auto write_facade = [&](int stations, const std::string& name, std::array<double, 3>* station) {
+    pb::Expected<pb::SynthScene> scene = pb::MakeSynthScene("facade", 1);
+    EXPECT_TRUE(scene.ok()) << scene.status().message();
+    pb::SynthScanOptions options;
+    options.target_points = 40000 * uint64_t(stations);
+    options.stations = stations;
+    pb::Expected<pb::SynthScanResult> scan = pb::SimulateScan(*scene, options);
+    EXPECT_TRUE(scan.ok()) << scan.status().message();
+    const std::array<double, 3> offset = {512345000, 5401234000, 210000};  // mm
+    for (int a = 0; a < 3; ++a) (*station)[a] = scan->cloud.stations[0][a] * 1000 + offset[a];
+    const size_t n = scan->cloud.size();
+    std::string ply = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n) +
+                      "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
+    char line[128];
+    for (size_t i = 0; i < n; ++i) {
+      const float* p = &scan->cloud.positions[3 * i];
+      std::snprintf(line, sizeof line, "%.1f %.1f %.1f\n", p[0] * 1000.0 + offset[0], p[1] * 1000.0 + offset[1],
+                    p[2] * 1000.0 + offset[2]);
+      ply += line;
+    }
+    WriteFile(P(name), ply);
+    return P(name);
+  };
+  std::array<double, 3> station{};
+  const std::string one = write_facade(1, "one_scan_mm.ply", &station);
+  const RunResult r = pbtest::Run({"scene", one, "-o", P("one.yaml"), "--units", "mm"});
+  ASSERT_EQ(r.exit_code, 0) << r.Describe();
+  EXPECT_NE(r.err.find("note: no scanner station in the file, but the points are one scan's"), std::string::npos)
+      << r.err;
+  const std::string yaml = ReadFile(P("one.yaml"));
+  EXPECT_NE(yaml.find("1 scanner station (not in the file: found in the points)"), std::string::npos) << yaml;
+  EXPECT_NE(yaml.find("# station: not in the file."), std::string::npos) << yaml;
+  const size_t at = yaml.find("station: [");
+  ASSERT_NE(at, std::string::npos) << yaml;
+  std::array<double, 3> found{};
+  ASSERT_EQ(std::sscanf(yaml.c_str() + at, "station: [%lf, %lf, %lf]", &found[0], &found[1], &found[2]), 3);
+  EXPECT_LT(std::hypot(found[0] - station[0], found[1] - station[1], found[2] - station[2]), 300.0) << yaml;
+  EXPECT_NE(yaml.find("name: station1"), std::string::npos) << yaml;
+
+  const RunResult kept = pbtest::Run({"scene", one, "-o", P("kept.yaml"), "--units", "mm", "--no-find-station"});
+  ASSERT_EQ(kept.exit_code, 0) << kept.Describe();
+  EXPECT_NE(kept.err.find("note: no scanner station: if this is one scan"), std::string::npos) << kept.err;
+  EXPECT_EQ(ReadFile(P("kept.yaml")).find("station: ["), std::string::npos);
+
+  const std::string merged = write_facade(3, "merged_mm.ply", &station);
+  const RunResult none = pbtest::Run({"scene", merged, "-o", P("merged.yaml"), "--units", "mm"});
+  ASSERT_EQ(none.exit_code, 0) << none.Describe();
+  EXPECT_NE(none.err.find("note: no scanner station (the sampling is not one scanner's"), std::string::npos)
+      << none.err;
+  EXPECT_EQ(ReadFile(P("merged.yaml")).find("station: ["), std::string::npos);
 }
 
 TEST_F(SceneCli, KeepsAnExistingFileUnlessForced) {

@@ -1,0 +1,96 @@
+// A lost station: where the scanner stood, found in the points of one scan
+// exported without its position (a PLY, XYZ or LAS of x, y, z and colour).
+// Without it nothing says which side of an open surface was scanned: the
+// normals' sides come out half wrong (the pump as such a file: 50.4 % face
+// the scanner, 57 % of every view a face's back; docs/real-scans.md).
+//
+// One terrestrial scan has two properties no other cloud has, and the search
+// asks for both:
+//   * Its sampling follows from one place. A scanner sends a ray every
+//     angular step in azimuth and in elevation, so a surface r away, at
+//     incidence i, at elevation e (whose azimuth steps close up toward the
+//     zenith), is sampled every  step * r * sqrt(cos e / cos i). The misfit
+//     of a place is the median absolute deviation, over `sample` points
+//     spread over the cloud, of  log(spacing) - log(r) + log(cos i) / 2 -
+//     log(cos e) / 2  (spacing: LocalSpacing's at k = 16; i from the
+//     points' unoriented PCA normals; e against `up`): about 0.03 for the
+//     synthetic stations, 0.05 for the pump, 0.10-0.23 for clouds merged
+//     from several stations, fused from a camera's trajectory or resampled.
+//   * From there every point is seen, with nothing in front of it (the
+//     scanner recorded the first surface along each ray). A line of sight
+//     is walked over an occupancy grid of the points (at most `grid_side`
+//     voxels along the box's longest side, none finer than the median
+//     spacing) from the place to short of its point by max(3 voxels, 10 % of
+//     the distance), as a grazing ray meets the voxels of its own floor only
+//     that close to it. Below a floor the sampling fits as well as above
+//     it, but the floor blocks every line of sight. Edges cost a few per
+//     cent even at the right place (a ray passing a voxel of the pump's
+//     pipes: 5 % at its station), so the bound is loose.
+// The search: a lattice of `lattice`^3 places over the points' robust box
+// padded by half its longest side each way (none in or beside an occupied
+// voxel: no place to stand); of those whose lines of sight (512 of them) are
+// blocked at most `max_blocked`, the best few by misfit start a pattern
+// search on the misfit through places still blocked at most that, halving
+// its step down to a voxel.
+//
+// The place is declared only when all of these hold (else `found` is false
+// and `verdict` says which failed):
+//   * its misfit is at most `max_misfit`;
+//   * it is unique: every lattice place within 1.25x of its misfit lies
+//     within `max_spread` of the extent from it;
+//   * it stands in free space: its nearest point at least `min_clearance_m`
+//     away (a scanner records nothing within its minimum range). The inside
+//     of a closed object also sees every point unblocked;
+//   * the spacing grows with the distance from it: the exponent fitted to
+//     log(spacing) against log(r) is at least `min_spacing_exponent` (a
+//     resampled or fused cloud fits a far place with a flat sampling).
+// Measured (docs/real-scans.md, "A lost station"): each synthetic station's
+// scan alone found within 0.03-0.18 m of its station; the pump within 0.15 m
+// (E57 read without its pose, and as a millimetre PLY); nothing found for
+// the merged synthetic room, sculpture or facade, the bunny's two clouds,
+// the statue stand-in, the Kinect office or the living-room fusion.
+// Cost: a k-NN index of the points (knn.h), a byte per voxel, and about
+// lattice^3 * 512 + a few hundred * `sample` lines of sight; 1-2 s for
+// 155,000 points on 2 cores.
+#pragma once
+
+#include <array>
+#include <cstddef>
+#include <string>
+
+#include "base/status.h"
+#include "stages/geometry/core/point_cloud.h"
+
+namespace pb {
+
+struct LostStationOptions {
+  std::array<double, 3> up = {0.0, 0.0, 1.0};  // the scanner's axis (need not be unit length)
+  size_t sample = 4096;       // points whose lines of sight are walked
+  int grid_side = 200;        // voxels along the padded box's longest side, at most
+  int lattice = 16;           // places per side of the first search
+  double max_blocked = 0.15;  // share of lines of sight that may cross surface
+  double max_misfit = 0.065;   // of the sampling against one scanner's
+  double max_spread = 0.15;   // of the box's longest side: places nearly as good
+  double min_clearance_m = 0.3;
+  double min_explained = 0.7;
+};
+
+struct LostStation {
+  bool found = false;
+  std::array<double, 3> position{};  // absolute (the cloud's origin added), the cloud's units
+  double misfit = 0.0;               // of the sampling against one scanner's there
+  double blocked_share = 1.0;        // of the lines of sight from it that cross surface
+  double spread = 0.0;               // farthest nearly-as-good place, over the box's longest side
+  double clearance_m = 0.0;          // to its nearest point
+  double explained = 0.0;            // 1 - misfit / the spacing's own variation
+  std::string verdict;   // what was found, or why nothing was: "the sampling is not one scanner's"
+  std::string figures;   // the figures it rests on, for a log or a comment
+};
+
+// Searches `cloud` (meters; positions relative to its origin) for the one
+// place a single scan would have been taken from. Status::Invalid when it
+// has fewer than 100 points, a non-finite coordinate or an option out of
+// range; a cloud that is not one station's gives found = false, not an error.
+Expected<LostStation> FindLostStation(const PointCloud& cloud, const LostStationOptions& options = {});
+
+}  // namespace pb
