@@ -241,7 +241,8 @@ Status Run(StageContext& ctx) {
                 "the viewpoints look at the scan from a side the scanner never saw. A scan without its "
                 "scanner stations cannot say which side was scanned, and an open scene scanned from "
                 "one station (neither a room nor an object) is oriented only by propagation: declare "
-                "where the scanner stood (io.read_points `station`), keep the file's own normals, or "
+                "where the scanner stood (io.read_points `station`; `pointbake scene SCAN` finds it in "
+                "the points of one scan), keep the file's own normals, or "
                 "move the viewpoints to the scanned side (docs/real-scans.md, \"Faces seen from "
                 "behind\")");
   }
@@ -255,8 +256,9 @@ StageType FramesStage() {
   StageType type;
   type.id = kId;
   // 2: meta render.back_share and counter back_share (frames unchanged);
-  // 3: a warning when back_share is over kMaxBackShare (frames unchanged).
-  type.version = 3;
+  // 3: a warning when back_share is over kMaxBackShare (frames unchanged);
+  // 4: the warning says that pointbake scene finds a lost station.
+  type.version = 4;
   type.summary = "Deterministic reference renders of a mesh or the ground truth from the scene's viewpoints";
   type.doc =
       "Draws `mesh` (with its color map `color` and tangent-space normal map `normal` when given; "
