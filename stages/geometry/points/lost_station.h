@@ -20,8 +20,9 @@
 //     scanner recorded the first surface along each ray). A line of sight
 //     is walked over an occupancy grid of the points (at most `grid_side`
 //     voxels along the box's longest side, none finer than the median
-//     spacing) from the place to short of its point by max(3 voxels, 10 % of
-//     the distance), as a grazing ray meets the voxels of its own floor only
+//     spacing; a lone occupied voxel, a return in the air, is left empty)
+//     from the place to short of its point by max(3 voxels, 10 % of the
+//     distance), as a grazing ray meets the voxels of its own floor only
 //     that close to it. Below a floor the sampling fits as well as above
 //     it, but the floor blocks every line of sight. Edges cost a few per
 //     cent even at the right place (a ray passing a voxel of the pump's
@@ -38,9 +39,10 @@
 //   * its misfit is at most `max_misfit`;
 //   * it is unique: every lattice place within 1.25x of its misfit lies
 //     within `max_spread` of the extent from it;
-//   * it stands in free space: its nearest point at least `min_clearance_m`
-//     away (a scanner records nothing within its minimum range). The inside
-//     of a closed object also sees every point unblocked;
+//   * it stands in free space: its 8th nearest point at least
+//     `min_clearance_m` away (a scanner records nothing within its minimum
+//     range). The inside of a closed object also sees every point
+//     unblocked;
 //   * the spacing grows with the distance from it: the exponent fitted to
 //     log(spacing) against log(r) is at least `min_spacing_exponent` (a
 //     resampled or fused cloud fits a far place with a flat sampling).
@@ -81,7 +83,7 @@ struct LostStation {
   double misfit = 0.0;               // of the sampling against one scanner's there
   double blocked_share = 1.0;        // of the lines of sight from it that cross surface
   double spread = 0.0;               // farthest nearly-as-good place, over the box's longest side
-  double clearance_m = 0.0;          // to its nearest point
+  double clearance_m = 0.0;          // to its 8th nearest point
   double explained = 0.0;            // 1 - misfit / the spacing's own variation
   std::string verdict;   // what was found, or why nothing was: "the sampling is not one scanner's"
   std::string figures;   // the figures it rests on, for a log or a comment
