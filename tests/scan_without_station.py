@@ -17,7 +17,7 @@ import struct
 import sys
 
 sys.path.insert(0, __file__.rsplit('/', 1)[0])
-from statue_file import read_header, stations_of  # noqa: E402
+from statue_file import read_colored_points, stations_of  # noqa: E402
 
 OFFSET = (512345.0, 210.0, 5401234.0)  # mm
 
@@ -30,14 +30,7 @@ def main():
     if len(sys.argv) != 3:
         sys.exit(__doc__)
     source, target = sys.argv[1:]
-    with open(source, 'rb') as f:
-        data = f.read()
-    start, count, names, record = read_header(data, source)
-    if len(data) < start + count * record.size:
-        sys.exit(f'{source}: {count} vertices announced, the file ends before them')
-    for name in ('x', 'y', 'z', 'red', 'green', 'blue'):
-        if name not in names:
-            sys.exit(f'{source}: no {name} property')
+    data, start, count, names, record = read_colored_points(source)
     stations = stations_of(data, source)
     if len(stations) != 1:
         sys.exit(f'{source}: {len(stations)} stations; one scan has one')

@@ -64,6 +64,20 @@ def read_header(data, path):
     return end + len(b'end_header\n'), count, names, struct.Struct(fmt)
 
 
+def read_colored_points(path):
+    """PATH's bytes and header (read_header), checked to hold every vertex
+    it announces and x, y, z, red, green and blue."""
+    with open(path, 'rb') as f:
+        data = f.read()
+    start, count, names, record = read_header(data, path)
+    if len(data) < start + count * record.size:
+        sys.exit(f'{path}: {count} vertices announced, the file ends before them')
+    for name in ('x', 'y', 'z', 'red', 'green', 'blue'):
+        if name not in names:
+            sys.exit(f'{path}: no {name} property')
+    return data, start, count, names, record
+
+
 def stations_of(data, path):
     """The `comment station I X Y Z` lines of IN's header, by I."""
     header = data[:data.find(b'end_header\n')].decode('ascii')
@@ -122,14 +136,7 @@ def main():
     if len(args) != 2 or not 0 <= air < 1:
         sys.exit(__doc__)
     source, target = args
-    with open(source, 'rb') as f:
-        data = f.read()
-    start, count, names, record = read_header(data, source)
-    if len(data) < start + count * record.size:
-        sys.exit(f'{source}: {count} vertices announced, the file ends before them')
-    for name in ('x', 'y', 'z', 'red', 'green', 'blue'):
-        if name not in names:
-            sys.exit(f'{source}: no {name} property')
+    data, start, count, names, record = read_colored_points(source)
     ix, iy, iz = (names.index(n) for n in ('x', 'y', 'z'))
     colors = [names.index(n) for n in ('red', 'green', 'blue')]
     normals = [names.index(n) for n in ('nx', 'ny', 'nz')] if 'nx' in names else None
