@@ -42,6 +42,11 @@ constexpr const char* kSchema = R"({
       "default": "auto",
       "description": "For 'propagate': whether the scan is an interior seen from inside, whose normals face the space it encloses (a room merged into one file without its scanner stations would otherwise come out inside-out). 'auto' looks for free space the scan closes around, openings up to 1.5 m wide closed, at least 1 m3 once 0.75 m from the scan: a room's, not an object's inside; 'no' always faces outward (version 2); 'yes' faces inward, toward the centroid, for an interior the test misses (open on a wider side)."
     },
+    "find_station": {
+      "type": "boolean",
+      "default": true,
+      "description": "With orientation 'auto' and interior 'auto', a cloud without stations, usable normals of its own or enclosed space (at least 1,000 points): look for where one scanner would have stood, the one place whose sweep explains the points' spacing and from which nearly every point is seen (stages/geometry/points/lost_station.h, the scanner's axis the cloud's x, y or z). Found, every normal faces it and a warning says where it is. One scan exported without its position is otherwise oriented by propagation, which picks a side per part (version 6). false: propagation (version 5)."
+    },
     "implementation": {
       "type": "string",
       "enum": ["own", "pcl", "open3d"],
@@ -92,6 +97,7 @@ Status Run(StageContext& ctx) {
                                              {{"auto", NormalInterior::kAuto},
                                               {"yes", NormalInterior::kYes},
                                               {"no", NormalInterior::kNo}}));
+  PB_ASSIGN_OR_RETURN(const bool find_station, BoolParam(ctx, kId, "find_station"));
   PB_ASSIGN_OR_RETURN(const std::string implementation, StringParam(ctx, kId, "implementation"));
   PB_ASSIGN_OR_RETURN(const NormalImplementation solver,
                       Choice<NormalImplementation>("implementation", implementation,
@@ -108,6 +114,7 @@ Status Run(StageContext& ctx) {
     options.widen_dense = widen_dense && solver == NormalImplementation::kOwn;
     options.orientation = orientation;
     options.interior = interior;
+    options.find_station = find_station;
     options.implementation = solver;
     options.threads = ctx.threads();
     options.progress = [&ctx](double fraction) { ctx.progress(0.3 + 0.5 * fraction); };
@@ -122,7 +129,17 @@ Status Run(StageContext& ctx) {
                 "them without orienting them); oriented by propagation instead (orientation: input "
                 "keeps their sides)");
   }
+  if (report.station_found) {
+    char at[160];
+    std::snprintf(at, sizeof at, "%.3f, %.3f, %.3f", report.station[0], report.station[1], report.station[2]);
+    ctx.warning(std::string(kId) + ": the points carry no scanner station, but " + report.station_verdict +
+                ": the scanner stood at " + at +
+                " m (the cloud's coordinates, in meters), and the normals face it. If that is wrong, declare "
+                "the station (io.read_points `station`) or set find_station: false (docs/real-scans.md, \"A "
+                "lost station\")");
+  }
   if (report.input_sides_checked) ctx.counter("input_sides_disagree", report.input_sides_disagree);
+  if (report.station_searched) ctx.counter("station_found", report.station_found ? 1.0 : 0.0);
   ctx.counter("points", static_cast<double>(report.points));
   ctx.counter("flipped", static_cast<double>(report.flipped));
   if (widen_dense && solver == NormalImplementation::kOwn) {
@@ -134,12 +151,14 @@ Status Run(StageContext& ctx) {
     ctx.counter("facing_enclosure", static_cast<double>(report.facing_enclosure));
     ctx.counter("facing_rays", static_cast<double>(report.facing_rays));
   }
-  const nlohmann::json meta =
+  nlohmann::json meta =
       InputPointsMetaWith(ctx, {{"points", cloud.size()},
                                 {"has_normals", true},
                                 {"normals_k", static_cast<int>(k)},
                                 {"normals_orientation", OrientationName(report.orientation_used)},
                                 {"normals_implementation", implementation}});
+  if (report.station_found)
+    meta["normals_station_found"] = {report.station[0], report.station[1], report.station[2]};
   PB_RETURN_IF_ERROR(WriteOutputPoints(ctx, cloud, meta));
   ctx.progress(1.0);
   return Status::Ok();
@@ -150,7 +169,8 @@ Status Run(StageContext& ctx) {
 StageType NormalsStage() {
   StageType type;
   type.id = kId;
-  type.version = 5;
+  // 6: find_station (a lost station, found in the points of one scan).
+  type.version = 6;
   type.summary = "k-NN PCA normals, oriented toward the scanner, like the file's own, or by propagation";
   type.doc =
       "Estimates a unit normal per point: the eigenvector of the smallest eigenvalue of the "
@@ -173,7 +193,12 @@ StageType NormalsStage() {
       "PCL's NormalEstimationOMP or Open3D's EstimateNormals (modules loaded on first use), "
       "for campaigns that compare implementations.\n\n"
       "Meta added: `has_normals`, `normals_k`, `normals_orientation` (the method used), "
-      "`normals_implementation`. "
+      "`normals_implementation`, and `normals_station_found` (the place, absolute meters) when "
+      "`find_station` (default true, version 6) found where one scanner stood in a cloud without "
+      "stations, usable normals of its own or enclosed space: the one place whose sweep explains "
+      "the points' spacing and from which nearly every point is seen "
+      "(stages/geometry/points/lost_station.h); the normals then face it, `normals_orientation` "
+      "says `stations` and a warning says where it is. "
       "Since version 5 (`widen_dense`, default true), a point whose `k` nearest lie closer "
       "together than a typical point's takes its nearest points out to the typical radius instead "
       "(at most 32k): where a scanner's lines converge, above a station, the k nearest lie on one "
@@ -184,7 +209,8 @@ StageType NormalsStage() {
       "propagation and `interior: auto`, `enclosed_volume_m3` (the enclosed space found, 0 for "
       "none; stages/geometry/points/enclosure.h) and `facing_enclosure` (points oriented to face "
       "it; the rest by propagation from them) and `facing_rays` (points whose side rays decided, "
-      "when no enclosed space was found); with `auto` and a file's own normals, "
+      "when no enclosed space was found), or `station_found` (1 when the lost station was found, "
+      "else 0, when `find_station` looked); with `auto` and a file's own normals, "
       "`input_sides_disagree` (the share of neighbouring pairs on one smooth surface whose file "
       "sides disagree; over 0.05, version 4, the sides were not oriented, a warning says so and "
       "propagation orients instead).";

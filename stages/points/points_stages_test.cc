@@ -16,6 +16,8 @@
 #include "stages/geometry/core/table.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/points/module_calls.h"
+#include "stages/geometry/synth/scanner.h"
+#include "stages/geometry/synth/scene.h"
 #include "stages/geometry/io/e57_test_writer.h"
 #include "stages/geometry/testing/clouds.h"
 #include "stages/geometry/testing/test_data.h"
@@ -837,6 +839,48 @@ TEST_F(PointsStagesTest, NormalsWarnOfAFilesUnorientedNormals) {
   EXPECT_THAT(ctx.warnings_[0], HasSubstr("the normals the points came with (the scan file's own) "
                                            "face inconsistent sides"));
   EXPECT_THAT(ctx.warnings_[0], HasSubstr("oriented by propagation instead"));
+}
+
+// One scan exported without its station (the synthetic facade from one
+// station, written without it): the stage finds where the scanner stood,
+// says so and turns the normals toward it; find_station: false propagates.
+TEST_F(PointsStagesTest, NormalsFindWhereOneScanStood) {
+  Expected<SynthScene> scene = MakeSynthScene("facade", 1);
+  ASSERT_TRUE(scene.ok()) << scene.status().message();
+  SynthScanOptions scan_options;
+  scan_options.target_points = 40'000;
+  scan_options.stations = 1;
+  Expected<SynthScanResult> scan = SimulateScan(*scene, scan_options);
+  ASSERT_TRUE(scan.ok()) << scan.status().message();
+  PointCloud cloud = std::move(scan->cloud);
+  const std::array<double, 3> station = cloud.stations[0];
+  cloud.stations.clear();
+  cloud.station_ids.clear();
+  const std::string input = (dir_ / "one_scan.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
+
+  FakeContext found(dir_ / "found", {});
+  found.AddInput("points", "points", input);
+  Status status = Run("points.normals", found);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(found.meta_["points"]["normals_orientation"], "stations");
+  EXPECT_EQ(found.counters_["station_found"], 1.0);
+  const nlohmann::json& at = found.meta_["points"]["normals_station_found"];
+  ASSERT_TRUE(at.is_array() && at.size() == 3) << found.meta_["points"].dump();
+  EXPECT_LT(std::hypot(at[0].get<double>() - station[0], at[1].get<double>() - station[1],
+                       at[2].get<double>() - station[2]),
+            0.25);
+  ASSERT_EQ(found.warnings_.size(), 1u);
+  EXPECT_THAT(found.warnings_[0], HasSubstr("the points carry no scanner station, but the points are one scan's"));
+  EXPECT_THAT(found.warnings_[0], HasSubstr("find_station: false"));
+
+  FakeContext kept(dir_ / "kept", {{"find_station", false}});
+  kept.AddInput("points", "points", input);
+  status = Run("points.normals", kept);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(kept.meta_["points"]["normals_orientation"], "propagate");
+  EXPECT_EQ(kept.counters_.count("station_found"), 0u);
+  EXPECT_TRUE(kept.warnings_.empty());
 }
 
 TEST_F(PointsStagesTest, NormalsRejectsBadParameters) {

@@ -37,6 +37,7 @@
 #include "stages/geometry/core/module.h"
 #include "stages/geometry/points/enclosure.h"
 #include "stages/geometry/points/knn.h"
+#include "stages/geometry/points/lost_station.h"
 #include "stages/geometry/points/module_calls.h"
 
 namespace pb {
@@ -124,16 +125,18 @@ size_t EstimateUnoriented(const KnnIndex& index, int k, double widen_to_m, std::
   return widened.load();
 }
 
-size_t OrientTowardStations(PointCloud& cloud) {
+// Turns each normal toward its point's station, or toward `only` (absolute)
+// for every point when given.
+size_t OrientTowardStations(PointCloud& cloud, const std::array<double, 3>* only = nullptr) {
   const size_t n = cloud.size();
   std::vector<std::array<double, 3>> stations;
-  for (const auto& station : cloud.stations) {
+  for (const auto& station : only ? std::vector<std::array<double, 3>>{*only} : cloud.stations) {
     stations.push_back({station[0] - cloud.origin[0], station[1] - cloud.origin[1],
                         station[2] - cloud.origin[2]});
   }
   size_t flipped = 0;
   for (size_t i = 0; i < n; ++i) {
-    const auto& s = stations[cloud.station_ids[i]];
+    const auto& s = stations[only ? 0 : cloud.station_ids[i]];
     float* normal = &cloud.normals[3 * i];
     double dot = 0;
     for (int a = 0; a < 3; ++a) dot += (s[a] - cloud.positions[3 * i + a]) * normal[a];
@@ -650,8 +653,26 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
       report.enclosed_volume_m3 = enclosure->volume_m3();
       if (enclosure->empty()) enclosure.reset();
     }
-    OrientByPropagation(cloud, graph, options.interior == NormalInterior::kYes,
-                        enclosure ? &*enclosure : nullptr, report);
+    if (!enclosure && options.find_station && options.orientation == NormalOrientation::kAuto &&
+        options.interior == NormalInterior::kAuto && n >= kLeastPointsForStation) {
+      LostStationOptions lost_options;
+      lost_options.up = {0, 0, 0};  // unknown: the cloud's x, y or z
+      // A cloud the search cannot read (all its points at one place) is
+      // left to the propagation, as before.
+      if (const Expected<LostStation> lost = FindLostStation(cloud, lost_options); lost.ok()) {
+        report.station_searched = true;
+        report.station_found = lost->found;
+        report.station = lost->position;
+        report.station_verdict = lost->verdict + " (" + lost->figures + ")";
+      }
+    }
+    if (report.station_found) {
+      report.orientation_used = NormalOrientation::kStations;
+      report.flipped = OrientTowardStations(cloud, &report.station);
+    } else {
+      OrientByPropagation(cloud, graph, options.interior == NormalInterior::kYes,
+                          enclosure ? &*enclosure : nullptr, report);
+    }
   }
   if (options.progress) options.progress(1.0);
   return Status::Ok();

@@ -52,8 +52,10 @@
 // propagation, 32 bytes per point of neighbour graph and a sequential pass.
 #pragma once
 
+#include <array>
 #include <cstddef>
 #include <functional>
+#include <string>
 
 #include "base/status.h"
 #include "stages/geometry/core/point_cloud.h"
@@ -91,6 +93,14 @@ struct NormalOptions {
   bool widen_dense = true;
   NormalOrientation orientation = NormalOrientation::kAuto;
   NormalInterior interior = NormalInterior::kAuto;  // kPropagate only
+  // kAuto resolved to kPropagate with interior kAuto and no enclosed space
+  // found (at least kLeastPointsForStation points): look for where one
+  // scanner would have stood (lost_station.h, its axis the cloud's x, y or
+  // z); found, every normal faces it, as with a station the file gave. One
+  // scan exported without its position (a PLY of x, y, z and colour) is
+  // otherwise oriented by propagation, which picks a side per part: half
+  // the pump's normals faced away from its scanner.
+  bool find_station = true;
   int threads = 0;  // worker threads; 0 = TBB's default (all cores)
   // Called from the calling thread with the fraction done, in [0, 1].
   std::function<void(double fraction)> progress;
@@ -118,7 +128,15 @@ struct NormalReport {
   // propagation orients instead (orientation_used says so).
   bool input_sides_checked = false;
   double input_sides_disagree = 0.0;
+  // find_station: whether the search ran, what it found (station_found, the
+  // place, absolute, the cloud's units) and its verdict and figures.
+  bool station_searched = false;
+  bool station_found = false;
+  std::array<double, 3> station{};
+  std::string station_verdict;
 };
+
+inline constexpr size_t kLeastPointsForStation = 1000;
 
 inline constexpr double kMaxInputSidesDisagree = 0.05;
 

@@ -11,6 +11,8 @@
 #include <random>
 #include <vector>
 
+#include "stages/geometry/synth/scanner.h"
+#include "stages/geometry/synth/scene.h"
 #include "stages/geometry/testing/clouds.h"
 
 namespace pb {
@@ -137,6 +139,48 @@ TEST(NormalsTest, TwoSeparateSpheresBothOutward) {
     for (int a = 0; a < 3; ++a) radial[a] = cloud.positions[3 * i + a] - c[a];
     ASSERT_GT(Dot(&cloud.normals[3 * i], radial), 0) << "point " << i;
   }
+}
+
+// One scan exported without its station (the synthetic facade from one
+// station, its stations dropped): the normals face where the scanner stood,
+// found in the points, nearly all of them; propagation (find_station false,
+// version 5) picks a side per part.
+TEST(NormalsTest, AScanWithoutItsStationFacesWhereItStood) {
+  Expected<SynthScene> scene = MakeSynthScene("facade", 1);
+  ASSERT_TRUE(scene.ok()) << scene.status().message();
+  SynthScanOptions scan_options;
+  scan_options.target_points = 60'000;
+  scan_options.stations = 1;
+  Expected<SynthScanResult> scan = SimulateScan(*scene, scan_options);
+  ASSERT_TRUE(scan.ok()) << scan.status().message();
+  const std::array<double, 3> station = scan->cloud.stations[0];
+  PointCloud cloud = std::move(scan->cloud);
+  cloud.stations.clear();
+  cloud.station_ids.clear();
+  auto facing = [&](const PointCloud& oriented) {
+    size_t toward = 0;
+    for (size_t i = 0; i < oriented.size(); ++i) {
+      double dot = 0;
+      for (int a = 0; a < 3; ++a)
+        dot += (station[a] - oriented.positions[3 * i + a]) * oriented.normals[3 * i + a];
+      toward += dot > 0;
+    }
+    return double(toward) / double(oriented.size());
+  };
+  PointCloud propagated = cloud;
+  NormalReport report, old_report;
+  ASSERT_TRUE(EstimateNormals(cloud, {}, &report).ok());
+  ASSERT_TRUE(EstimateNormals(propagated, {.find_station = false}, &old_report).ok());
+  EXPECT_TRUE(report.station_searched);
+  EXPECT_TRUE(report.station_found) << report.station_verdict;
+  EXPECT_EQ(report.orientation_used, NormalOrientation::kStations);
+  EXPECT_LT(std::hypot(report.station[0] - station[0], report.station[1] - station[1],
+                       report.station[2] - station[2]),
+            0.25);
+  EXPECT_GT(facing(cloud), 0.99);
+  EXPECT_FALSE(old_report.station_searched);
+  EXPECT_EQ(old_report.orientation_used, NormalOrientation::kPropagate);
+  EXPECT_LT(facing(propagated), 0.95) << "propagation alone no longer errs: the test shows nothing";
 }
 
 TEST(NormalsTest, StationOrientationFacesTheScanner) {
