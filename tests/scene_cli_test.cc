@@ -7,8 +7,7 @@
 #include <fstream>
 #include <string>
 
-#include "stages/geometry/synth/scanner.h"
-#include "stages/geometry/synth/scene.h"
+#include "stages/geometry/synth/scan_without_stations.h"
 #include "tests/cli_test_util.h"
 
 namespace pbtest {
@@ -94,21 +93,16 @@ TEST_F(SceneCli, AStationTheFileLost) {
 // --no-find-station leaves it out. Three stations' scans merged get none.
 TEST_F(SceneCli, FindsWhereOneScanWasTaken) {
   auto write_facade = [&](int stations, const std::string& name, std::array<double, 3>* station) {
-    pb::Expected<pb::SynthScene> scene = pb::MakeSynthScene("facade", 1);
-    EXPECT_TRUE(scene.ok()) << scene.status().message();
-    pb::SynthScanOptions options;
-    options.target_points = 40000 * uint64_t(stations);
-    options.stations = stations;
-    pb::Expected<pb::SynthScanResult> scan = pb::SimulateScan(*scene, options);
-    EXPECT_TRUE(scan.ok()) << scan.status().message();
+    const pb::testing::ScanWithoutStations scan = pb::testing::FacadeWithoutStations(stations, 40000 * uint64_t(stations));
+    EXPECT_EQ(scan.stations.size(), size_t(stations));
     const std::array<double, 3> offset = {512345000, 5401234000, 210000};  // mm
-    for (int a = 0; a < 3; ++a) (*station)[a] = scan->cloud.stations[0][a] * 1000 + offset[a];
-    const size_t n = scan->cloud.size();
+    for (int a = 0; a < 3; ++a) (*station)[a] = scan.stations[0][a] * 1000 + offset[a];
+    const size_t n = scan.cloud.size();
     std::string ply = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(n) +
                       "\nproperty double x\nproperty double y\nproperty double z\nend_header\n";
     char line[128];
     for (size_t i = 0; i < n; ++i) {
-      const float* p = &scan->cloud.positions[3 * i];
+      const float* p = &scan.cloud.positions[3 * i];
       std::snprintf(line, sizeof line, "%.1f %.1f %.1f\n", p[0] * 1000.0 + offset[0], p[1] * 1000.0 + offset[1],
                     p[2] * 1000.0 + offset[2]);
       ply += line;

@@ -16,10 +16,9 @@
 #include "stages/geometry/core/table.h"
 #include "stages/geometry/io/ply.h"
 #include "stages/geometry/points/module_calls.h"
-#include "stages/geometry/synth/scanner.h"
-#include "stages/geometry/synth/scene.h"
 #include "stages/geometry/io/e57_test_writer.h"
 #include "stages/geometry/testing/clouds.h"
+#include "stages/geometry/synth/scan_without_stations.h"
 #include "stages/geometry/testing/test_data.h"
 #include "stages/stage_test_util.h"
 
@@ -845,17 +844,10 @@ TEST_F(PointsStagesTest, NormalsWarnOfAFilesUnorientedNormals) {
 // station, written without it): the stage finds where the scanner stood,
 // says so and turns the normals toward it; find_station: false propagates.
 TEST_F(PointsStagesTest, NormalsFindWhereOneScanStood) {
-  Expected<SynthScene> scene = MakeSynthScene("facade", 1);
-  ASSERT_TRUE(scene.ok()) << scene.status().message();
-  SynthScanOptions scan_options;
-  scan_options.target_points = 40'000;
-  scan_options.stations = 1;
-  Expected<SynthScanResult> scan = SimulateScan(*scene, scan_options);
-  ASSERT_TRUE(scan.ok()) << scan.status().message();
-  PointCloud cloud = std::move(scan->cloud);
-  const std::array<double, 3> station = cloud.stations[0];
-  cloud.stations.clear();
-  cloud.station_ids.clear();
+  pb::testing::ScanWithoutStations scan = pb::testing::FacadeWithoutStations(1, 40'000);
+  ASSERT_EQ(scan.stations.size(), 1u);
+  const std::array<double, 3> station = scan.stations[0];
+  const PointCloud& cloud = scan.cloud;
   const std::string input = (dir_ / "one_scan.ply").string();
   ASSERT_TRUE(WritePlyPoints(input, cloud).ok());
 

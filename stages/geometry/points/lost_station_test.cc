@@ -6,33 +6,18 @@
 #include <cmath>
 #include <limits>
 
-#include "stages/geometry/synth/scanner.h"
-#include "stages/geometry/synth/scene.h"
 #include "stages/geometry/testing/clouds.h"
+#include "stages/geometry/synth/scan_without_stations.h"
 
 namespace pb {
 namespace {
 
 using ::testing::HasSubstr;
 
-// The synthetic facade (two brick walls on a paved yard, a pump, a bench, a
-// column) scanned by `stations` stations, as one cloud without them.
-struct Facade {
-  PointCloud cloud;
-  std::vector<std::array<double, 3>> stations;
-};
+using Facade = testing::ScanWithoutStations;
 Facade ScanFacade(int stations) {
-  Expected<SynthScene> scene = MakeSynthScene("facade", 1);
-  EXPECT_TRUE(scene.ok()) << scene.status().message();
-  SynthScanOptions options;
-  options.target_points = 60'000 * uint64_t(stations);
-  options.stations = stations;
-  Expected<SynthScanResult> scan = SimulateScan(*scene, options);
-  EXPECT_TRUE(scan.ok()) << scan.status().message();
-  Facade facade{std::move(scan->cloud), {}};
-  facade.stations = facade.cloud.stations;
-  facade.cloud.stations.clear();
-  facade.cloud.station_ids.clear();
+  Facade facade = testing::FacadeWithoutStations(stations, 60'000 * uint64_t(stations));
+  EXPECT_EQ(facade.stations.size(), size_t(stations));
   return facade;
 }
 

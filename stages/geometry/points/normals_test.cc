@@ -11,9 +11,8 @@
 #include <random>
 #include <vector>
 
-#include "stages/geometry/synth/scanner.h"
-#include "stages/geometry/synth/scene.h"
 #include "stages/geometry/testing/clouds.h"
+#include "stages/geometry/synth/scan_without_stations.h"
 
 namespace pb {
 namespace {
@@ -146,17 +145,10 @@ TEST(NormalsTest, TwoSeparateSpheresBothOutward) {
 // found in the points, nearly all of them; propagation (find_station false,
 // version 5) picks a side per part.
 TEST(NormalsTest, AScanWithoutItsStationFacesWhereItStood) {
-  Expected<SynthScene> scene = MakeSynthScene("facade", 1);
-  ASSERT_TRUE(scene.ok()) << scene.status().message();
-  SynthScanOptions scan_options;
-  scan_options.target_points = 60'000;
-  scan_options.stations = 1;
-  Expected<SynthScanResult> scan = SimulateScan(*scene, scan_options);
-  ASSERT_TRUE(scan.ok()) << scan.status().message();
-  const std::array<double, 3> station = scan->cloud.stations[0];
-  PointCloud cloud = std::move(scan->cloud);
-  cloud.stations.clear();
-  cloud.station_ids.clear();
+  testing::ScanWithoutStations scan = testing::FacadeWithoutStations(1, 60'000);
+  ASSERT_EQ(scan.stations.size(), 1u);
+  const std::array<double, 3> station = scan.stations[0];
+  PointCloud cloud = std::move(scan.cloud);
   auto facing = [&](const PointCloud& oriented) {
     size_t toward = 0;
     for (size_t i = 0; i < oriented.size(); ++i) {
