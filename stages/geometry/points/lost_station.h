@@ -14,9 +14,9 @@
 //     spread over the cloud, of  log(spacing) - log(r) + log(cos i) / 2 -
 //     log(cos e) / 2  (spacing: LocalSpacing's formula at k = 16, its
 //     distances taken in the tangent plane of the same neighbours' PCA,
-//     which gives i too; e against `up`): about 0.03 for the
-//     synthetic stations, 0.05 for the pump, 0.10-0.23 for clouds merged
-//     from several stations, fused from a camera's trajectory or resampled.
+//     which gives i too; e against `up`): about 0.03 for the synthetic
+//     stations, 0.05 for the pump, 0.08-0.23 for clouds merged from several
+//     stations, fused from a camera's trajectory or resampled.
 //   * From there every point is seen, with nothing in front of it (the
 //     scanner recorded the first surface along each ray). A line of sight
 //     is walked over an occupancy grid of the points (at most `grid_side`
@@ -38,23 +38,27 @@
 // The place is declared only when all of these hold (else `found` is false
 // and `verdict` says which failed):
 //   * its misfit is at most `max_misfit`;
-//   * it is unique: every lattice place within 1.25x of its misfit lies
-//     within `max_spread` of the extent from it;
+//   * it is unique: the pattern searches start from places farther apart
+//     than `max_spread` of the extent, and every place they end at whose
+//     misfit is within 1.25x of its and whose lines of sight are blocked at
+//     most 3 points more lies within that of it (a lone wall's mirror image
+//     does not);
 //   * it stands in free space: its 8th nearest point at least
 //     `min_clearance_m` away (a scanner records nothing within its minimum
 //     range). The inside of a closed object also sees every point
 //     unblocked;
-//   * the spacing grows with the distance from it: the exponent fitted to
-//     log(spacing) against log(r) is at least `min_spacing_exponent` (a
-//     resampled or fused cloud fits a far place with a flat sampling).
+//   * it explains at least `min_explained` of the spacing's own variation
+//     (1 - misfit / the median absolute deviation of log(spacing)): a cloud
+//     of nearly even spacing fits a far place about as well as any.
 // Measured (docs/real-scans.md, "A lost station"): each synthetic station's
-// scan alone found within 0.03-0.18 m of its station; the pump within 0.15 m
+// scan alone found within 0.02-0.20 m of its station; the pump within 0.24 m
 // (E57 read without its pose, and as a millimetre PLY); nothing found for
-// the merged synthetic room, sculpture or facade, the bunny's two clouds,
+// the merged synthetic room, vault, tower, sculpture or facade, the bunny,
 // the statue stand-in, the Kinect office or the living-room fusion.
 // Cost: a k-NN index of the points (knn.h), a byte per voxel, and about
-// lattice^3 * 512 + a few hundred * `sample` lines of sight; 1-2 s for
-// 155,000 points on 2 cores.
+// lattice^3 * 512 + a few hundred * `sample` lines of sight: 1-3 s for
+// 155,000 points on 2 cores, 4.3 s and 330 MB for 5 * 10^6 with the axis
+// unknown (three searches, one grid).
 #pragma once
 
 #include <array>
@@ -74,10 +78,10 @@ struct LostStationOptions {
   int grid_side = 200;        // voxels along the padded box's longest side, at most
   int lattice = 16;           // places per side of the first search
   double max_blocked = 0.15;  // share of lines of sight that may cross surface
-  double max_misfit = 0.065;   // of the sampling against one scanner's
+  double max_misfit = 0.065;  // of the sampling against one scanner's
   double max_spread = 0.15;   // of the box's longest side: places nearly as good
   double min_clearance_m = 0.3;
-  double min_explained = 0.7;
+  double min_explained = 0.7;  // of the spacing's variation, by the place
 };
 
 struct LostStation {
