@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <optional>
 #include <cstdio>
 #include <utility>
 #include <vector>
@@ -141,15 +142,21 @@ std::string Format(const char* format, auto... args) {
 
 }  // namespace
 
-Expected<LostStation> FindLostStation(const PointCloud& cloud, const LostStationOptions& options) {
+Expected<LostStation> FindLostStation(const PointCloud& cloud, const LostStationOptions& options,
+                                      const KnnIndex* points_index) {
   const size_t n = cloud.size();
   if (n < 100) return Status::Invalid("lost station: the cloud has fewer than 100 points");
   if (options.sample < 16 || options.grid_side < 8 || options.lattice < 2 || !(options.max_blocked >= 0) ||
       !(options.max_spread > 0) || !(options.min_clearance_m >= 0) || !std::isfinite(options.min_explained) ||
       !std::isfinite(Dot(options.up, options.up)))
     return Status::Invalid("lost station: an option is out of range");
-  Expected<KnnIndex> index = KnnIndex::Build(cloud.positions);  // also rejects non-finite coordinates
-  if (!index.ok()) return index.status();
+  std::optional<KnnIndex> own_index;
+  if (points_index == nullptr) {
+    Expected<KnnIndex> built = KnnIndex::Build(cloud.positions);  // also rejects non-finite coordinates
+    if (!built.ok()) return built.status();
+    own_index = std::move(*built);
+  }
+  const KnnIndex* index = points_index != nullptr ? points_index : &*own_index;
 
   // The box: the points' robust box padded by half its longest side each
   // way (a wall scanned from across a street whose near side the scan lacks).

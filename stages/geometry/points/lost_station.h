@@ -67,6 +67,7 @@
 
 #include "base/status.h"
 #include "stages/geometry/core/point_cloud.h"
+#include "stages/geometry/points/knn.h"
 
 namespace pb {
 
@@ -101,6 +102,9 @@ struct LostStation {
 // place a single scan would have been taken from. Status::Invalid when it
 // has fewer than 100 points, a non-finite coordinate or an option out of
 // range; a cloud that is not one station's gives found = false, not an error.
-Expected<LostStation> FindLostStation(const PointCloud& cloud, const LostStationOptions& options = {});
+// `points_index`, when given, is KnnIndex::Build over cloud.positions (a
+// caller that has one: points.normals), and is not built again.
+Expected<LostStation> FindLostStation(const PointCloud& cloud, const LostStationOptions& options = {},
+                                      const KnnIndex* points_index = nullptr);
 
 }  // namespace pb

@@ -625,16 +625,19 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
   if (orientation == NormalOrientation::kPropagate || check_input) {
     graph.assign(n * kPropagationNeighbors, kNoNeighbor);
   }
+  // Kept for the lost station's search (released after it): the points do
+  // not move.
+  std::optional<KnnIndex> index;
   if (options.implementation == NormalImplementation::kOwn) {
-    PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
+    PB_ASSIGN_OR_RETURN(index, KnnIndex::Build(cloud.positions));
     cloud.normals.assign(3 * n, 0.0f);
-    if (options.widen_dense) report.widen_to_m = MedianNeighborhoodRadius(index, options.k);
-    report.widened = EstimateUnoriented(index, options.k, report.widen_to_m, cloud.normals, graph, options.progress);
+    if (options.widen_dense) report.widen_to_m = MedianNeighborhoodRadius(*index, options.k);
+    report.widened = EstimateUnoriented(*index, options.k, report.widen_to_m, cloud.normals, graph, options.progress);
   } else {
     PB_RETURN_IF_ERROR(EstimateWithModule(cloud, options));
     if (!graph.empty()) {
-      PB_ASSIGN_OR_RETURN(const KnnIndex index, KnnIndex::Build(cloud.positions));
-      NeighborGraph(index, graph);
+      PB_ASSIGN_OR_RETURN(index, KnnIndex::Build(cloud.positions));
+      NeighborGraph(*index, graph);
     }
   }
   report.points = n;
@@ -659,13 +662,15 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
       lost_options.up = {0, 0, 0};  // unknown: the cloud's x, y or z
       // A cloud the search cannot read (all its points at one place) is
       // left to the propagation, as before.
-      if (const Expected<LostStation> lost = FindLostStation(cloud, lost_options); lost.ok()) {
+      if (const Expected<LostStation> lost = FindLostStation(cloud, lost_options, index ? &*index : nullptr);
+          lost.ok()) {
         report.station_searched = true;
         report.station_found = lost->found;
         report.station = lost->position;
         report.station_verdict = lost->verdict + " (" + lost->figures + ")";
       }
     }
+    index.reset();
     if (report.station_found) {
       report.orientation_used = NormalOrientation::kStations;
       report.flipped = OrientTowardStations(cloud, &report.station);
