@@ -124,10 +124,15 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
        Length(survey.spacing_m) + ",\n";
   y += "# robust extent " + Length(extent[0]) + " x " + Length(extent[1]) + " x " +
        Length(extent[2]) + " (1st to 99th percentile per axis).\n";
-  if (survey.enclosed_volume_m3 > 0)
+  if (survey.enclosed_volume_m3 > 0 && !survey.enclosure_open)
     y += "# The points enclose " + Number(std::round(survey.enclosed_volume_m3)) +
          " m3 of free space (0.75 m or more from them): an interior,\n"
          "# viewed from inside; points.normals (interior: auto) faces its normals in.\n";
+  if (survey.enclosure_open)
+    y += "# The points nearly enclose " + Number(std::round(survey.enclosed_volume_m3)) +
+         " m3 of free space (0.375 m or more from them; from it at\n"
+         "# least 85 % of the lines of sight meet the scan): an interior open on a side, or\n"
+         "# small, viewed from inside; points.normals (interior: auto) faces its normals in.\n";
   if (survey.stations == 0 && !(survey.enclosed_volume_m3 > 0))
     y += "# No scanner station: nothing says which side of an open surface was scanned. If\n"
          "# this is one scan exported without its position, give --station x,y,z (where the\n"
@@ -250,7 +255,10 @@ int RunScene(const std::vector<std::string>& args) {
   // position, perhaps. Its points tell where it stood (lost_station.h); the
   // scene declares that place as the file's station, as --station would.
   std::string station_found, station_sought;
-  if (station_text.empty() && !no_find_station && survey->stations == 0 && !(survey->enclosed_volume_m3 > 0)) {
+  // A room closed in is not one scan's; one nearly closed may be (a cell
+  // scanned from its middle), and a station found says more.
+  if (station_text.empty() && !no_find_station && survey->stations == 0 &&
+      (!(survey->enclosed_volume_m3 > 0) || survey->enclosure_open)) {
     std::fprintf(stderr, "pointbake scene: looking in the points for where the scanner stood\n");
     LostStationOptions lost_options;
     lost_options.up = options.up;

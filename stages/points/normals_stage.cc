@@ -40,7 +40,7 @@ constexpr const char* kSchema = R"({
       "type": "string",
       "enum": ["auto", "yes", "no"],
       "default": "auto",
-      "description": "For 'propagate': whether the scan is an interior seen from inside, whose normals face the space it encloses (a room merged into one file without its scanner stations would otherwise come out inside-out). 'auto' looks for free space the scan closes around, openings up to 1.5 m wide closed, at least 1 m3 once 0.75 m from the scan: a room's, not an object's inside; 'no' always faces outward (version 2); 'yes' faces inward, toward the centroid, for an interior the test misses (open on a wider side)."
+      "description": "For 'propagate': whether the scan is an interior seen from inside, whose normals face the space it encloses (a room merged into one file without its scanner stations would otherwise come out inside-out). 'auto' looks for free space the scan closes around, openings up to 1.5 m wide closed, at least 1 m3 once 0.75 m from the scan: a room's, not an object's inside; failing that and a lost station (find_station), since version 7 for free space the scan nearly closes around, at least 1.5 m3 once 0.375 m from the scan, from which at least 85 % of the lines of sight meet it and which is not a cup (open across one side: an object's inside seen from its unscanned underside): a corridor open at its ends, a room with a doorway wider than 1.5 m, a cell too small for the first test; 'no' always faces outward (version 2); 'yes' faces inward, toward the centroid, for an interior both tests miss (open across a whole side, an apse, a dead-end passage)."
     },
     "find_station": {
       "type": "boolean",
@@ -138,6 +138,14 @@ Status Run(StageContext& ctx) {
                 "the station (io.read_points `station`) or set find_station: false (docs/real-scans.md, \"A "
                 "lost station\")");
   }
+  if (report.enclosure_open) {
+    char volume[32];
+    std::snprintf(volume, sizeof volume, "%.1f", report.enclosed_volume_m3);
+    ctx.warning(std::string(kId) + ": the points enclose no room, but nearly enclose " + volume +
+                " m3 of free space from which most lines of sight meet them (a corridor open at its ends, a "
+                "room with a wide doorway, a small room; stages/geometry/points/enclosure.h), and the "
+                "normals face it. If the scan is an object seen from outside, set interior: no");
+  }
   if (report.input_sides_checked) ctx.counter("input_sides_disagree", report.input_sides_disagree);
   if (report.station_searched) ctx.counter("station_found", report.station_found ? 1.0 : 0.0);
   ctx.counter("points", static_cast<double>(report.points));
@@ -148,6 +156,7 @@ Status Run(StageContext& ctx) {
   }
   if (report.orientation_used == NormalOrientation::kPropagate && interior == NormalInterior::kAuto) {
     ctx.counter("enclosed_volume_m3", report.enclosed_volume_m3);
+    ctx.counter("enclosure_open", report.enclosure_open ? 1.0 : 0.0);
     ctx.counter("facing_enclosure", static_cast<double>(report.facing_enclosure));
     ctx.counter("facing_rays", static_cast<double>(report.facing_rays));
   }
@@ -170,7 +179,8 @@ StageType NormalsStage() {
   StageType type;
   type.id = kId;
   // 6: find_station (a lost station, found in the points of one scan).
-  type.version = 6;
+  // 7: interior auto also faces a space the points nearly enclose (FindOpen).
+  type.version = 7;
   type.summary = "k-NN PCA normals, oriented toward the scanner, like the file's own, or by propagation";
   type.doc =
       "Estimates a unit normal per point: the eigenvector of the smallest eigenvalue of the "
@@ -180,7 +190,9 @@ StageType NormalsStage() {
       "neighbour graph seeded outward from the point farthest from the centroid (`propagate`, "
       "Hoppe et al. 1992; right for closed objects; with `interior: auto`, version 3, where the "
       "scan encloses free space, a room's, the points beside it face it and the propagation "
-      "starts from them, so that a room merged without its stations is not meshed inside-out; "
+      "starts from them, so that a room merged without its stations is not meshed inside-out "
+      "(version 7: also one the scan only nearly encloses, a corridor open at its ends, a room "
+      "with a wide doorway, a small room, when no lost station was found; a warning says so); "
       "elsewhere, version 4, rays decide the points whose outside they see, open ahead and "
       "closed behind, where their nearest probed points agree, and the propagation starts from "
       "them, so that a plinth standing on its ground is not turned inside out through it), "
@@ -207,7 +219,8 @@ StageType NormalsStage() {
       "`widen_dense` `widened` (points whose neighbourhood was widened) and `widen_to_m` (the "
       "typical radius); with "
       "propagation and `interior: auto`, `enclosed_volume_m3` (the enclosed space found, 0 for "
-      "none; stages/geometry/points/enclosure.h) and `facing_enclosure` (points oriented to face "
+      "none; stages/geometry/points/enclosure.h), `enclosure_open` (1 when it was only nearly "
+      "enclosed, version 7: a warning says so) and `facing_enclosure` (points oriented to face "
       "it; the rest by propagation from them) and `facing_rays` (points whose side rays decided, "
       "when no enclosed space was found), or `station_found` (1 when the lost station was found, "
       "else 0, when `find_station` looked); with `auto` and a file's own normals, "

@@ -804,6 +804,7 @@ TEST_F(PointsStagesTest, NormalsOfARoomWithoutStationsFaceIntoIt) {
     ASSERT_TRUE(out.ok()) << out.status().message();
     if (interior == "auto") {
       EXPECT_GT(ctx.counters_["enclosed_volume_m3"], 8.0);
+      EXPECT_EQ(ctx.counters_["enclosure_open"], 0.0);
       EXPECT_GT(ctx.counters_["facing_enclosure"], 0.5 * double(out->points.size()));
       EXPECT_GT(wall_inward(out->points), 0.99);
     } else {
@@ -814,6 +815,30 @@ TEST_F(PointsStagesTest, NormalsOfARoomWithoutStationsFaceIntoIt) {
   FakeContext bad(dir_ / "bad", {{"interior", "maybe"}});
   bad.AddInput("points", "points", input);
   EXPECT_THAT(Run("points.normals", bad).message(), HasSubstr("interior"));
+}
+
+// The same room with a doorway 2.5 m wide: nearly enclosed (version 7),
+// faced in, with a warning and the counter saying so.
+TEST_F(PointsStagesTest, NormalsOfARoomOpenOnASideFaceIntoIt) {
+  const std::string input = (dir_ / "open-room.ply").string();
+  ASSERT_TRUE(WritePlyPoints(input, pb::testing::RoomWithTable(6.0, 4.5, 2.5, 7)).ok());
+  FakeContext ctx(dir_ / "open", {});
+  ctx.AddInput("points", "points", input);
+  const Status status = Run("points.normals", ctx);
+  ASSERT_TRUE(status.ok()) << status.message();
+  EXPECT_EQ(ctx.counters_["enclosure_open"], 1.0);
+  EXPECT_GT(ctx.counters_["enclosed_volume_m3"], 8.0);
+  ASSERT_EQ(ctx.warnings_.size(), 1u);
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr("nearly enclose"));
+  EXPECT_THAT(ctx.warnings_[0], HasSubstr("interior: no"));
+  auto out = ReadPlyPoints(ctx.outputs_["points"]);
+  ASSERT_TRUE(out.ok()) << out.status().message();
+  size_t wall = 0, inward = 0;  // the wall x = 0
+  for (size_t i = 0; i < out->points.size(); ++i) {
+    if (std::abs(out->points.positions[3 * i]) > 0.01 || out->points.positions[3 * i + 2] < 0.2) continue;
+    ++wall, inward += out->points.normals[3 * i] > 0;
+  }
+  EXPECT_GT(double(inward) / double(wall), 0.99);
 }
 
 // A file whose normals were computed without orienting them (random signs

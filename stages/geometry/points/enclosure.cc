@@ -81,81 +81,134 @@ size_t Fill(const Grid& grid, uint8_t from, uint8_t to, std::vector<uint32_t>& q
   return queue.size();
 }
 
-}  // namespace
 
-Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const EnclosureOptions& options) {
+// The grid over the cloud's robust box and the voxels holding a point.
+struct Voxels {
+  Grid grid;
+  std::vector<uint8_t> scanned;  // kOccupied where a point lies, else kFree
+};
+
+// Voxels of `gap_m` / 4, or coarser to fit max_voxels_per_side.
+Expected<Voxels> Prepare(const PointCloud& cloud, const EnclosureOptions& options, double gap_m,
+                         std::array<double, 3>& min, double& voxel) {
   if (cloud.empty()) return Status::Invalid("enclosed space: the cloud has no points");
-  if (!(options.gap_m > 0) || !(options.min_volume_m3 > 0) || options.max_voxels_per_side < 16)
-    return Status::Invalid("enclosed space: gap_m and min_volume_m3 must be positive");
+  if (!(options.gap_m > 0) || !(options.min_volume_m3 > 0) || !(options.open_gap_m > 0) ||
+      !(options.min_open_volume_m3 > 0) || !(options.min_surrounded > 0 && options.min_surrounded <= 1) ||
+      options.max_voxels_per_side < 16)
+    return Status::Invalid(
+        "enclosed space: gap_m, open_gap_m and the volumes must be positive, min_surrounded in (0, 1]");
   PB_RETURN_IF_ERROR(CheckFinitePositions(cloud, "enclosed space"));
-  const size_t n = cloud.size();
   const float* positions = cloud.positions.data();
-
   const Bounds robust = RobustLocalBounds(cloud, 0.005);
   const std::array<double, 3>& lo = robust.min_m;
   const std::array<double, 3>& hi = robust.max_m;
   const double longest = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
-  const double margin = 0.02 * longest + options.gap_m;
-  EnclosedSpace space;
-  space.voxel_m_ = std::max(options.gap_m / 4,
-                            (longest + 2 * margin) / double(options.max_voxels_per_side - 4));
-  const double voxel = space.voxel_m_;
-  const int radius = std::max(1, int(std::ceil(options.gap_m / voxel - 1e-9)));
-  Grid grid;
+  const double margin = 0.02 * longest + gap_m;
+  voxel = std::max(gap_m / 4, (longest + 2 * margin) / double(options.max_voxels_per_side - 4));
+  Voxels v;
   for (int axis = 0; axis < 3; ++axis) {
-    space.min_[axis] = lo[axis] - margin - 2 * voxel;
-    grid.dims[axis] = std::max(
-        3, int(std::ceil((hi[axis] - lo[axis] + 2 * margin + 4 * voxel) / voxel)));
-    grid.dims[axis] = std::min(grid.dims[axis], options.max_voxels_per_side);
+    min[axis] = lo[axis] - margin - 2 * voxel;
+    v.grid.dims[axis] = std::max(3, int(std::ceil((hi[axis] - lo[axis] + 2 * margin + 4 * voxel) / voxel)));
+    v.grid.dims[axis] = std::min(v.grid.dims[axis], options.max_voxels_per_side);
   }
-  space.dims_ = grid.dims;
-
-  std::vector<uint8_t> cells(grid.size(), kFree);
-  for (size_t i = 0; i < n; ++i) {
+  v.scanned.assign(v.grid.size(), kFree);
+  for (size_t i = 0; i < cloud.size(); ++i) {
     int c[3];
     bool in = true;
     for (int axis = 0; axis < 3; ++axis) {
-      const double f = std::floor((positions[3 * i + axis] - space.min_[axis]) / voxel);
-      in = in && f >= 0 && f < grid.dims[axis];
+      const double f = std::floor((positions[3 * i + axis] - min[axis]) / voxel);
+      in = in && f >= 0 && f < v.grid.dims[axis];
       c[axis] = in ? int(f) : 0;
     }
-    if (in) cells[grid.Index(c[0], c[1], c[2])] = kOccupied;
+    if (in) v.scanned[v.grid.Index(c[0], c[1], c[2])] = kOccupied;
   }
-  const std::vector<uint8_t> scanned = cells;  // voxels holding a point
-  Grow(grid, radius, kOccupied, cells);
+  return v;
+}
 
-  // The outside: free voxels the border reaches.
-  std::vector<uint32_t> queue;
-  for (int z = 0; z < grid.dims[2]; ++z) {
-    for (int y = 0; y < grid.dims[1]; ++y) {
-      for (int x = 0; x < grid.dims[0]; ++x) {
-        const bool border = x == 0 || y == 0 || z == 0 || x == grid.dims[0] - 1 ||
-                            y == grid.dims[1] - 1 || z == grid.dims[2] - 1;
-        const size_t i = grid.Index(x, y, z);
-        if (border && cells[i] == kFree) {
-          cells[i] = kOutside;
-          queue.push_back(uint32_t(i));
-        }
-      }
-    }
-  }
-  Fill(grid, kFree, kOutside, queue, cells);
-
-  // The enclosed parts, each kept if large enough.
+// Marks each 6-connected part of kFree voxels kEnclosed when it holds at
+// least `min_volume_m3` and `accept` takes its voxels, else kSmall (too
+// small) or kOutside (refused); returns the voxels marked kEnclosed.
+template <typename Accept>
+size_t KeepLargeParts(const Grid& grid, double voxel, double min_volume_m3, std::vector<uint8_t>& cells,
+                      Accept accept) {
   const double voxel_volume = voxel * voxel * voxel;
+  std::vector<uint32_t> queue;
   size_t enclosed = 0;
   for (size_t i = 0; i < cells.size(); ++i) {
     if (cells[i] != kFree) continue;
     queue.assign(1, uint32_t(i));
     cells[i] = kSmall;
     const size_t count = Fill(grid, kFree, kSmall, queue, cells);
-    if (double(count) * voxel_volume < options.min_volume_m3) continue;
-    for (uint32_t j : queue) cells[j] = kEnclosed;
+    if (double(count) * voxel_volume < min_volume_m3) continue;
+    const bool accepted = accept(queue);
+    for (uint32_t j : queue) cells[j] = accepted ? kEnclosed : kOutside;
+    if (!accepted) continue;
     enclosed += count;
   }
-  space.volume_m3_ = double(enclosed) * voxel_volume;
-  if (enclosed == 0) return space;
+  return enclosed;
+}
 
+struct LinesOfSight {
+  std::vector<uint8_t> meeting;  // per voxel, of the 26 directions
+  std::vector<uint8_t> leaving;  // per voxel, bit a * 2 + (d > 0): the axis direction leaves
+};
+
+// For every voxel, how many of the 26 lattice directions (a voxel's
+// neighbours') lead from it into an occupied voxel before the grid's border,
+// and which of the six along the axes do not. One sweep per direction, each
+// voxel taking its neighbour's answer.
+LinesOfSight LinesOfSightMeetingTheScan(const Grid& grid, const std::vector<uint8_t>& cells) {
+  LinesOfSight lines;
+  lines.meeting.assign(cells.size(), 0);
+  lines.leaving.assign(cells.size(), 0);
+  std::vector<uint8_t>& count = lines.meeting;
+  std::vector<uint8_t> meets(cells.size(), 0);
+  for (int dz = -1; dz <= 1; ++dz) {
+    for (int dy = -1; dy <= 1; ++dy) {
+      for (int dx = -1; dx <= 1; ++dx) {
+        if (dx == 0 && dy == 0 && dz == 0) continue;
+        const int d[3] = {dx, dy, dz};
+        // Visit each voxel after its neighbour along d.
+        for (int zi = 0; zi < grid.dims[2]; ++zi) {
+          const int z = dz > 0 ? grid.dims[2] - 1 - zi : zi;
+          for (int yi = 0; yi < grid.dims[1]; ++yi) {
+            const int y = dy > 0 ? grid.dims[1] - 1 - yi : yi;
+            for (int xi = 0; xi < grid.dims[0]; ++xi) {
+              const int x = dx > 0 ? grid.dims[0] - 1 - xi : xi;
+              const int nx = x + d[0], ny = y + d[1], nz = z + d[2];
+              const size_t i = grid.Index(x, y, z);
+              if (nx < 0 || ny < 0 || nz < 0 || nx >= grid.dims[0] || ny >= grid.dims[1] || nz >= grid.dims[2]) {
+                meets[i] = 0;
+                continue;
+              }
+              const size_t j = grid.Index(nx, ny, nz);
+              meets[i] = cells[j] == kOccupied || meets[j];
+              count[i] = uint8_t(count[i] + meets[i]);
+            }
+          }
+        }
+        if (std::abs(dx) + std::abs(dy) + std::abs(dz) != 1) continue;
+        const int axis = dx != 0 ? 0 : dy != 0 ? 1 : 2;
+        const uint8_t bit = uint8_t(1u << (2 * axis + (d[axis] > 0 ? 1 : 0)));
+        for (size_t i = 0; i < cells.size(); ++i) {
+          if (!meets[i]) lines.leaving[i] |= bit;
+        }
+      }
+    }
+  }
+  return lines;
+}
+
+}  // namespace
+
+// The deepest voxel of the parts marked kEnclosed in `cells`, and the space
+// reaching back from them to the scan (`outside_radius`: the growth that
+// made `cells`' occupancy).
+void EnclosedSpace::Finish(const std::array<int, 3>& dims, std::vector<uint8_t>& cells,
+                           const std::vector<uint8_t>& scanned, int outside_radius) {
+  Grid grid;
+  grid.dims = dims;
+  const double voxel = voxel_m_;
   // The deepest enclosed voxel: city-block distance to the nearest voxel
   // outside the parts, by a forward and a backward pass.
   std::vector<uint16_t> depth(cells.size(), 0);
@@ -192,7 +245,7 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
   auto center_of = [&](size_t i) {
     const std::array<int, 3> coords = grid.Coords(i);
     std::array<double, 3> c{};
-    for (int axis = 0; axis < 3; ++axis) c[axis] = space.min_[axis] + (double(coords[axis]) + 0.5) * voxel;
+    for (int axis = 0; axis < 3; ++axis) c[axis] = min_[axis] + (double(coords[axis]) + 0.5) * voxel;
     return c;
   };
   std::array<double, 3> mean{};
@@ -210,7 +263,7 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
     const std::array<double, 3> c = center_of(i);
     const double d2 = (c[0] - mean[0]) * (c[0] - mean[0]) + (c[1] - mean[1]) * (c[1] - mean[1]) +
                       (c[2] - mean[2]) * (c[2] - mean[2]);
-    if (d2 < nearest) nearest = d2, space.deepest_ = c;
+    if (d2 < nearest) nearest = d2, deepest_ = c;
   }
 
   // The space reaches back to the scan: from the parts, every voxel without
@@ -221,8 +274,8 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
   // object's inside (a table's) nor the outside through a door.
   std::vector<uint8_t> reach(cells.size(), 0);
   for (size_t i = 0; i < cells.size(); ++i) reach[i] = cells[i] == kOutside ? 1 : 0;
-  Grow(grid, radius + 1, 1, reach);
-  queue.clear();
+  Grow(grid, outside_radius + 1, 1, reach);
+  std::vector<uint32_t> queue;
   for (size_t i = 0; i < cells.size(); ++i) {
     if (cells[i] == kEnclosed) {
       reach[i] = 2;
@@ -232,8 +285,82 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
     }
   }
   Fill(grid, 0, 2, queue, reach);
-  space.inside_.resize(cells.size());
-  for (size_t i = 0; i < cells.size(); ++i) space.inside_[i] = reach[i] == 2;
+  inside_.resize(cells.size());
+  for (size_t i = 0; i < cells.size(); ++i) inside_[i] = reach[i] == 2;
+}
+
+Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const EnclosureOptions& options) {
+  EnclosedSpace space;
+  PB_ASSIGN_OR_RETURN(Voxels voxels, Prepare(cloud, options, options.gap_m, space.min_, space.voxel_m_));
+  const Grid& grid = voxels.grid;
+  space.dims_ = grid.dims;
+  const int radius = std::max(1, int(std::ceil(options.gap_m / space.voxel_m_ - 1e-9)));
+  std::vector<uint8_t> cells = voxels.scanned;
+  Grow(grid, radius, kOccupied, cells);
+
+  // The outside: free voxels the border reaches.
+  std::vector<uint32_t> queue;
+  for (int z = 0; z < grid.dims[2]; ++z) {
+    for (int y = 0; y < grid.dims[1]; ++y) {
+      for (int x = 0; x < grid.dims[0]; ++x) {
+        const bool border = x == 0 || y == 0 || z == 0 || x == grid.dims[0] - 1 ||
+                            y == grid.dims[1] - 1 || z == grid.dims[2] - 1;
+        const size_t i = grid.Index(x, y, z);
+        if (border && cells[i] == kFree) {
+          cells[i] = kOutside;
+          queue.push_back(uint32_t(i));
+        }
+      }
+    }
+  }
+  Fill(grid, kFree, kOutside, queue, cells);
+
+  // The enclosed parts, each kept if large enough.
+  const size_t enclosed = KeepLargeParts(grid, space.voxel_m_, options.min_volume_m3, cells,
+                                         [](const std::vector<uint32_t>&) { return true; });
+  space.volume_m3_ = double(enclosed) * space.voxel_m_ * space.voxel_m_ * space.voxel_m_;
+  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, radius);
+  return space;
+}
+
+Expected<EnclosedSpace> EnclosedSpace::FindOpen(const PointCloud& cloud, const EnclosureOptions& options) {
+  EnclosedSpace space;
+  space.open_ = true;
+  PB_ASSIGN_OR_RETURN(Voxels voxels, Prepare(cloud, options, options.open_gap_m, space.min_, space.voxel_m_));
+  const Grid& grid = voxels.grid;
+  space.dims_ = grid.dims;
+  const int radius = std::max(1, int(std::ceil(options.open_gap_m / space.voxel_m_ - 1e-9)));
+  std::vector<uint8_t> cells = voxels.scanned;
+  Grow(grid, radius, kOccupied, cells);
+
+  // Free voxels from which too many lines of sight leave the scan are
+  // outside; the others, surrounded, are candidates.
+  const LinesOfSight lines = LinesOfSightMeetingTheScan(grid, cells);
+  const int least = int(std::ceil(options.min_surrounded * 26 - 1e-9));
+  for (size_t i = 0; i < cells.size(); ++i) {
+    if (cells[i] == kFree && lines.meeting[i] < least) cells[i] = kOutside;
+  }
+  // A cup is an object's inside: along one axis the lines of sight leave
+  // from most of it (through the unscanned underside it rests on) and the
+  // other way from hardly any. A room's door lets few out; a corridor's ends
+  // let most out both ways.
+  auto not_a_cup = [&](const std::vector<uint32_t>& part) {
+    std::array<size_t, 6> leaving{};
+    for (uint32_t i : part) {
+      for (int bit = 0; bit < 6; ++bit) leaving[bit] += (lines.leaving[i] >> bit) & 1u;
+    }
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int side = 0; side < 2; ++side) {
+        const double out = double(leaving[2 * axis + side]) / double(part.size());
+        const double back = double(leaving[2 * axis + 1 - side]) / double(part.size());
+        if (out >= 0.5 && back <= 0.1) return false;
+      }
+    }
+    return true;
+  };
+  const size_t enclosed = KeepLargeParts(grid, space.voxel_m_, options.min_open_volume_m3, cells, not_a_cup);
+  space.volume_m3_ = double(enclosed) * space.voxel_m_ * space.voxel_m_ * space.voxel_m_;
+  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, radius);
   return space;
 }
 

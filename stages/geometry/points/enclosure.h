@@ -22,6 +22,24 @@
 // a closed object's inside (a table's, if its surface has no gap of a
 // voxel) nor the outside through a door.
 //
+// A room open on a side wider than 2 * gap_m (a corridor open at both
+// ends, a chapel whose doorway or windows the scan left open), or smaller
+// than 2 * gap_m plus about 1 m across (a cell, a sacristy), encloses
+// nothing so. FindOpen looks for such a space by what a person standing in
+// it sees: occupancy is grown by open_gap_m only (half the gap: openings
+// are not closed, so they need not be), and a free voxel counts when at least
+// min_surrounded of the 26 lattice directions from it (to its neighbours and
+// on across the grid) meet an occupied voxel before the grid's border; each
+// 6-connected part of such voxels holding at least min_open_volume_m3
+// counts, and reaches back to the scan as above (the outside being the free
+// voxels from which more lines of sight leave). In the middle of a corridor
+// 1.8 m wide only the two along it leave (24 of 26); beside an object, or in
+// the corner of two walls on a yard open to the sky, at least 7 do (the
+// sky's octant). An object's inside is not found unless it is closed all
+// round, its underside too, and more than about 2.3 m across: an object
+// resting on the ground was not scanned underneath, so from its inside the
+// lines of sight down leave through the ground.
+//
 // Cost: at most 256^3 voxels (16 MiB per byte of them; about 6 bytes each),
 // a few passes over them.
 #pragma once
@@ -40,6 +58,10 @@ struct EnclosureOptions {
   double gap_m = 0.75;         // openings up to twice this wide are closed
   double min_volume_m3 = 1.0;  // of an enclosed part, after the growth by gap_m
   int max_voxels_per_side = 256;
+  // FindOpen:
+  double open_gap_m = 0.375;        // occupancy grown by this only
+  double min_surrounded = 0.85;     // share of the 26 directions meeting the scan
+  double min_open_volume_m3 = 1.5;  // of a part, after the growth by open_gap_m
 };
 
 class EnclosedSpace {
@@ -48,8 +70,13 @@ class EnclosedSpace {
   // origin, as all queries below). Status::Invalid when the cloud is empty,
   // has a non-finite coordinate or an option is not positive.
   static Expected<EnclosedSpace> Find(const PointCloud& cloud, const EnclosureOptions& options = {});
+  // Finds the space a scan nearly encloses, open on a side or small (see
+  // above); for a scan Find finds nothing in. The same errors.
+  static Expected<EnclosedSpace> FindOpen(const PointCloud& cloud, const EnclosureOptions& options = {});
 
   bool empty() const { return volume_m3_ == 0.0; }
+  // Found by FindOpen: surrounded by the scan, not closed in.
+  bool open() const { return open_; }
   // Volume of the enclosed parts found, before growing them back to the scan.
   double volume_m3() const { return volume_m3_; }
   double voxel_m() const { return voxel_m_; }
@@ -62,6 +89,10 @@ class EnclosedSpace {
   std::array<double, 3> Deepest() const { return deepest_; }
 
  private:
+  void Finish(const std::array<int, 3>& dims, std::vector<uint8_t>& cells, const std::vector<uint8_t>& scanned,
+              int outside_radius);
+
+  bool open_ = false;
   std::array<double, 3> min_{};  // the grid's corner, relative to the origin
   std::array<int, 3> dims_{};
   double voxel_m_ = 0.0;

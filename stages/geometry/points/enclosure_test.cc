@@ -11,6 +11,7 @@ namespace pb {
 namespace {
 
 using ::testing::HasSubstr;
+using testing::AddBoxFaces;
 using testing::AddSphere;
 using testing::RoomWithTable;
 
@@ -85,6 +86,107 @@ TEST(EnclosureTest, ObjectsEncloseNothing) {
   EXPECT_TRUE(space->empty()) << space->volume_m3() << " m3";
 }
 
+// FindOpen: a room that Find cannot close in (open wider than 2 * gap_m,
+// or too small) is found by what one sees from inside it.
+
+// A corridor 10 x 1.8 x 2.6 m open at both ends, merged without stations.
+PointCloud OpenCorridor() {
+  PointCloud corridor;
+  const double lo[3] = {0, 0, 0}, hi[3] = {10.0, 1.8, 2.6};
+  AddBoxFaces(corridor, lo, hi, 0.04, 0.002, 11,
+              [](double x, double, double) { return x < 0.01 || x > 9.99; });
+  return corridor;
+}
+
+TEST(EnclosureTest, CorridorOpenAtBothEndsIsNearlyEnclosed) {
+  const PointCloud corridor = OpenCorridor();
+  const Expected<EnclosedSpace> closed = EnclosedSpace::Find(corridor);
+  ASSERT_TRUE(closed.ok());
+  EXPECT_TRUE(closed->empty());  // the ends, 1.8 m wide, stay open
+  const Expected<EnclosedSpace> space = EnclosedSpace::FindOpen(corridor);
+  ASSERT_TRUE(space.ok()) << space.status().message();
+  ASSERT_FALSE(space->empty());
+  EXPECT_TRUE(space->open());
+  EXPECT_FALSE(closed->open());
+  // (10 - 0.75) x (1.8 - 0.75) x (2.6 - 0.75) m = 18 m3 less the ends,
+  // from which the lines of sight along the corridor leave.
+  EXPECT_GT(space->volume_m3(), 8.0);
+  EXPECT_LT(space->volume_m3(), 18.5);
+  EXPECT_TRUE(Contains(*space, 5.0, 0.9, 1.3));
+  EXPECT_TRUE(Contains(*space, 5.0, 0.1, 1.3));  // beside a wall
+  EXPECT_TRUE(Contains(*space, 2.0, 0.9, 0.1));  // on the floor
+  EXPECT_FALSE(Contains(*space, 5.0, -0.4, 1.3));  // behind a wall
+  EXPECT_FALSE(Contains(*space, 5.0, 0.9, 3.0));   // above the ceiling
+  EXPECT_FALSE(Contains(*space, -1.0, 0.9, 1.3));  // out past an end
+  const std::array<double, 3> deepest = space->Deepest();
+  EXPECT_NEAR(deepest[1], 0.9, 0.3);
+  EXPECT_GT(deepest[2], 0.6);
+  EXPECT_LT(deepest[2], 2.0);
+}
+
+// A cell 2.2 x 2 x 2.5 m with a door: Find's gap fills it; FindOpen's not.
+// And the room with a 2 m opening that Find leaves open.
+TEST(EnclosureTest, SmallRoomAndWideOpeningAreNearlyEnclosed) {
+  PointCloud cell;
+  const double lo[3] = {0, 0, 0}, hi[3] = {2.2, 2.0, 2.5};
+  AddBoxFaces(cell, lo, hi, 0.03, 0.002, 12, [](double x, double y, double z) {
+    return y < 0.01 && z < 2.0 && x > 0.65 && x < 1.55;
+  });
+  const Expected<EnclosedSpace> closed = EnclosedSpace::Find(cell);
+  ASSERT_TRUE(closed.ok());
+  EXPECT_TRUE(closed->empty());
+  const Expected<EnclosedSpace> space = EnclosedSpace::FindOpen(cell);
+  ASSERT_TRUE(space.ok());
+  EXPECT_FALSE(space->empty());
+  EXPECT_TRUE(Contains(*space, 1.1, 1.0, 1.25));
+  EXPECT_FALSE(Contains(*space, 1.1, -0.5, 1.0));  // out through the door
+
+  const PointCloud room = RoomWithTable(6.0, 4.5, 2.0, 3);
+  const Expected<EnclosedSpace> wide = EnclosedSpace::FindOpen(room);
+  ASSERT_TRUE(wide.ok());
+  EXPECT_GT(wide->volume_m3(), 8.0);
+  EXPECT_TRUE(Contains(*wide, 4.5, 2.0, 1.5));
+  EXPECT_FALSE(Contains(*wide, 2.4, 2.65, 0.4));  // inside the table
+  EXPECT_FALSE(Contains(*wide, 3.0, -0.5, 1.0));  // out through the opening
+}
+
+// What FindOpen must not take for a room: objects (a 2 m ball closed all
+// round; boxes standing on paving, not scanned underneath: a 1.6 m plinth,
+// and a 3 m monument whose inside is large and surrounded but a cup, open
+// below) and an open scene (two walls meeting in a corner on a yard, open
+// to the sky).
+TEST(EnclosureTest, ObjectsAndOpenScenesAreNotNearlyEnclosed) {
+  const double center[3] = {10.0, -3.0, 1.0};
+  PointCloud ball;
+  AddSphere(ball, center, 1.0, 60000, 0.001, 4);
+  PointCloud plinth;  // a 1.6 x 1.6 x 2 m box on 6 x 6 m of paving
+  const double plo[3] = {2.2, 2.2, 0}, phi[3] = {3.8, 3.8, 2.0};
+  AddBoxFaces(plinth, plo, phi, 0.04, 0.002, 5, [](double, double, double z) { return z < 0.01; });
+  const double glo[3] = {0, 0, -0.2}, ghi[3] = {6, 6, 0};
+  AddBoxFaces(plinth, glo, ghi, 0.04, 0.002, 6, [&](double x, double y, double z) {
+    return z < -0.01 || (x > plo[0] && x < phi[0] && y > plo[1] && y < phi[1]);
+  });
+  PointCloud monument;  // a 3 m cube on 9 x 9 m of paving
+  const double mlo[3] = {3, 3, 0}, mhi[3] = {6, 6, 3}, mglo[3] = {0, 0, -0.2}, mghi[3] = {9, 9, 0};
+  AddBoxFaces(monument, mlo, mhi, 0.05, 0.002, 10, [](double, double, double z) { return z < 0.01; });
+  AddBoxFaces(monument, mglo, mghi, 0.05, 0.002, 11, [&](double x, double y, double z) {
+    return z < -0.01 || (x > mlo[0] && x < mhi[0] && y > mlo[1] && y < mhi[1]);
+  });
+  PointCloud corner;  // walls 8 m long and 6 m tall on 8 x 8 m of yard
+  const double wx[3] = {0, 0, 0}, wxh[3] = {8, 0.3, 6}, wy[3] = {0, 0, 0}, wyh[3] = {0.3, 8, 6};
+  const double ylo[3] = {0, 0, -0.2}, yhi[3] = {8, 8, 0};
+  auto inner = [](double, double, double) { return false; };
+  AddBoxFaces(corner, wx, wxh, 0.05, 0.002, 7, inner);
+  AddBoxFaces(corner, wy, wyh, 0.05, 0.002, 8, inner);
+  AddBoxFaces(corner, ylo, yhi, 0.05, 0.002, 9, [](double, double, double z) { return z < -0.01; });
+  for (const auto& [name, cloud] : {std::pair<const char*, const PointCloud*>{"ball", &ball},
+                                    {"plinth", &plinth}, {"monument", &monument}, {"corner", &corner}}) {
+    const Expected<EnclosedSpace> space = EnclosedSpace::FindOpen(*cloud);
+    ASSERT_TRUE(space.ok()) << name;
+    EXPECT_TRUE(space->empty()) << name << ": " << space->volume_m3() << " m3";
+  }
+}
+
 TEST(EnclosureTest, BadInput) {
   PointCloud cloud;
   EXPECT_THAT(EnclosedSpace::Find(cloud).status().message(), HasSubstr("no points"));
@@ -92,6 +194,9 @@ TEST(EnclosureTest, BadInput) {
   EXPECT_THAT(EnclosedSpace::Find(cloud).status().message(), HasSubstr("point 1"));
   cloud.positions = {0, 0, 0};
   EXPECT_FALSE(EnclosedSpace::Find(cloud, {.gap_m = 0}).ok());
+  EXPECT_FALSE(EnclosedSpace::FindOpen(cloud, {.min_surrounded = 1.5}).ok());
+  cloud.positions = {0, 0, 0, 1, std::nanf(""), 0};
+  EXPECT_THAT(EnclosedSpace::FindOpen(cloud).status().message(), HasSubstr("point 1"));
 }
 
 }  // namespace

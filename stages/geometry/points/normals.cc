@@ -671,6 +671,14 @@ Status EstimateInArena(PointCloud& cloud, const NormalOptions& options, NormalRe
       }
     }
     index.reset();
+    // No room closed in and no station: a room open on a side or small
+    // (a corridor, a cell; enclosure.h's FindOpen) still faces in.
+    if (!enclosure && !report.station_found && options.interior == NormalInterior::kAuto) {
+      PB_ASSIGN_OR_RETURN(enclosure, EnclosedSpace::FindOpen(cloud));
+      report.enclosed_volume_m3 = enclosure->volume_m3();
+      report.enclosure_open = !enclosure->empty();
+      if (enclosure->empty()) enclosure.reset();
+    }
     if (report.station_found) {
       report.orientation_used = NormalOrientation::kStations;
       report.flipped = OrientTowardStations(cloud, &report.station);

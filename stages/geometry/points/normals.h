@@ -27,6 +27,10 @@
 //               room) faces it, and the propagation grows from those points
 //               to the rest (propagation alone is unreliable across the
 //               sharp creases where furniture meets a floor). Without an
+//               enclosed space and no lost station found (find_station),
+//               the space the scan nearly encloses (enclosure.h's
+//               FindOpen: a corridor open at its ends, a room with a wide
+//               doorway, a cell) is faced the same way. Without either
 //               enclosed space (an object), rays over a voxel grid decide
 //               first the points open on one side and closed on the other
 //               (of 48 directions, those within 60 degrees of either
@@ -116,7 +120,10 @@ struct NormalReport {
   NormalOrientation orientation_used = NormalOrientation::kNone;  // kAuto resolved
   // kPropagate with interior kAuto: the enclosed space found (0: none), and
   // the points oriented to face it (the rest by propagation).
+  // enclosure_open: found by EnclosedSpace::FindOpen (no room closed in,
+  // no station found), a room open on a side or small.
   double enclosed_volume_m3 = 0.0;
+  bool enclosure_open = false;
   size_t facing_enclosure = 0;
   // kPropagate without enclosed space (an object): the points whose side
   // rays decided (the rest by propagation from them).

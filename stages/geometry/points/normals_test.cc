@@ -466,18 +466,52 @@ TEST(NormalsTest, PropagationFacesARoomsInside) {
   EXPECT_LT(SidesOf(room, 6.0, 4.5).walls_inward, 0.01);
 }
 
-// A room open on a side wider than the enclosure test closes: auto finds no
-// enclosed space and faces outward; interior: yes faces it inward.
-TEST(NormalsTest, InteriorYesForARoomTheTestMisses) {
+// A room open on a side wider than the enclosure test closes (a 2.5 m
+// doorway): no enclosed space, but from inside it most lines of sight meet
+// the scan (enclosure.h, FindOpen), and auto faces it inward (version 7;
+// version 6 faced it out). Open across a whole wall, it is a cup, as an
+// object's inside is from its open underside: auto faces it outward, and
+// interior: yes is for it.
+TEST(NormalsTest, ARoomOpenOnASideFacesIn) {
   PointCloud room = testing::RoomWithTable(6.0, 4.5, 2.5, 3);
   NormalReport report;
   ASSERT_TRUE(EstimateNormals(room, {}, &report).ok());
+  EXPECT_GT(report.enclosed_volume_m3, 8.0);
+  EXPECT_TRUE(report.enclosure_open);
+  EXPECT_GT(report.facing_enclosure, room.size() / 2);
+  RoomSides sides = SidesOf(room, 6.0, 4.5);
+  EXPECT_GT(sides.walls_inward, 0.99);
+  EXPECT_GT(sides.table_outward, 0.95);
+
+  room = testing::RoomWithTable(6.0, 4.5, 6.0, 3);  // no wall below the lintel
+  ASSERT_TRUE(EstimateNormals(room, {}, &report).ok());
   EXPECT_EQ(report.enclosed_volume_m3, 0.0);
+  EXPECT_FALSE(report.enclosure_open);
   EXPECT_EQ(report.facing_enclosure, 0u);
   EXPECT_LT(SidesOf(room, 6.0, 4.5).walls_inward, 0.01);
-  room = testing::RoomWithTable(6.0, 4.5, 2.5, 3);
+  room = testing::RoomWithTable(6.0, 4.5, 6.0, 3);
   ASSERT_TRUE(EstimateNormals(room, {.interior = NormalInterior::kYes}, &report).ok());
   EXPECT_GT(SidesOf(room, 6.0, 4.5).walls_inward, 0.99);
+}
+
+// A corridor open at both ends, merged without its stations: version 6
+// faced its walls, floor and ceiling out (every line of sight from the wall's
+// outside leaves the scan, and the propagation took that side).
+TEST(NormalsTest, ACorridorOpenAtBothEndsFacesIn) {
+  PointCloud corridor;
+  const double lo[3] = {0, 0, 0}, hi[3] = {10.0, 1.8, 2.6};
+  testing::AddBoxFaces(corridor, lo, hi, 0.04, 0.002, 11,
+                       [](double x, double, double) { return x < 0.01 || x > 9.99; });
+  NormalReport report;
+  ASSERT_TRUE(EstimateNormals(corridor, {}, &report).ok());
+  EXPECT_TRUE(report.enclosure_open);
+  size_t inward = 0;
+  for (size_t i = 0; i < corridor.size(); ++i) {
+    const float* p = &corridor.positions[3 * i];
+    const float* n = &corridor.normals[3 * i];
+    inward += (0.9 - p[1]) * n[1] + (1.3 - p[2]) * n[2] > 0;  // toward the corridor's axis
+  }
+  EXPECT_GT(double(inward) / double(corridor.size()), 0.99) << inward << " of " << corridor.size();
 }
 
 }  // namespace

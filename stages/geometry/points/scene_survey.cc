@@ -236,9 +236,11 @@ void InteriorViews(const PointCloud& cloud, const EnclosedSpace& space, const Ve
     sector->elevation = 0;  // level: walls, floor and ceiling in one frame
     SurveyViewpoint view = ViewToward(eye, 0.0, *sector, up, e1, e2, options.fov_deg);
     view.name = "inside" + std::to_string(k + 1);
-    view.why = (k == 0 ? std::string("from the place deepest in the free space the scan encloses "
-                                     "(no stations: a room merged into one file), level, toward "
-                                     "the 60-degree sector whose points lie farthest (")
+    view.why = (k == 0 ? std::string("from the place deepest in the free space the scan ") +
+                             (space.open() ? "nearly encloses (no stations: a room open on a side, or "
+                                             "small, merged into one file)"
+                                           : "encloses (no stations: a room merged into one file)") +
+                             ", level, toward the 60-degree sector whose points lie farthest ("
                        : "from there, level, toward the farthest sector at least " +
                              std::string(k < 2 ? "120" : "90") + " degrees from the views before (") +
                Percent(sector->share) + " % of the points, their median " +
@@ -432,8 +434,13 @@ Expected<SceneSurvey> SurveyScene(const PointCloud& cloud, const SceneSurveyOpti
   if (!cloud.stations.empty()) StationViews(cloud, up, e1, e2, options, &survey);
   if (survey.viewpoints.empty()) {
     // No stations: a room merged into one file is seen from inside.
-    PB_ASSIGN_OR_RETURN(const EnclosedSpace space, EnclosedSpace::Find(cloud));
+    PB_ASSIGN_OR_RETURN(EnclosedSpace space, EnclosedSpace::Find(cloud));
+    // Or a room open on a side, or small: a corridor, a cell.
+    if (space.empty()) {
+      PB_ASSIGN_OR_RETURN(space, EnclosedSpace::FindOpen(cloud));
+    }
     survey.enclosed_volume_m3 = space.volume_m3();
+    survey.enclosure_open = space.open() && !space.empty();
     if (!space.empty()) InteriorViews(cloud, space, up, e1, e2, options, &survey);
   }
   if (survey.viewpoints.empty()) FaceOnViews(cloud, up, e1, e2, options, &survey);

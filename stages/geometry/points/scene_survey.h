@@ -43,7 +43,8 @@
 //     view: the first station's view turned 40° about its target and raised,
 //     which shows what the scanner did not see (the sides Poisson closes).
 //   * A scan without stations that encloses free space (enclosure.h: a
-//     room merged into one file, seen from inside): three level views from
+//     room merged into one file, seen from inside; else FindOpen's space,
+//     a corridor open at its ends, a cell too small for Find): three level views from
 //     the enclosed place farthest from the scan, toward the 60° sector of
 //     azimuths whose points lie farthest (median distance, of the sectors
 //     holding at least 1 % of them: down the room's length, walls, floor
@@ -100,6 +101,7 @@ struct SceneSurvey {
   Bounds robust_bounds;    // absolute; per axis the 1st..99th percentile of the points
   size_t stations = 0;     // stations with at least one point
   double enclosed_volume_m3 = 0.0;  // without stations: the free space enclosed (enclosure.h)
+  bool enclosure_open = false;      // that space found by FindOpen: open on a side, or small
   int depth_high = 0, depth_low = 0;
   int64_t faces_high = 0, faces_low = 0;
   int texture = 0, frame_size = 0;

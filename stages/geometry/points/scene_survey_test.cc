@@ -234,6 +234,29 @@ TEST(SceneSurveyTest, WithoutStationsARoomIsSeenFromInside) {
   EXPECT_EQ(survey->viewpoints[0].name, "front");
 }
 
+// A corridor open at both ends (no stations): Find closes nothing in, but
+// the space it nearly encloses is stood in (enclosure.h, FindOpen) and the
+// first view looks down its length.
+TEST(SceneSurveyTest, WithoutStationsACorridorIsSeenFromInside) {
+  PointCloud corridor;
+  const double lo[3] = {0, 0, 0}, hi[3] = {10.0, 1.8, 2.6};
+  testing::AddBoxFaces(corridor, lo, hi, 0.04, 0.002, 11,
+                       [](double x, double, double) { return x < 0.01 || x > 9.99; });
+  const Expected<SceneSurvey> survey = SurveyScene(corridor);
+  ASSERT_TRUE(survey.ok()) << survey.status().message();
+  EXPECT_TRUE(survey->enclosure_open);
+  EXPECT_GT(survey->enclosed_volume_m3, 8.0);
+  ASSERT_EQ(survey->viewpoints.size(), 3u);
+  const SurveyViewpoint& first = survey->viewpoints[0];
+  EXPECT_EQ(first.name, "inside1");
+  EXPECT_NE(first.why.find("nearly encloses"), std::string::npos) << first.why;
+  EXPECT_GT(first.eye[1], 0.3);
+  EXPECT_LT(first.eye[1], 1.5);
+  EXPECT_GT(first.eye[2], 0.5);
+  EXPECT_LT(first.eye[2], 2.1);
+  EXPECT_GT(std::abs(first.target[0] - first.eye[0]), 3 * std::abs(first.target[1] - first.eye[1]));
+}
+
 TEST(SceneSurveyTest, WithoutStationsFromTheSideTheNormalsFace) {
   for (float facing : {-1.0f, 1.0f}) {
     PointCloud cloud = Wall();
