@@ -2,8 +2,8 @@
 """A room registered and exported as one cloud, without its scanner stations,
 for ctest campaign_runs.scene_from_scan.merged_room (tests/merged_room.sh).
 
-  merged_room.py make OUT.ply     writes the room (binary PLY: x y z, colors)
-  merged_room.py check GLB...     asserts each glTF model faces into the room
+  merged_room.py make OUT.ply [corridor]   writes the room (binary PLY: x y z, colors)
+  merged_room.py check GLB...              asserts each glTF model faces into the room
 
 The room is 5 x 4 x 2.8 m, its faces sampled on a jittered 2.5 cm grid with
 1.5 mm of noise across them (about 140,000 points), with a door 0.9 m wide
@@ -11,6 +11,13 @@ and 2 m high and a window 1.2 x 1 m left open (no points beyond them, as a
 scan's), a table (top and sides) standing in it, and dark and light 20 cm
 squares in a hue per face, with 2 % color noise. Deterministic (a fixed
 seed).
+
+`corridor` writes a corridor instead, 9 x 1.8 x 2.6 m, open at both ends (no
+end walls: the scan stops there), with a window 1.2 x 1 m in one wall and a
+bench (top and sides) against the other, about 130,000 points: the free
+space it encloses reaches the cloud's box through its ends, so the enclosure
+test closes nothing in, and until points.normals 7 it was meshed inside-out
+and viewed from outside.
 
 `check` reads each model.glb (positions and triangles of its meshes, node
 transforms being rotations and translations, which keep the sides) and
@@ -64,12 +71,26 @@ def box_faces(points, lo, hi, rng, skip, tint):
                     points.append((p, color))
 
 
-def make(path):
+CORRIDOR = (9.0, 1.8, 2.6)
+
+
+def corridor_opening(x, y, z):
+    ends = x < 0.01 or x > CORRIDOR[0] - 0.01
+    window = y > CORRIDOR[1] - 0.01 and 3.0 < x < 4.2 and 0.9 < z < 1.9
+    return ends or window
+
+
+def make(path, kind="room"):
     rng = random.Random(15)
     points = []
-    box_faces(points, (0, 0, 0), (WIDTH, DEPTH, HEIGHT), rng, opening, 0)
-    # A table: its top and sides, not its bottom on the floor.
-    box_faces(points, (1.5, 1.8, 0.0), (2.7, 2.6, 0.75), rng, lambda x, y, z: z < 0.01, 6)
+    if kind == "corridor":
+        box_faces(points, (0, 0, 0), CORRIDOR, rng, corridor_opening, 0)
+        # A bench against the wall y = 0: its top and its other sides.
+        box_faces(points, (5.0, 0.0, 0.0), (6.5, 0.45, 0.45), rng, lambda x, y, z: z < 0.01 or y < 0.01, 6)
+    else:
+        box_faces(points, (0, 0, 0), (WIDTH, DEPTH, HEIGHT), rng, opening, 0)
+        # A table: its top and sides, not its bottom on the floor.
+        box_faces(points, (1.5, 1.8, 0.0), (2.7, 2.6, 0.75), rng, lambda x, y, z: z < 0.01, 6)
     with open(path, "wb") as out:
         out.write((
             "ply\nformat binary_little_endian 1.0\nelement vertex %d\n"
@@ -182,8 +203,8 @@ def check(paths, least=0.9):
 
 
 if __name__ == "__main__":
-    if len(sys.argv) == 3 and sys.argv[1] == "make":
-        make(sys.argv[2])
+    if len(sys.argv) in (3, 4) and sys.argv[1] == "make" and sys.argv[3:] in ([], ["corridor"]):
+        make(sys.argv[2], *sys.argv[3:])
     elif len(sys.argv) >= 2 and sys.argv[1] == "check":
         sys.exit(check(sys.argv[2:]))
     else:
