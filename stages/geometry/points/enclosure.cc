@@ -82,10 +82,13 @@ size_t Fill(const Grid& grid, uint8_t from, uint8_t to, std::vector<uint32_t>& q
 }
 
 
-// The grid over the cloud's robust box and the voxels holding a point.
+// The grid over the cloud's robust box, the voxels holding a point, and
+// those grown by the gap.
 struct Voxels {
   Grid grid;
   std::vector<uint8_t> scanned;  // kOccupied where a point lies, else kFree
+  std::vector<uint8_t> cells;    // scanned grown by `radius` voxels
+  int radius = 0;                // the gap in voxels
 };
 
 // Voxels of `gap_m` / 4, or coarser to fit max_voxels_per_side.
@@ -122,6 +125,9 @@ Expected<Voxels> Prepare(const PointCloud& cloud, const EnclosureOptions& option
     }
     if (in) v.scanned[v.grid.Index(c[0], c[1], c[2])] = kOccupied;
   }
+  v.radius = std::max(1, int(std::ceil(gap_m / voxel - 1e-9)));
+  v.cells = v.scanned;
+  Grow(v.grid, v.radius, kOccupied, v.cells);
   return v;
 }
 
@@ -293,10 +299,8 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
   EnclosedSpace space;
   PB_ASSIGN_OR_RETURN(Voxels voxels, Prepare(cloud, options, options.gap_m, space.min_, space.voxel_m_));
   const Grid& grid = voxels.grid;
+  std::vector<uint8_t>& cells = voxels.cells;
   space.dims_ = grid.dims;
-  const int radius = std::max(1, int(std::ceil(options.gap_m / space.voxel_m_ - 1e-9)));
-  std::vector<uint8_t> cells = voxels.scanned;
-  Grow(grid, radius, kOccupied, cells);
 
   // The outside: free voxels the border reaches.
   std::vector<uint32_t> queue;
@@ -319,7 +323,7 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
   const size_t enclosed = KeepLargeParts(grid, space.voxel_m_, options.min_volume_m3, cells,
                                          [](const std::vector<uint32_t>&) { return true; });
   space.volume_m3_ = double(enclosed) * space.voxel_m_ * space.voxel_m_ * space.voxel_m_;
-  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, radius);
+  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, voxels.radius);
   return space;
 }
 
@@ -328,10 +332,8 @@ Expected<EnclosedSpace> EnclosedSpace::FindOpen(const PointCloud& cloud, const E
   space.open_ = true;
   PB_ASSIGN_OR_RETURN(Voxels voxels, Prepare(cloud, options, options.open_gap_m, space.min_, space.voxel_m_));
   const Grid& grid = voxels.grid;
+  std::vector<uint8_t>& cells = voxels.cells;
   space.dims_ = grid.dims;
-  const int radius = std::max(1, int(std::ceil(options.open_gap_m / space.voxel_m_ - 1e-9)));
-  std::vector<uint8_t> cells = voxels.scanned;
-  Grow(grid, radius, kOccupied, cells);
 
   // Free voxels from which too many lines of sight leave the scan are
   // outside; the others, surrounded, are candidates.
@@ -360,7 +362,7 @@ Expected<EnclosedSpace> EnclosedSpace::FindOpen(const PointCloud& cloud, const E
   };
   const size_t enclosed = KeepLargeParts(grid, space.voxel_m_, options.min_open_volume_m3, cells, not_a_cup);
   space.volume_m3_ = double(enclosed) * space.voxel_m_ * space.voxel_m_ * space.voxel_m_;
-  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, radius);
+  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, voxels.radius);
   return space;
 }
 
