@@ -153,8 +153,8 @@ TEST(EnclosureTest, SmallRoomAndWideOpeningAreNearlyEnclosed) {
 // What FindOpen must not take for a room: objects (a 2 m ball closed all
 // round; boxes standing on paving, not scanned underneath: a 1.6 m plinth,
 // and a 3 m monument whose inside is large and surrounded but a cup, open
-// below) and an open scene (two walls meeting in a corner on a yard, open
-// to the sky).
+// below) and open scenes (two walls meeting in a corner on a yard, open
+// to the sky; a statue in a niche of a wall, on the floor before it).
 TEST(EnclosureTest, ObjectsAndOpenScenesAreNotNearlyEnclosed) {
   const double center[3] = {10.0, -3.0, 1.0};
   PointCloud ball;
@@ -179,8 +179,29 @@ TEST(EnclosureTest, ObjectsAndOpenScenesAreNotNearlyEnclosed) {
   AddBoxFaces(corner, wx, wxh, 0.05, 0.002, 7, inner);
   AddBoxFaces(corner, wy, wyh, 0.05, 0.002, 8, inner);
   AddBoxFaces(corner, ylo, yhi, 0.05, 0.002, 9, [](double, double, double z) { return z < -0.01; });
+  // A statue in a niche 2 m wide, 1.2 m deep and 3.5 m tall in the front
+  // of a wall 6 m wide and 5 m tall, on 6 x 6 m of floor before it: open to
+  // the front and the sky.
+  PointCloud niche;
+  const double wlo[3] = {0, 0, 0}, whi[3] = {6, 1.5, 5}, nlo[3] = {2, 0, 0}, nhi[3] = {4, 1.2, 3.5};
+  AddBoxFaces(niche, wlo, whi, 0.05, 0.002, 12, [&](double x, double y, double z) {
+    return y > 0.01 || (x > nlo[0] && x < nhi[0] && z < nhi[2]);  // the wall's front, less the niche
+  });
+  AddBoxFaces(niche, nlo, nhi, 0.05, 0.002, 13, [](double, double y, double) { return y < 0.01; });
+  const double flo[3] = {0, -6, -0.2}, fhi[3] = {6, 0, 0};
+  AddBoxFaces(niche, flo, fhi, 0.05, 0.002, 14, [](double, double, double z) { return z < -0.01; });
+  PointCloud figure;
+  const double figure_center[3] = {3.0, 0.6, 0.9};
+  AddSphere(figure, figure_center, 1.0, 30000, 0.001, 15);
+  for (size_t i = 0; i < figure.size(); ++i) {  // 0.8 x 0.6 x 1.8 m, standing in the niche
+    for (int a = 0; a < 3; ++a) {
+      const double scale = a == 0 ? 0.4 : a == 1 ? 0.3 : 0.9;
+      niche.positions.push_back(float(figure_center[a] + scale * (figure.positions[3 * i + a] - figure_center[a])));
+    }
+  }
   for (const auto& [name, cloud] : {std::pair<const char*, const PointCloud*>{"ball", &ball},
-                                    {"plinth", &plinth}, {"monument", &monument}, {"corner", &corner}}) {
+                                    {"plinth", &plinth}, {"monument", &monument}, {"corner", &corner},
+                                    {"niche", &niche}}) {
     const Expected<EnclosedSpace> space = EnclosedSpace::FindOpen(*cloud);
     ASSERT_TRUE(space.ok()) << name;
     EXPECT_TRUE(space->empty()) << name << ": " << space->volume_m3() << " m3";
