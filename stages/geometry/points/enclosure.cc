@@ -81,7 +81,6 @@ size_t Fill(const Grid& grid, uint8_t from, uint8_t to, std::vector<uint32_t>& q
   return queue.size();
 }
 
-
 // The grid over the cloud's robust box, the voxels holding a point, and
 // those grown by the gap.
 struct Voxels {
