@@ -31,14 +31,19 @@
 // min_surrounded of the 26 lattice directions from it (to its neighbours and
 // on across the grid) meet an occupied voxel before the grid's border; each
 // 6-connected part of such voxels holding at least min_open_volume_m3
-// counts, and reaches back to the scan as above (the outside being the free
-// voxels from which more lines of sight leave). In the middle of a corridor
-// 1.8 m wide only the two along it leave (24 of 26); beside an object, or in
-// the corner of two walls on a yard open to the sky, at least 7 do (the
-// sky's octant). An object's inside is not found unless it is closed all
-// round, its underside too, and more than about 2.3 m across: an object
-// resting on the ground was not scanned underneath, so from its inside the
-// lines of sight down leave through the ground.
+// counts, unless it is a cup, and reaches back to the scan as above (the
+// outside being the free voxels from which more lines of sight leave). In
+// the middle of a corridor 1.8 m wide only the two along it leave (24 of
+// 26); beside an object, or in the corner of two walls on a yard open to the
+// sky, at least 7 do (the sky's octant). The inside of an object resting on
+// the ground is surrounded too (only the few directions through its
+// unscanned footprint leave: a 3 m cube on paving keeps 7 m3), but it is a
+// cup: along one axis the line straight out leaves from at least half of
+// the part's voxels, and the other way from at most a tenth. A room's door
+// lets that line out from few voxels; a corridor's ends let it out both
+// ways; a passage open at one end only (a dead end, an apse) is a cup too
+// and is not found. An object closed all round, its underside too, is
+// found only when more than about 2.3 m across.
 //
 // Cost: at most 256^3 voxels (16 MiB per byte of them; about 6 bytes each),
 // a few passes over them; FindOpen about 9 bytes each and 26 more passes
