@@ -11,6 +11,7 @@
 #include "cli/command_args.h"
 #include "engine/workflow.h"
 #include "stages/geometry/io/scan_read.h"
+#include "stages/geometry/points/enclosure.h"
 #include "stages/geometry/points/lost_station.h"
 #include "stages/geometry/points/scene_survey.h"
 
@@ -124,14 +125,17 @@ std::string SceneYaml(const std::string& name, const std::string& scan_in_file,
        Length(survey.spacing_m) + ",\n";
   y += "# robust extent " + Length(extent[0]) + " x " + Length(extent[1]) + " x " +
        Length(extent[2]) + " (1st to 99th percentile per axis).\n";
+  const EnclosureOptions enclosure;  // the survey's and points.normals' figures
   if (survey.enclosed_volume_m3 > 0 && !survey.enclosure_open)
-    y += "# The points enclose " + Number(std::round(survey.enclosed_volume_m3)) +
-         " m3 of free space (0.75 m or more from them): an interior,\n"
+    y += "# The points enclose " + Number(std::round(survey.enclosed_volume_m3)) + " m3 of free space (" +
+         Number(enclosure.gap_m) +
+         " m or more from them): an interior,\n"
          "# viewed from inside; points.normals (interior: auto) faces its normals in.\n";
   if (survey.enclosure_open)
-    y += "# The points nearly enclose " + Number(std::round(survey.enclosed_volume_m3)) +
-         " m3 of free space (0.375 m or more from them; from it at\n"
-         "# least 85 % of the lines of sight meet the scan): an interior open on a side, or\n"
+    y += "# The points nearly enclose " + Number(std::round(survey.enclosed_volume_m3)) + " m3 of free space (" +
+         Number(enclosure.open_gap_m) + " m or more from them; from it at\n# least " +
+         Number(100 * enclosure.min_surrounded) +
+         " % of the lines of sight meet the scan): an interior open on a side, or\n"
          "# small, viewed from inside; points.normals (interior: auto) faces its normals in.\n";
   if (survey.stations == 0 && !(survey.enclosed_volume_m3 > 0))
     y += "# No scanner station: nothing says which side of an open surface was scanned. If\n"

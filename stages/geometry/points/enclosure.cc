@@ -206,13 +206,11 @@ LinesOfSight LinesOfSightMeetingTheScan(const Grid& grid, const std::vector<uint
 
 }  // namespace
 
-// The deepest voxel of the parts marked kEnclosed in `cells`, and the space
-// reaching back from them to the scan (`outside_radius`: the growth that
-// made `cells`' occupancy).
-void EnclosedSpace::Finish(const std::array<int, 3>& dims, std::vector<uint8_t>& cells,
-                           const std::vector<uint8_t>& scanned, int outside_radius) {
-  Grid grid;
-  grid.dims = dims;
+// The deepest voxel of the parts marked kEnclosed in `cells` (on the grid
+// dims_), and the space reaching back from them to the scan
+// (`outside_radius`: the growth that made `cells`' occupancy).
+void EnclosedSpace::Finish(std::vector<uint8_t>& cells, const std::vector<uint8_t>& scanned, int outside_radius) {
+  const Grid grid{dims_};
   const double voxel = voxel_m_;
   // The deepest enclosed voxel: city-block distance to the nearest voxel
   // outside the parts, by a forward and a backward pass.
@@ -322,7 +320,7 @@ Expected<EnclosedSpace> EnclosedSpace::Find(const PointCloud& cloud, const Enclo
   const size_t enclosed = KeepLargeParts(grid, space.voxel_m_, options.min_volume_m3, cells,
                                          [](const std::vector<uint32_t>&) { return true; });
   space.volume_m3_ = double(enclosed) * space.voxel_m_ * space.voxel_m_ * space.voxel_m_;
-  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, voxels.radius);
+  if (enclosed > 0) space.Finish(cells, voxels.scanned, voxels.radius);
   return space;
 }
 
@@ -361,7 +359,7 @@ Expected<EnclosedSpace> EnclosedSpace::FindOpen(const PointCloud& cloud, const E
   };
   const size_t enclosed = KeepLargeParts(grid, space.voxel_m_, options.min_open_volume_m3, cells, not_a_cup);
   space.volume_m3_ = double(enclosed) * space.voxel_m_ * space.voxel_m_ * space.voxel_m_;
-  if (enclosed > 0) space.Finish(grid.dims, cells, voxels.scanned, voxels.radius);
+  if (enclosed > 0) space.Finish(cells, voxels.scanned, voxels.radius);
   return space;
 }
 

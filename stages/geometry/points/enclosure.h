@@ -96,8 +96,7 @@ class EnclosedSpace {
   std::array<double, 3> Deepest() const { return deepest_; }
 
  private:
-  void Finish(const std::array<int, 3>& dims, std::vector<uint8_t>& cells, const std::vector<uint8_t>& scanned,
-              int outside_radius);
+  void Finish(std::vector<uint8_t>& cells, const std::vector<uint8_t>& scanned, int outside_radius);
 
   bool open_ = false;
   std::array<double, 3> min_{};  // the grid's corner, relative to the origin

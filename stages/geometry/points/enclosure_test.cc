@@ -13,6 +13,7 @@ namespace {
 using ::testing::HasSubstr;
 using testing::AddBoxFaces;
 using testing::AddSphere;
+using testing::OpenCorridor;
 using testing::RoomWithTable;
 
 bool Contains(const EnclosedSpace& space, double x, double y, double z) {
@@ -88,15 +89,6 @@ TEST(EnclosureTest, ObjectsEncloseNothing) {
 
 // FindOpen: a room that Find cannot close in (open wider than 2 * gap_m,
 // or too small) is found by what one sees from inside it.
-
-// A corridor 10 x 1.8 x 2.6 m open at both ends, merged without stations.
-PointCloud OpenCorridor() {
-  PointCloud corridor;
-  const double lo[3] = {0, 0, 0}, hi[3] = {10.0, 1.8, 2.6};
-  AddBoxFaces(corridor, lo, hi, 0.04, 0.002, 11,
-              [](double x, double, double) { return x < 0.01 || x > 9.99; });
-  return corridor;
-}
 
 TEST(EnclosureTest, CorridorOpenAtBothEndsIsNearlyEnclosed) {
   const PointCloud corridor = OpenCorridor();

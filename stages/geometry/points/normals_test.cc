@@ -498,10 +498,7 @@ TEST(NormalsTest, ARoomOpenOnASideFacesIn) {
 // faced its walls, floor and ceiling out (every line of sight from the wall's
 // outside leaves the scan, and the propagation took that side).
 TEST(NormalsTest, ACorridorOpenAtBothEndsFacesIn) {
-  PointCloud corridor;
-  const double lo[3] = {0, 0, 0}, hi[3] = {10.0, 1.8, 2.6};
-  testing::AddBoxFaces(corridor, lo, hi, 0.04, 0.002, 11,
-                       [](double x, double, double) { return x < 0.01 || x > 9.99; });
+  PointCloud corridor = testing::OpenCorridor();
   NormalReport report;
   ASSERT_TRUE(EstimateNormals(corridor, {}, &report).ok());
   EXPECT_TRUE(report.enclosure_open);

@@ -238,10 +238,7 @@ TEST(SceneSurveyTest, WithoutStationsARoomIsSeenFromInside) {
 // the space it nearly encloses is stood in (enclosure.h, FindOpen) and the
 // first view looks down its length.
 TEST(SceneSurveyTest, WithoutStationsACorridorIsSeenFromInside) {
-  PointCloud corridor;
-  const double lo[3] = {0, 0, 0}, hi[3] = {10.0, 1.8, 2.6};
-  testing::AddBoxFaces(corridor, lo, hi, 0.04, 0.002, 11,
-                       [](double x, double, double) { return x < 0.01 || x > 9.99; });
+  const PointCloud corridor = testing::OpenCorridor();
   const Expected<SceneSurvey> survey = SurveyScene(corridor);
   ASSERT_TRUE(survey.ok()) << survey.status().message();
   EXPECT_TRUE(survey->enclosure_open);

@@ -100,4 +100,14 @@ inline PointCloud RoomWithTable(double width_m, double depth_m, double door_m, u
   return cloud;
 }
 
+// A corridor 10 x 1.8 x 2.6 m ([0, 10] x [0, 1.8] x [0, 2.6]) seen from
+// inside, merged without stations, open at both ends (no end walls: the
+// scan stops there), its walls, floor and ceiling every 4 cm.
+inline PointCloud OpenCorridor() {
+  PointCloud corridor;
+  const double lo[3] = {0, 0, 0}, hi[3] = {10.0, 1.8, 2.6};
+  AddBoxFaces(corridor, lo, hi, 0.04, 0.002, 11, [](double x, double, double) { return x < 0.01 || x > 9.99; });
+  return corridor;
+}
+
 }  // namespace pb::testing
